@@ -1,0 +1,106 @@
+!> LAPACK wrapped once: assumed-shape wrappers that work out the sizes and turn `info` into errors.
+module kf_lapack
+  use kf_kinds, only: wp
+  use kf_error, only: error_t, fatal_error
+  implicit none
+  private
+
+  public :: cholesky_factor, cholesky_solve, cholesky_invert, symmetric_eigen
+
+  interface
+    subroutine dpotrf(uplo, n, a, lda, info)
+      import :: wp
+      character(len=1), intent(in) :: uplo
+      integer, intent(in) :: n, lda
+      real(wp), intent(inout) :: a(lda, *)
+      integer, intent(out) :: info
+    end subroutine dpotrf
+    subroutine dpotrs(uplo, n, nrhs, a, lda, b, ldb, info)
+      import :: wp
+      character(len=1), intent(in) :: uplo
+      integer, intent(in) :: n, nrhs, lda, ldb
+      real(wp), intent(in) :: a(lda, *)
+      real(wp), intent(inout) :: b(ldb, *)
+      integer, intent(out) :: info
+    end subroutine dpotrs
+    subroutine dpotri(uplo, n, a, lda, info)
+      import :: wp
+      character(len=1), intent(in) :: uplo
+      integer, intent(in) :: n, lda
+      real(wp), intent(inout) :: a(lda, *)
+      integer, intent(out) :: info
+    end subroutine dpotri
+    subroutine dsyev(jobz, uplo, n, a, lda, w, work, lwork, info)
+      import :: wp
+      character(len=1), intent(in) :: jobz, uplo
+      integer, intent(in) :: n, lda, lwork
+      real(wp), intent(inout) :: a(lda, *)
+      real(wp), intent(out) :: w(*), work(*)
+      integer, intent(out) :: info
+    end subroutine dsyev
+  end interface
+
+contains
+
+  !> Cholesky factorisation A = L L^T in place (lower triangle; the upper one is left untouched).
+  subroutine cholesky_factor(a, error, what)
+    real(wp), intent(inout) :: a(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    character(len=*), intent(in) :: what   !< name of the matrix, for the message
+    integer :: info
+    character(len=24) :: buf
+    call dpotrf('L', size(a, 1), a, size(a, 1), info)
+    if (info /= 0) then
+      write (buf, '(i0)') info
+      if (info > 0) then
+        call fatal_error(error, 'Cholesky factorisation of the '//what// &
+          ' failed: matrix not positive definite (leading minor '//trim(buf)//')')
+      else
+        call fatal_error(error, 'dpotrf: illegal argument '//trim(buf)//' for the '//what)
+      end if
+    end if
+  end subroutine cholesky_factor
+
+  !> Solve A X = B given the factor from cholesky_factor; B is overwritten by X.
+  subroutine cholesky_solve(factor, b)
+    real(wp), intent(in) :: factor(:, :)
+    real(wp), intent(inout) :: b(:, :)
+    integer :: info
+    call dpotrs('L', size(factor, 1), size(b, 2), factor, size(factor, 1), b, size(b, 1), info)
+  end subroutine cholesky_solve
+
+  !> Inverse of an SPD matrix from its Cholesky factor; returns the full symmetric inverse.
+  subroutine cholesky_invert(a, error, what)
+    real(wp), intent(inout) :: a(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    character(len=*), intent(in) :: what
+    integer :: info, i, n
+    character(len=24) :: buf
+    n = size(a, 1)
+    call dpotri('L', n, a, n, info)
+    if (info /= 0) then
+      write (buf, '(i0)') info
+      call fatal_error(error, 'inversion of the '//what//' failed (dpotri info = '//trim(buf)//')')
+      return
+    end if
+    do i = 2, n
+      a(1:i - 1, i) = a(i, 1:i - 1)
+    end do
+  end subroutine cholesky_invert
+
+  !> Eigenvalues (ascending) and, in a, the eigenvectors of a real symmetric matrix.
+  subroutine symmetric_eigen(a, w, error)
+    real(wp), intent(inout) :: a(:, :)
+    real(wp), intent(out) :: w(:)
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: work(:)
+    real(wp) :: query(1)
+    integer :: info, n
+    n = size(a, 1)
+    call dsyev('V', 'L', n, a, n, w, query, -1, info)
+    allocate (work(max(1, int(query(1)))))
+    call dsyev('V', 'L', n, a, n, w, work, size(work), info)
+    if (info /= 0) call fatal_error(error, 'dsyev failed to converge')
+  end subroutine symmetric_eigen
+
+end module kf_lapack
