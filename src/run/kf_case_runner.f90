@@ -1,0 +1,246 @@
+!> Running one case: initial chain (or the checkpoint of an interrupted run), the time loop with
+!> frames, checkpoints and progress reports, and the final status in the case file.
+!> The library never prints: progress lines go to a procedure supplied by the program.
+module kf_case_runner
+  use, intrinsic :: iso_fortran_env, only: int64
+  use kf_kinds, only: wp, i8
+  use kf_error, only: error_t
+  use kf_scene, only: scene_t
+  use kf_scene_items, only: scene_item_t, scene_items, scene_text, item_string, item_integer, &
+                            item_real, item_logical, item_real_array
+  use kf_chain_shapes, only: build_initial_chain
+  use kf_dynamics, only: dynamics_t
+  use kf_integrator, only: integrator_t
+  use kf_shape, only: shape_t, compute_shape
+  use kf_case_file, only: case_file_t, case_file_status
+  use kf_fs, only: remove_file
+  implicit none
+  private
+
+  integer, parameter, public :: case_ok = 0, case_failed = 1, case_skipped = 2
+
+  abstract interface
+    !> Receives one progress line.
+    subroutine report_i(line)
+      character(len=*), intent(in) :: line
+    end subroutine report_i
+  end interface
+
+  public :: run_case, case_path, report_i
+
+contains
+
+  !> The case file of a scene: <output.directory>/<output.case_name>.h5
+  function case_path(sc) result(path)
+    type(scene_t), intent(in) :: sc
+    character(len=:), allocatable :: path
+    path = trim(sc%output%directory)//'/'//trim(sc%output%case_name)//'.h5'
+  end function case_path
+
+  !> Run (or resume, or skip) the case described by `sc`. Returns case_ok, case_failed or
+  !> case_skipped and a one-line message. Failures are recorded in the case file's status.
+  subroutine run_case(sc, report, status, message)
+    type(scene_t), intent(in) :: sc
+    procedure(report_i) :: report
+    integer, intent(out) :: status
+    character(len=:), allocatable, intent(out) :: message
+    type(error_t), allocatable :: error
+    type(case_file_t) :: file
+    type(dynamics_t) :: dyn
+    type(integrator_t) :: integ
+    type(shape_t) :: obs
+    real(wp), allocatable :: r(:, :)
+    real(wp) :: rotation(3, 3), t, t_next, dt
+    integer(i8) :: steps, rejected, nframes
+    character(len=:), allocatable :: path, state, name
+    integer(int64) :: clock0, clock_last, clock_now, rate
+    real(wp) :: t_start
+    logical :: resumed
+
+    path = case_path(sc)
+    name = trim(sc%output%case_name)
+    call case_file_status(path, state, error)
+    if (allocated(error)) then
+      status = case_failed
+      message = error%message
+      return
+    end if
+    resumed = .false.
+    if (state == 'finished') then
+      status = case_skipped
+      message = 'already finished ('//path//')'
+      return
+    else if (state == 'running') then
+      call file%open_resume(path, r, t, dt, steps, rejected, nframes, error)
+      if (.not. allocated(error)) then
+        if (file%scene_text() /= scene_text(sc)) then
+          call file%close()
+          status = case_failed
+          message = path//' was written with a different scene: remove it or use another '// &
+                    'output directory'
+          return
+        end if
+        resumed = .true.
+      else
+        ! An unreadable checkpoint: start again from the beginning.
+        call remove_file(path)
+      end if
+    else if (state /= 'missing') then
+      ! Failed or corrupt files are recomputed from scratch.
+      call remove_file(path)
+    end if
+
+    if (.not. resumed) then
+      call build_initial_chain(sc%chain, r, rotation, error)
+      if (allocated(error)) then
+        status = case_failed
+        message = error%message
+        return
+      end if
+    end if
+    call dyn%init(sc, size(r, 2), error)
+    if (.not. allocated(error)) call integ%init(sc%integrator, error)
+    if (allocated(error)) then
+      if (resumed) call file%close()
+      status = case_failed
+      message = error%message
+      return
+    end if
+
+    if (resumed) then
+      integ%dt = dt
+      integ%steps = steps
+      integ%rejected = rejected
+      call report('case '//name//': resuming at t = '//fmt(t)//' from its checkpoint ('// &
+                  itoa(nframes)//' frames)')
+    else
+      call file%create(path, name, size(r, 2), scene_text(sc), rotation, error)
+      if (.not. allocated(error)) call write_scene_attributes(file, sc, error)
+      if (allocated(error)) then
+        status = case_failed
+        message = error%message
+        return
+      end if
+      t = 0.0_wp
+      nframes = 0
+      call compute_shape(r, obs, error)
+      if (.not. allocated(error)) call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt, error)
+      if (allocated(error)) then
+        call fail(error%message)
+        return
+      end if
+      nframes = 1
+    end if
+
+    call system_clock(clock0, rate)
+    clock_last = clock0
+    t_start = t
+    do while (t < sc%integrator%t_end*(1.0_wp - 1.0e-12_wp))
+      t_next = min(sc%integrator%t_end, real(nframes, wp)*sc%output%frame_interval)
+      if (t_next <= t) t_next = min(sc%integrator%t_end, t + sc%output%frame_interval)
+      call integ%advance(dyn, t, r, t_next, error)
+      if (allocated(error)) then
+        call fail(error%message//' at t = '//fmt(t))
+        return
+      end if
+      call compute_shape(r, obs, error)
+      if (.not. allocated(error)) then
+        call file%append_frame(t, r, obs, integ%steps, integ%rejected, integ%dt, error)
+      end if
+      if (allocated(error)) then
+        call fail(error%message)
+        return
+      end if
+      nframes = nframes + 1
+      call system_clock(clock_now)
+      if (real(clock_now - clock_last, wp)/rate >= sc%output%progress_interval) then
+        clock_last = clock_now
+        call report(progress_line())
+      end if
+    end do
+    call file%set_status('finished', error)
+    call file%close()
+    if (allocated(error)) then
+      status = case_failed
+      message = error%message
+      return
+    end if
+    status = case_ok
+    call system_clock(clock_now)
+    message = 'finished: '//itoa(integ%steps)//' steps ('//itoa(integ%rejected)//' rejected), '// &
+              fmt(real(clock_now - clock0, wp)/rate)//' s'
+
+  contains
+
+    subroutine fail(reason)
+      character(len=*), intent(in) :: reason
+      type(error_t), allocatable :: ignored
+      status = case_failed
+      message = reason
+      call file%set_status('failed: '//reason, ignored)
+      call file%close()
+    end subroutine fail
+
+    function progress_line() result(line)
+      character(len=:), allocatable :: line
+      real(wp) :: elapsed, eta
+      elapsed = real(clock_now - clock0, wp)/rate
+      eta = elapsed*(sc%integrator%t_end - t)/max(t - t_start, tiny(1.0_wp))
+      line = 'case '//name//': t = '//fmt(t)//' / '//fmt(sc%integrator%t_end)//', dt = '// &
+             fmt(integ%dt)//', steps = '//itoa(integ%steps)//' ('//itoa(integ%rejected)// &
+             ' rejected), elapsed '//fmt(elapsed)//' s, ETA '//fmt(eta)//' s'
+    end function progress_line
+
+  end subroutine run_case
+
+  !> Every effective scene variable as a root attribute `<group>.<variable>`.
+  subroutine write_scene_attributes(file, sc, error)
+    type(case_file_t), intent(inout) :: file
+    type(scene_t), intent(in) :: sc
+    type(error_t), allocatable, intent(out) :: error
+    type(scene_item_t), allocatable :: items(:)
+    integer :: k
+    call scene_items(sc, items)
+    do k = 1, size(items)
+      associate (it => items(k))
+        select case (it%kind)
+        case (item_string)
+          call file%write_attribute(trim(it%name), it%s, error)
+        case (item_integer, item_logical)
+          call file%write_attribute(trim(it%name), it%i, error)
+        case (item_real)
+          call file%write_attribute(trim(it%name), it%r, error)
+        case (item_real_array)
+          if (it%dims(2) > 0) then
+            call file%write_attribute(trim(it%name), reshape(it%ra, it%dims), error)
+          else
+            call file%write_attribute(trim(it%name), it%ra, error)
+          end if
+        end select
+      end associate
+      if (allocated(error)) return
+    end do
+  end subroutine write_scene_attributes
+
+  function fmt(x) result(s)
+    real(wp), intent(in) :: x
+    character(len=:), allocatable :: s
+    character(len=32) :: buf
+    if (abs(x) >= 1.0e-3_wp .and. abs(x) < 1.0e6_wp) then
+      write (buf, '(f0.3)') x
+      if (buf(1:1) == '.') buf = '0'//buf
+    else
+      write (buf, '(es10.3)') x
+    end if
+    s = trim(adjustl(buf))
+  end function fmt
+
+  function itoa(i) result(s)
+    integer(i8), intent(in) :: i
+    character(len=:), allocatable :: s
+    character(len=24) :: buf
+    write (buf, '(i0)') i
+    s = trim(buf)
+  end function itoa
+
+end module kf_case_runner

@@ -1,0 +1,151 @@
+!> A sweep: the Cartesian product of listed parameter values applied to a base scene.
+!> Group &sweep (optional): bending_a = list, orientation = list, seed = list.
+module kf_sweep
+  use kf_kinds, only: wp, i8
+  use kf_error, only: error_t, fatal_error
+  use kf_scene, only: scene_t
+  use kf_scene_read, only: read_scene, validate_scene, find_group
+  use kf_namelist_scan, only: nml_group_t, scan_namelist_file, group_text
+  implicit none
+  private
+
+  integer, parameter :: max_values = 256
+  real(wp), parameter :: unset_real = -huge(1.0_wp)
+  integer(i8), parameter :: unset_int = -huge(1_i8)
+
+  !> The cases of a sweep.
+  type, public :: sweep_t
+    type(scene_t) :: base                       !< the scene all cases start from
+    real(wp), allocatable :: bending_a(:)       !< listed values (empty: the base value only)
+    character(len=1), allocatable :: orientation(:)
+    integer(i8), allocatable :: seed(:)
+  contains
+    procedure :: n_cases
+    procedure :: case_scene
+  end type sweep_t
+
+  public :: read_sweep
+
+contains
+
+  !> Read the base scene and the optional &sweep group from `path`.
+  subroutine read_sweep(path, sw, error)
+    character(len=*), intent(in) :: path
+    type(sweep_t), intent(out) :: sw
+    type(error_t), allocatable, intent(out) :: error
+    type(nml_group_t), allocatable :: groups(:)
+    integer :: ig, k, ios
+    character(len=512) :: msg
+    character(len=:), allocatable :: text
+    real(wp) :: bending_a(max_values)
+    character(len=1) :: orientation(max_values)
+    integer(i8) :: seed(max_values)
+    namelist /sweep/ bending_a, orientation, seed
+
+    call read_scene(path, sw%base, error, extra_groups=['sweep'])
+    if (allocated(error)) return
+    call scan_namelist_file(path, groups, error)
+    if (allocated(error)) return
+    bending_a = unset_real
+    orientation = ' '
+    seed = unset_int
+    ig = find_group(groups, 'sweep')
+    if (ig > 0) then
+      do k = 1, size(groups(ig)%items)
+        select case (groups(ig)%items(k)%name)
+        case ('bending_a', 'orientation', 'seed')
+        case default
+          call fatal_error(error, trim(path)//': &sweep: unknown variable '''// &
+            groups(ig)%items(k)%name//''' (allowed: bending_a, orientation, seed)')
+          return
+        end select
+        text = group_text(groups(ig), only=k)
+        read (text, nml=sweep, iostat=ios, iomsg=msg)
+        if (ios /= 0) then
+          call fatal_error(error, trim(path)//': &sweep: '//groups(ig)%items(k)%lhs//' = '// &
+            groups(ig)%items(k)%value//' is not valid (expected a list of '// &
+            merge('quoted letters a-e', 'values            ', groups(ig)%items(k)%name == 'orientation')// &
+            ', at most 256)')
+          return
+        end if
+      end do
+    end if
+    sw%bending_a = pack(bending_a, bending_a /= unset_real)
+    sw%orientation = pack(orientation, orientation /= ' ')
+    sw%seed = pack(seed, seed /= unset_int)
+    if (size(sw%orientation) > 0 .and. sw%base%chain%shape /= 'trefoil') then
+      call fatal_error(error, trim(path)//': &sweep: orientation is listed but &chain: shape = '''// &
+        trim(sw%base%chain%shape)//''' has no orientations (only trefoil has a-e)')
+      return
+    end if
+    ! Every case must be valid: check them all before anything runs.
+    block
+      type(scene_t) :: sc
+      character(len=:), allocatable :: name
+      do k = 1, sw%n_cases()
+        call sw%case_scene(k, sc, name)
+        call validate_scene(sc, error)
+        if (allocated(error)) then
+          error%message = error%message//' [in &sweep case '//name//']'
+          return
+        end if
+      end do
+    end block
+  end subroutine read_sweep
+
+  !> Number of cases (1 without a &sweep group).
+  pure integer function n_cases(this)
+    class(sweep_t), intent(in) :: this
+    n_cases = max(1, size(this%bending_a))*max(1, size(this%orientation))*max(1, size(this%seed))
+  end function n_cases
+
+  !> The scene of case `k` (1-based; bending_a varies slowest, seed fastest) and its name,
+  !> e.g. "A2.20_orc". Without listed parameters the name is output%case_name or "case".
+  subroutine case_scene(this, k, sc, name)
+    class(sweep_t), intent(in) :: this
+    integer, intent(in) :: k
+    type(scene_t), intent(out) :: sc
+    character(len=:), allocatable, intent(out) :: name
+    integer :: ia, io, is, na, no, ns, r
+    character(len=40) :: buf
+
+    na = max(1, size(this%bending_a))
+    no = max(1, size(this%orientation))
+    ns = max(1, size(this%seed))
+    r = k - 1
+    is = mod(r, ns) + 1
+    r = r/ns
+    io = mod(r, no) + 1
+    ia = r/no + 1
+    sc = this%base
+    name = ''
+    if (size(this%bending_a) > 0) then
+      sc%forces%bending_a = this%bending_a(ia)
+      write (buf, '(f0.2)') sc%forces%bending_a
+      if (buf(1:1) == '.') buf = '0'//buf
+      name = 'A'//trim(buf)
+    end if
+    if (size(this%orientation) > 0) then
+      sc%chain%orientation = this%orientation(io)
+      name = name//merge('_', ' ', len(name) > 0)//'or'//this%orientation(io)
+      name = trim(adjustl(name))
+    end if
+    if (size(this%seed) > 0) then
+      sc%chain%seed = this%seed(is)
+      write (buf, '(i0)') this%seed(is)
+      name = name//merge('_', ' ', len(name) > 0)//'s'//trim(buf)
+      name = trim(adjustl(name))
+    end if
+    if (len_trim(this%base%output%case_name) > 0) then
+      if (len(name) > 0) then
+        name = trim(this%base%output%case_name)//'_'//name
+      else
+        name = trim(this%base%output%case_name)
+      end if
+    else if (len(name) == 0) then
+      name = 'case'
+    end if
+    sc%output%case_name = name
+  end subroutine case_scene
+
+end module kf_sweep
