@@ -1,0 +1,395 @@
+!> The N-sphere multipole system (MULTIPOLE.md sections 7-11) for equal spheres of diameter 1,
+!> in the real scaled form, factorised by one dense Cholesky with the force/torque moments
+!> (set P) ordered last: the trailing factor L_PP then satisfies L_PP L_PP^T = the Schur
+!> complement of the other moments (the grand mobility in moment form), and L_PQ, L_QQ give the
+!> shear disturbance of free spheres by one triangular solve and one product.
+!>
+!> Results are in project units (PHYSICS.md section 1): an isolated sphere has translational
+!> mobility 1/3 and rotational mobility 1; Cartesian ordering per sphere [U(3), Omega(3)].
+!>
+!> Overlapping spheres: the pair blocks of a pair closer than `min_distance` are evaluated at
+!> min_distance along the line of centres (the plain system is not positive definite for
+!> overlapping spheres).
+module kf_multipole_system
+  use kf_kinds, only: wp
+  use kf_constants, only: pi
+  use kf_error, only: error_t, fatal_error
+  use kf_multipole_blocks, only: multipole_layout_t, pair_block_complex, pair_block_real, &
+                                 fam_phi, fam_chi, fam_p
+  use kf_solid_harmonics, only: irregular_harmonics
+  implicit none
+  private
+
+  public :: strain_basis, strain_coefficients
+
+  !> The factorised N-sphere system.
+  type, public :: multipole_system_t
+    type(multipole_layout_t) :: lay
+    real(wp) :: min_distance = 1.0_wp   !< pair blocks use max(|d|, min_distance)
+    integer :: n = 0        !< number of spheres
+    integer :: ntot = 0     !< total unknowns N * 3L(L+2)
+    integer :: nqt = 0      !< unknowns outside P (they come first)
+    integer :: n6 = 0       !< 6N
+    integer :: n_clamped = 0 !< pairs closer than min_distance at the last factorise
+    integer :: perm(6) = 0  !< real local index of Cartesian component c (U then Omega)
+    real(wp) :: scal(6) = 0.0_wp !< moment_hat(perm(c)) = scal(c) * Cartesian force component c
+    real(wp), allocatable :: a(:, :)     !< the matrix, then its Cholesky factor (lower)
+    real(wp), allocatable :: w6(:, :)    !< 6N x 6N work
+    real(wp), allocatable :: bq(:, :)    !< nqt x 5 work
+    real(wp), allocatable :: d6(:, :)    !< 6N x 5 work
+    real(wp), allocatable :: gr(:, :)
+    complex(wp), allocatable :: gc(:, :), gx(:, :), ih(:, :)
+    !> Seconds spent in the last assembly and factorisation (for benchmarks).
+    real(wp) :: t_assembly = 0.0_wp, t_factor = 0.0_wp
+  contains
+    procedure :: init => system_init
+    procedure :: factorise => system_factorise
+    procedure :: grand_mobility => system_grand_mobility
+    procedure :: translational_mobility => system_translational_mobility
+    procedure :: grand_friction => system_grand_friction
+    procedure :: strain_disturbance => system_strain_disturbance
+    procedure :: position => system_position
+  end type multipole_system_t
+
+  interface
+    subroutine dpotrf(uplo, n, a, lda, info)
+      import :: wp
+      character(len=1), intent(in) :: uplo
+      integer, intent(in) :: n, lda
+      real(wp), intent(inout) :: a(lda, *)
+      integer, intent(out) :: info
+    end subroutine dpotrf
+    subroutine dpotri(uplo, n, a, lda, info)
+      import :: wp
+      character(len=1), intent(in) :: uplo
+      integer, intent(in) :: n, lda
+      real(wp), intent(inout) :: a(lda, *)
+      integer, intent(out) :: info
+    end subroutine dpotri
+    subroutine dtrsm(side, uplo, transa, diag, m, n, alpha, a, lda, b, ldb)
+      import :: wp
+      character(len=1), intent(in) :: side, uplo, transa, diag
+      integer, intent(in) :: m, n, lda, ldb
+      real(wp), intent(in) :: alpha
+      real(wp), intent(in) :: a(lda, *)
+      real(wp), intent(inout) :: b(ldb, *)
+    end subroutine dtrsm
+    subroutine dgemm(transa, transb, m, n, k, alpha, a, lda, b, ldb, beta, c, ldc)
+      import :: wp
+      character(len=1), intent(in) :: transa, transb
+      integer, intent(in) :: m, n, k, lda, ldb, ldc
+      real(wp), intent(in) :: alpha, beta
+      real(wp), intent(in) :: a(lda, *), b(ldb, *)
+      real(wp), intent(inout) :: c(ldc, *)
+    end subroutine dgemm
+    subroutine dsyrk(uplo, trans, n, k, alpha, a, lda, beta, c, ldc)
+      import :: wp
+      character(len=1), intent(in) :: uplo, trans
+      integer, intent(in) :: n, k, lda, ldc
+      real(wp), intent(in) :: alpha, beta
+      real(wp), intent(in) :: a(lda, *)
+      real(wp), intent(inout) :: c(ldc, *)
+    end subroutine dsyrk
+  end interface
+
+contains
+
+  !> Truncation order L (1..20) and the minimum centre distance used in the pair blocks
+  !> (<= 0 disables the overlap treatment).
+  subroutine system_init(this, order, min_distance, error)
+    class(multipole_system_t), intent(inout) :: this
+    integer, intent(in) :: order
+    real(wp), intent(in) :: min_distance
+    type(error_t), allocatable, intent(out) :: error
+    character(len=32) :: buf
+    integer :: c, s
+
+    if (order < 1 .or. order > 20) then
+      write (buf, '(i0)') order
+      call fatal_error(error, 'multipole order L = '//trim(buf)//' not allowed (1 <= L <= 20)')
+      return
+    end if
+    call this%lay%init(order)
+    this%min_distance = min_distance
+    this%n = 0
+    associate (lay => this%lay)
+      do s = 0, 1
+        c = 3*s
+        this%perm(c + 1) = lay%index(1, s, 1)
+        this%perm(c + 2) = lay%index(1, s, 2)
+        this%perm(c + 3) = lay%index(1, s, 0)
+        this%scal(c + 1) = -1.0_wp/(sqrt(2.0_wp)*lay%sigma_real(this%perm(c + 1)))
+        this%scal(c + 2) = 1.0_wp/(sqrt(2.0_wp)*lay%sigma_real(this%perm(c + 2)))
+        this%scal(c + 3) = 1.0_wp/lay%sigma_real(this%perm(c + 3))
+      end do
+    end associate
+    if (allocated(this%gc)) deallocate (this%gc, this%gx, this%gr, this%ih)
+    allocate (this%gc(this%lay%nb, this%lay%nb), this%gx(this%lay%nb, this%lay%nb))
+    allocate (this%gr(this%lay%nb, this%lay%nb))
+    allocate (this%ih(0:2*order, -2*order:2*order))
+  end subroutine system_init
+
+  !> Global position of local real index t of sphere i.
+  pure integer function system_position(this, i, t) result(p)
+    class(multipole_system_t), intent(in) :: this
+    integer, intent(in) :: i, t
+    if (t <= 6) then
+      p = this%nqt + 6*(i - 1) + t
+    else
+      p = (this%lay%nb - 6)*(i - 1) + t - 6
+    end if
+  end function system_position
+
+  !> Assemble the scaled real system for centres r(3, N) and factorise it (Cholesky).
+  subroutine system_factorise(this, r, error)
+    class(multipole_system_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: nsph, nb, i, j, t, q, n, p1, p2, info, tp
+    integer(8) :: c0, c1, c2, crate
+    real(wp) :: d(3), dist
+    character(len=64) :: buf
+    integer, allocatable :: posi(:), posj(:)
+
+    nsph = size(r, 2)
+    if (nsph < 1) then
+      call fatal_error(error, 'multipole system: no spheres')
+      return
+    end if
+    if (this%lay%order < 1) then
+      call fatal_error(error, 'multipole system: init was not called')
+      return
+    end if
+    call system_clock(c0, crate)
+    nb = this%lay%nb
+    if (nsph /= this%n) then
+      this%n = nsph
+      this%ntot = nb*nsph
+      this%nqt = (nb - 6)*nsph
+      this%n6 = 6*nsph
+      if (allocated(this%a)) deallocate (this%a, this%w6, this%bq, this%d6)
+      allocate (this%a(this%ntot, this%ntot), this%w6(this%n6, this%n6))
+      allocate (this%bq(this%nqt, 5), this%d6(this%n6, 5))
+    end if
+    allocate (posi(nb), posj(nb))
+
+    this%a = 0.0_wp
+    this%n_clamped = 0
+    do i = 1, nsph
+      do t = 1, nb
+        posi(t) = this%position(i, t)
+        this%a(posi(t), posi(t)) = 1.0_wp
+      end do
+      do n = 1, this%lay%order
+        do q = 0, 2*n
+          p1 = posi(this%lay%index(n, fam_phi, q))
+          p2 = posi(this%lay%index(n, fam_p, q))
+          this%a(p1, p2) = -this%lay%cn(n)
+          this%a(p2, p1) = -this%lay%cn(n)
+        end do
+      end do
+    end do
+
+    do i = 1, nsph
+      do t = 1, nb
+        posi(t) = this%position(i, t)
+      end do
+      do j = i + 1, nsph
+        do t = 1, nb
+          posj(t) = this%position(j, t)
+        end do
+        d = r(:, i) - r(:, j)
+        dist = norm2(d)
+        if (dist <= 0.0_wp) then
+          write (buf, '(i0," and ",i0)') i, j
+          call fatal_error(error, 'multipole system: spheres '//trim(buf)//' coincide')
+          return
+        end if
+        if (dist < this%min_distance) then
+          d = d*(this%min_distance/dist)
+          this%n_clamped = this%n_clamped + 1
+        end if
+        call irregular_harmonics(d, 2*this%lay%order, this%ih)
+        call pair_block_complex(this%lay, d, this%ih, this%gc)
+        call pair_block_real(this%lay, this%gc, this%gx, this%gr)
+        do q = 1, nb
+          tp = posj(q)
+          do t = 1, nb
+            this%a(posi(t), tp) = this%gr(t, q)
+            this%a(tp, posi(t)) = this%gr(t, q)
+          end do
+        end do
+      end do
+    end do
+    call system_clock(c1)
+
+    call dpotrf('L', this%ntot, this%a, this%ntot, info)
+    call system_clock(c2)
+    this%t_assembly = real(c1 - c0, wp)/real(crate, wp)
+    this%t_factor = real(c2 - c1, wp)/real(crate, wp)
+    if (info /= 0) then
+      write (buf, '(i0)') info
+      if (info > 0) then
+        call fatal_error(error, 'Cholesky factorisation of the multipole system failed: matrix not '// &
+                         'positive definite (leading minor '//trim(buf)//'); overlapping spheres?')
+      else
+        call fatal_error(error, 'dpotrf: illegal argument '//trim(buf)//' for the multipole system')
+      end if
+      this%n = 0
+    end if
+  end subroutine system_factorise
+
+  !> Copy L_PP (lower, upper part zeroed) into w6.
+  subroutine copy_lpp(this)
+    class(multipole_system_t), intent(inout) :: this
+    integer :: j
+    do j = 1, this%n6
+      this%w6(1:j - 1, j) = 0.0_wp
+      this%w6(j:this%n6, j) = this%a(this%nqt + j:this%ntot, this%nqt + j)
+    end do
+  end subroutine copy_lpp
+
+  !> The 6N x 6N grand mobility (velocities and angular velocities from applied forces and
+  !> torques), project units, ordering [U_1, Omega_1, U_2, ...].
+  subroutine system_grand_mobility(this, mob)
+    class(multipole_system_t), intent(inout) :: this
+    real(wp), intent(out) :: mob(:, :)
+    real(wp), allocatable :: s(:, :)
+    integer :: i, j, c, cc, n6
+
+    n6 = this%n6
+    call copy_lpp(this)
+    allocate (s(n6, n6))
+    call dsyrk('L', 'N', n6, n6, 1.0_wp, this%w6, n6, 0.0_wp, s, n6)
+    do j = 1, n6
+      s(j, j + 1:n6) = s(j + 1:n6, j)
+    end do
+    do j = 1, this%n
+      do cc = 1, 6
+        do i = 1, this%n
+          do c = 1, 6
+            mob(6*(i - 1) + c, 6*(j - 1) + cc) = pi*this%scal(c)*this%scal(cc)* &
+              s(6*(i - 1) + this%perm(c), 6*(j - 1) + this%perm(cc))
+          end do
+        end do
+      end do
+    end do
+  end subroutine system_grand_mobility
+
+  !> The 3N x 3N translational mobility of torque-free spheres (project units).
+  subroutine system_translational_mobility(this, mu)
+    class(multipole_system_t), intent(inout) :: this
+    real(wp), intent(out) :: mu(:, :)
+    real(wp), allocatable :: mob(:, :)
+    integer :: i, j
+    allocate (mob(this%n6, this%n6))
+    call this%grand_mobility(mob)
+    do j = 1, this%n
+      do i = 1, this%n
+        mu(3*i - 2:3*i, 3*j - 2:3*j) = mob(6*i - 5:6*i - 3, 6*j - 5:6*j - 3)
+      end do
+    end do
+  end subroutine system_translational_mobility
+
+  !> The 6N x 6N generalised friction (inverse of the grand mobility), project units:
+  !> [F; T] = zeta [U; Omega] for applied forces and torques in a quiescent fluid.
+  subroutine system_grand_friction(this, zeta, error)
+    class(multipole_system_t), intent(inout) :: this
+    real(wp), intent(out) :: zeta(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: i, j, c, cc, n6, info
+    character(len=24) :: buf
+
+    n6 = this%n6
+    call copy_lpp(this)
+    call dpotri('L', n6, this%w6, n6, info)
+    if (info /= 0) then
+      write (buf, '(i0)') info
+      call fatal_error(error, 'inversion of the multipole grand mobility failed (dpotri info = '// &
+                       trim(buf)//')')
+      return
+    end if
+    do j = 1, n6
+      this%w6(j, j + 1:n6) = this%w6(j + 1:n6, j)
+    end do
+    do j = 1, this%n
+      do cc = 1, 6
+        do i = 1, this%n
+          do c = 1, 6
+            zeta(6*(i - 1) + c, 6*(j - 1) + cc) = this%w6(6*(i - 1) + this%perm(c), &
+              6*(j - 1) + this%perm(cc))/(pi*this%scal(c)*this%scal(cc))
+          end do
+        end do
+      end do
+    end do
+  end subroutine system_grand_friction
+
+  !> Disturbance [U - U_inf; Omega - Omega_inf] (6N) of force-free, torque-free spheres for the
+  !> five basis strains of `strain_basis` (columns). Zero at L = 1 (no strain coupling).
+  subroutine system_strain_disturbance(this, dist)
+    class(multipole_system_t), intent(inout) :: this
+    real(wp), intent(out) :: dist(:, :)
+    real(wp) :: y(5, 5), rt2
+    integer :: i, k, q, t, c
+
+    dist(1:this%n6, 1:5) = 0.0_wp
+    if (this%lay%order < 2) return
+    rt2 = sqrt(2.0_wp)
+    ! Real-form strain coefficients y(q, k) (section 7) of basis strain k.
+    y(:, 1) = [-1.0_wp, 0.0_wp, 0.0_wp, rt2, 0.0_wp]
+    y(:, 2) = [-1.0_wp, 0.0_wp, 0.0_wp, -rt2, 0.0_wp]
+    y(:, 3) = [0.0_wp, 0.0_wp, 0.0_wp, 0.0_wp, -2.0_wp*rt2]
+    y(:, 4) = [0.0_wp, -rt2, 0.0_wp, 0.0_wp, 0.0_wp]
+    y(:, 5) = [0.0_wp, 0.0_wp, rt2, 0.0_wp, 0.0_wp]
+    this%bq = 0.0_wp
+    do i = 1, this%n
+      do q = 0, 4
+        t = this%lay%index(2, fam_phi, q)
+        this%bq(this%position(i, t), :) = this%lay%sigma_real(t)*y(q + 1, :)
+      end do
+    end do
+    call dtrsm('L', 'L', 'N', 'N', this%nqt, 5, 1.0_wp, this%a, this%ntot, this%bq, this%nqt)
+    call dgemm('N', 'N', this%n6, 5, this%nqt, -1.0_wp, this%a(this%nqt + 1, 1), this%ntot, &
+               this%bq, this%nqt, 0.0_wp, this%d6, this%n6)
+    do k = 1, 5
+      do i = 1, this%n
+        do c = 1, 6
+          dist(6*(i - 1) + c, k) = this%scal(c)*this%d6(6*(i - 1) + this%perm(c), k)
+        end do
+      end do
+    end do
+  end subroutine system_strain_disturbance
+
+  !> Basis strain k = 1..5: xx-zz, yy-zz, xy+yx, xz+zx, yz+zy.
+  pure function strain_basis(k) result(e)
+    integer, intent(in) :: k
+    real(wp) :: e(3, 3)
+    e = 0.0_wp
+    select case (k)
+    case (1)
+      e(1, 1) = 1.0_wp
+      e(3, 3) = -1.0_wp
+    case (2)
+      e(2, 2) = 1.0_wp
+      e(3, 3) = -1.0_wp
+    case (3)
+      e(1, 2) = 1.0_wp
+      e(2, 1) = 1.0_wp
+    case (4)
+      e(1, 3) = 1.0_wp
+      e(3, 1) = 1.0_wp
+    case (5)
+      e(2, 3) = 1.0_wp
+      e(3, 2) = 1.0_wp
+    end select
+  end function strain_basis
+
+  !> Coefficients of a symmetric traceless strain in the basis of `strain_basis`.
+  pure function strain_coefficients(e) result(c)
+    real(wp), intent(in) :: e(3, 3)
+    real(wp) :: c(5)
+    c = [e(1, 1), e(2, 2), 0.5_wp*(e(1, 2) + e(2, 1)), 0.5_wp*(e(1, 3) + e(3, 1)), &
+         0.5_wp*(e(2, 3) + e(3, 2))]
+  end function strain_coefficients
+
+end module kf_multipole_system
