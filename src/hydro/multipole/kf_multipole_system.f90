@@ -1,8 +1,13 @@
 !> The N-sphere multipole system (MULTIPOLE.md sections 7-11) for equal spheres of diameter 1,
-!> in the real scaled form, factorised by one dense Cholesky with the force/torque moments
-!> (set P) ordered last: the trailing factor L_PP then satisfies L_PP L_PP^T = the Schur
-!> complement of the other moments (the grand mobility in moment form), and L_PQ, L_QQ give the
-!> shear disturbance of free spheres by one triangular solve and one product.
+!> in the real scaled form. Structure used:
+!> * the p-moments of different spheres do not interact (no p<-p translation) and their scaled
+!>   self block is the identity, and they couple only to phi-moments: they are eliminated
+!>   first, exactly, by one product K_phiphi -= B B^T (B = the phi<-p couplings, DSYRK/DGEMM);
+!> * the remaining (phi, chi) system K is factorised by one dense Cholesky with the
+!>   force/torque moments (set P) ordered last: the trailing factor L_PP satisfies
+!>   L_PP L_PP^T = the Schur complement onto P (the grand mobility in moment form), and L_PQ,
+!>   L_QQ give the shear disturbance of free spheres by one triangular solve and one product.
+!> Global order of K: [phi n>=2 (all spheres), chi n>=2, phi n=1, chi n=1].
 !>
 !> Results are in project units (PHYSICS.md section 1): an isolated sphere has translational
 !> mobility 1/3 and rotational mobility 1; Cartesian ordering per sphere [U(3), Omega(3)].
@@ -14,8 +19,7 @@ module kf_multipole_system
   use kf_kinds, only: wp
   use kf_constants, only: pi
   use kf_error, only: error_t, fatal_error
-  use kf_multipole_blocks, only: multipole_layout_t, pair_block_complex, pair_block_real, &
-                                 fam_phi, fam_chi, fam_p
+  use kf_multipole_blocks, only: multipole_layout_t, pair_block_grouped, fam_phi, fam_p
   use kf_solid_harmonics, only: irregular_harmonics
   implicit none
   private
@@ -27,19 +31,20 @@ module kf_multipole_system
     type(multipole_layout_t) :: lay
     real(wp) :: min_distance = 1.0_wp   !< pair blocks use max(|d|, min_distance)
     integer :: n = 0        !< number of spheres
-    integer :: ntot = 0     !< total unknowns N * 3L(L+2)
-    integer :: nqt = 0      !< unknowns outside P (they come first)
+    integer :: nr = 0       !< size of K (phi and chi unknowns), 2 N L(L+2)
+    integer :: nqt = 0      !< unknowns of K outside P (they come first)
     integer :: n6 = 0       !< 6N
     integer :: n_clamped = 0 !< pairs closer than min_distance at the last factorise
-    integer :: perm(6) = 0  !< real local index of Cartesian component c (U then Omega)
-    real(wp) :: scal(6) = 0.0_wp !< moment_hat(perm(c)) = scal(c) * Cartesian force component c
-    real(wp), allocatable :: a(:, :)     !< the matrix, then its Cholesky factor (lower)
+    integer :: kmap(3) = [2, 3, 1] !< P component (1..3 = real q 0..2) of Cartesian x, y, z
+    real(wp) :: scal(6) = 0.0_wp !< moment_hat = scal(c) * Cartesian force/torque component c
+    real(wp), allocatable :: k(:, :)     !< K, then its Cholesky factor (lower triangle)
+    real(wp), allocatable :: bp(:, :)    !< phi <- p couplings (rows phi, columns p)
     real(wp), allocatable :: w6(:, :)    !< 6N x 6N work
     real(wp), allocatable :: bq(:, :)    !< nqt x 5 work
     real(wp), allocatable :: d6(:, :)    !< 6N x 5 work
-    real(wp), allocatable :: gr(:, :)
-    complex(wp), allocatable :: gc(:, :), gx(:, :), ih(:, :)
-    !> Seconds spent in the last assembly and factorisation (for benchmarks).
+    real(wp), allocatable :: gr(:, :), y(:)
+    complex(wp), allocatable :: ih(:, :)
+    !> Seconds spent in the last assembly (incl. p elimination) and factorisation.
     real(wp) :: t_assembly = 0.0_wp, t_factor = 0.0_wp
   contains
     procedure :: init => system_init
@@ -48,7 +53,7 @@ module kf_multipole_system
     procedure :: translational_mobility => system_translational_mobility
     procedure :: grand_friction => system_grand_friction
     procedure :: strain_disturbance => system_strain_disturbance
-    procedure :: position => system_position
+    procedure :: pindex => system_pindex
   end type multipole_system_t
 
   interface
@@ -115,41 +120,38 @@ contains
     associate (lay => this%lay)
       do s = 0, 1
         c = 3*s
-        this%perm(c + 1) = lay%index(1, s, 1)
-        this%perm(c + 2) = lay%index(1, s, 2)
-        this%perm(c + 3) = lay%index(1, s, 0)
-        this%scal(c + 1) = -1.0_wp/(sqrt(2.0_wp)*lay%sigma_real(this%perm(c + 1)))
-        this%scal(c + 2) = 1.0_wp/(sqrt(2.0_wp)*lay%sigma_real(this%perm(c + 2)))
-        this%scal(c + 3) = 1.0_wp/lay%sigma_real(this%perm(c + 3))
+        this%scal(c + 1) = -1.0_wp/(sqrt(2.0_wp)*lay%sigma_real(lay%index(1, s, 1)))
+        this%scal(c + 2) = 1.0_wp/(sqrt(2.0_wp)*lay%sigma_real(lay%index(1, s, 2)))
+        this%scal(c + 3) = 1.0_wp/lay%sigma_real(lay%index(1, s, 0))
       end do
     end associate
-    if (allocated(this%gc)) deallocate (this%gc, this%gx, this%gr, this%ih)
-    allocate (this%gc(this%lay%nb, this%lay%nb), this%gx(this%lay%nb, this%lay%nb))
-    allocate (this%gr(this%lay%nb, this%lay%nb))
+    if (allocated(this%gr)) deallocate (this%gr, this%y, this%ih)
+    allocate (this%gr(this%lay%nb, this%lay%nb), this%y(2*this%lay%nslot))
     allocate (this%ih(0:2*order, -2*order:2*order))
   end subroutine system_init
 
-  !> Global position of local real index t of sphere i.
-  pure integer function system_position(this, i, t) result(p)
+  !> Index in P (1..6N) of Cartesian component c (1..3 force, 4..6 torque) of sphere i.
+  pure integer function system_pindex(this, i, c) result(p)
     class(multipole_system_t), intent(in) :: this
-    integer, intent(in) :: i, t
-    if (t <= 6) then
-      p = this%nqt + 6*(i - 1) + t
+    integer, intent(in) :: i, c
+    if (c <= 3) then
+      p = 3*(i - 1) + this%kmap(c)
     else
-      p = (this%lay%nb - 6)*(i - 1) + t - 6
+      p = 3*this%n + 3*(i - 1) + this%kmap(c - 3)
     end if
-  end function system_position
+  end function system_pindex
 
-  !> Assemble the scaled real system for centres r(3, N) and factorise it (Cholesky).
+  !> Assemble the scaled real system for centres r(3, N), eliminate the p-moments and
+  !> factorise (Cholesky).
   subroutine system_factorise(this, r, error)
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
-    integer :: nsph, nb, i, j, t, q, n, p1, p2, info, tp
+    integer :: nsph, h, nb, i, j, x, yr, n, q, info, na, nc, nphi, np, cs, t, pc
+    integer :: lo(5), hi(5), ks(4, 2), bs(4, 2), ps(2)
     integer(8) :: c0, c1, c2, crate
     real(wp) :: d(3), dist
     character(len=64) :: buf
-    integer, allocatable :: posi(:), posj(:)
 
     nsph = size(r, 2)
     if (nsph < 1) then
@@ -161,48 +163,59 @@ contains
       return
     end if
     call system_clock(c0, crate)
+    h = this%lay%h
     nb = this%lay%nb
-    if (nsph /= this%n) then
+    if (nsph /= this%n .or. .not. allocated(this%k)) then
       this%n = nsph
-      this%ntot = nb*nsph
-      this%nqt = (nb - 6)*nsph
+      this%nr = 2*h*nsph
+      this%nqt = 2*(h - 3)*nsph
       this%n6 = 6*nsph
-      if (allocated(this%a)) deallocate (this%a, this%w6, this%bq, this%d6)
-      allocate (this%a(this%ntot, this%ntot), this%w6(this%n6, this%n6))
-      allocate (this%bq(this%nqt, 5), this%d6(this%n6, 5))
+      if (allocated(this%k)) deallocate (this%k, this%bp, this%w6, this%bq, this%d6)
+      allocate (this%k(this%nr, this%nr), this%bp(h*nsph, h*nsph), this%w6(this%n6, this%n6))
+      allocate (this%bq(max(1, this%nqt), 5), this%d6(this%n6, 5))
     end if
-    allocate (posi(nb), posj(nb))
+    na = (h - 3)*nsph
+    nc = 3*nsph
+    nphi = h*nsph
+    np = h*nsph
+    ! Grouped local runs: 1 phi n>=2, 2 chi n>=2, 3 phi1, 4 chi1, 5 p.
+    lo = [1, h - 2, 2*h - 5, 2*h - 2, 2*h + 1]
+    hi = [h - 3, 2*h - 6, 2*h - 3, 2*h, 3*h]
 
-    this%a = 0.0_wp
     this%n_clamped = 0
     do i = 1, nsph
-      do t = 1, nb
-        posi(t) = this%position(i, t)
-        this%a(posi(t), posi(t)) = 1.0_wp
+      call starts(i, ks(:, 1), bs(:, 1), ps(1))
+      do x = 1, 4
+        do yr = x, 4
+          this%k(ks(yr, 1):ks(yr, 1) + hi(yr) - lo(yr), ks(x, 1):ks(x, 1) + hi(x) - lo(x)) = 0.0_wp
+        end do
       end do
+      do t = 1, 2*h
+        pc = kpos(t, ks(:, 1))
+        this%k(pc, pc) = 1.0_wp
+      end do
+      this%bp(bs(1, 1):bs(1, 1) + hi(1) - lo(1), ps(1):ps(1) + h - 1) = 0.0_wp
+      this%bp(bs(3, 1):bs(3, 1) + 2, ps(1):ps(1) + h - 1) = 0.0_wp
       do n = 1, this%lay%order
         do q = 0, 2*n
-          p1 = posi(this%lay%index(n, fam_phi, q))
-          p2 = posi(this%lay%index(n, fam_p, q))
-          this%a(p1, p2) = -this%lay%cn(n)
-          this%a(p2, p1) = -this%lay%cn(n)
+          t = this%lay%grp(this%lay%index(n, fam_phi, q))
+          pc = this%lay%grp(this%lay%index(n, fam_p, q))
+          this%bp(bpos(t, bs(:, 1)), ps(1) + pc - lo(5)) = -this%lay%cn(n)
         end do
       end do
     end do
 
     do i = 1, nsph
-      do t = 1, nb
-        posi(t) = this%position(i, t)
-      end do
+      call starts(i, ks(:, 1), bs(:, 1), ps(1))
       do j = i + 1, nsph
-        do t = 1, nb
-          posj(t) = this%position(j, t)
-        end do
-        d = r(:, i) - r(:, j)
+        call starts(j, ks(:, 2), bs(:, 2), ps(2))
+        ! Receiver j (rows), source i (columns).
+        d = r(:, j) - r(:, i)
         dist = norm2(d)
         if (dist <= 0.0_wp) then
           write (buf, '(i0," and ",i0)') i, j
           call fatal_error(error, 'multipole system: spheres '//trim(buf)//' coincide')
+          this%n = 0
           return
         end if
         if (dist < this%min_distance) then
@@ -210,20 +223,41 @@ contains
           this%n_clamped = this%n_clamped + 1
         end if
         call irregular_harmonics(d, 2*this%lay%order, this%ih)
-        call pair_block_complex(this%lay, d, this%ih, this%gc)
-        call pair_block_real(this%lay, this%gc, this%gx, this%gr)
-        do q = 1, nb
-          tp = posj(q)
-          do t = 1, nb
-            this%a(posi(t), tp) = this%gr(t, q)
-            this%a(tp, posi(t)) = this%gr(t, q)
+        call pair_block_grouped(this%lay, d, this%ih, this%y, this%gr)
+        do x = 1, 4
+          if (hi(x) < lo(x)) cycle
+          do yr = 1, 4
+            if (hi(yr) < lo(yr)) cycle
+            if (yr >= x) then
+              this%k(ks(yr, 2):ks(yr, 2) + hi(yr) - lo(yr), ks(x, 1):ks(x, 1) + hi(x) - lo(x)) = &
+                this%gr(lo(yr):hi(yr), lo(x):hi(x))
+            else
+              this%k(ks(x, 1):ks(x, 1) + hi(x) - lo(x), ks(yr, 2):ks(yr, 2) + hi(yr) - lo(yr)) = &
+                transpose(this%gr(lo(yr):hi(yr), lo(x):hi(x)))
+            end if
           end do
+        end do
+        do x = 1, 3, 2
+          if (hi(x) < lo(x)) cycle
+          this%bp(bs(x, 2):bs(x, 2) + hi(x) - lo(x), ps(1):ps(1) + h - 1) = &
+            this%gr(lo(x):hi(x), lo(5):hi(5))
+          this%bp(bs(x, 1):bs(x, 1) + hi(x) - lo(x), ps(2):ps(2) + h - 1) = &
+            transpose(this%gr(lo(5):hi(5), lo(x):hi(x)))
         end do
       end do
     end do
+
+    ! Exact elimination of the p-moments (their block is the identity): K_phiphi -= B B^T.
+    cs = 2*na + 1
+    if (na > 0) then
+      call dsyrk('L', 'N', na, np, -1.0_wp, this%bp, nphi, 1.0_wp, this%k, this%nr)
+      call dgemm('N', 'T', nc, na, np, -1.0_wp, this%bp(na + 1, 1), nphi, this%bp, nphi, 1.0_wp, &
+                 this%k(cs, 1), this%nr)
+    end if
+    call dsyrk('L', 'N', nc, np, -1.0_wp, this%bp(na + 1, 1), nphi, 1.0_wp, this%k(cs, cs), this%nr)
     call system_clock(c1)
 
-    call dpotrf('L', this%ntot, this%a, this%ntot, info)
+    call dpotrf('L', this%nr, this%k, this%nr, info)
     call system_clock(c2)
     this%t_assembly = real(c1 - c0, wp)/real(crate, wp)
     this%t_factor = real(c2 - c1, wp)/real(crate, wp)
@@ -237,6 +271,43 @@ contains
       end if
       this%n = 0
     end if
+
+  contains
+
+    !> Global starts of the runs of sphere s in K (ksv), in the rows of B (bsv), p column (psv).
+    pure subroutine starts(s, ksv, bsv, psv)
+      integer, intent(in) :: s
+      integer, intent(out) :: ksv(4), bsv(4), psv
+      ksv(1) = (h - 3)*(s - 1) + 1
+      ksv(2) = (h - 3)*nsph + (h - 3)*(s - 1) + 1
+      ksv(3) = 2*(h - 3)*nsph + 3*(s - 1) + 1
+      ksv(4) = 2*(h - 3)*nsph + 3*nsph + 3*(s - 1) + 1
+      bsv = 0
+      bsv(1) = (h - 3)*(s - 1) + 1
+      bsv(3) = (h - 3)*nsph + 3*(s - 1) + 1
+      psv = h*(s - 1) + 1
+    end subroutine starts
+
+    !> Position in K of grouped local index g (1..2h) given the run starts.
+    pure integer function kpos(g, ksv)
+      integer, intent(in) :: g, ksv(4)
+      integer :: rr
+      do rr = 4, 1, -1
+        if (g >= lo(rr)) exit
+      end do
+      kpos = ksv(rr) + g - lo(rr)
+    end function kpos
+
+    !> Row of B of grouped phi index g given the run starts.
+    pure integer function bpos(g, bsv)
+      integer, intent(in) :: g, bsv(4)
+      if (g >= lo(3)) then
+        bpos = bsv(3) + g - lo(3)
+      else
+        bpos = bsv(1) + g - lo(1)
+      end if
+    end function bpos
+
   end subroutine system_factorise
 
   !> Copy L_PP (lower, upper part zeroed) into w6.
@@ -245,7 +316,7 @@ contains
     integer :: j
     do j = 1, this%n6
       this%w6(1:j - 1, j) = 0.0_wp
-      this%w6(j:this%n6, j) = this%a(this%nqt + j:this%ntot, this%nqt + j)
+      this%w6(j:this%n6, j) = this%k(this%nqt + j:this%nr, this%nqt + j)
     end do
   end subroutine copy_lpp
 
@@ -269,7 +340,7 @@ contains
         do i = 1, this%n
           do c = 1, 6
             mob(6*(i - 1) + c, 6*(j - 1) + cc) = pi*this%scal(c)*this%scal(cc)* &
-              s(6*(i - 1) + this%perm(c), 6*(j - 1) + this%perm(cc))
+              s(this%pindex(i, c), this%pindex(j, cc))
           end do
         end do
       end do
@@ -316,8 +387,8 @@ contains
       do cc = 1, 6
         do i = 1, this%n
           do c = 1, 6
-            zeta(6*(i - 1) + c, 6*(j - 1) + cc) = this%w6(6*(i - 1) + this%perm(c), &
-              6*(j - 1) + this%perm(cc))/(pi*this%scal(c)*this%scal(cc))
+            zeta(6*(i - 1) + c, 6*(j - 1) + cc) = this%w6(this%pindex(i, c), &
+              this%pindex(j, cc))/(pi*this%scal(c)*this%scal(cc))
           end do
         end do
       end do
@@ -345,16 +416,16 @@ contains
     do i = 1, this%n
       do q = 0, 4
         t = this%lay%index(2, fam_phi, q)
-        this%bq(this%position(i, t), :) = this%lay%sigma_real(t)*y(q + 1, :)
+        this%bq((this%lay%h - 3)*(i - 1) + q + 1, :) = this%lay%sigma_real(t)*y(q + 1, :)
       end do
     end do
-    call dtrsm('L', 'L', 'N', 'N', this%nqt, 5, 1.0_wp, this%a, this%ntot, this%bq, this%nqt)
-    call dgemm('N', 'N', this%n6, 5, this%nqt, -1.0_wp, this%a(this%nqt + 1, 1), this%ntot, &
+    call dtrsm('L', 'L', 'N', 'N', this%nqt, 5, 1.0_wp, this%k, this%nr, this%bq, this%nqt)
+    call dgemm('N', 'N', this%n6, 5, this%nqt, -1.0_wp, this%k(this%nqt + 1, 1), this%nr, &
                this%bq, this%nqt, 0.0_wp, this%d6, this%n6)
     do k = 1, 5
       do i = 1, this%n
         do c = 1, 6
-          dist(6*(i - 1) + c, k) = this%scal(c)*this%d6(6*(i - 1) + this%perm(c), k)
+          dist(6*(i - 1) + c, k) = this%scal(c)*this%d6(this%pindex(i, c), k)
         end do
       end do
     end do
