@@ -43,6 +43,7 @@ module kf_multipole_system
     real(wp), allocatable :: bq(:, :)    !< nqt x 5 work
     real(wp), allocatable :: d6(:, :)    !< 6N x 5 work
     real(wp), allocatable :: gr(:, :), y(:)
+    real(wp), allocatable :: zt(:, :), x6(:, :), t6(:, :) !< friction route work (6N x 6N, 6N x 5)
     complex(wp), allocatable :: ih(:, :)
     !> Seconds spent in the last assembly (incl. p elimination) and factorisation.
     real(wp) :: t_assembly = 0.0_wp, t_factor = 0.0_wp
@@ -53,6 +54,7 @@ module kf_multipole_system
     procedure :: translational_mobility => system_translational_mobility
     procedure :: grand_friction => system_grand_friction
     procedure :: strain_disturbance => system_strain_disturbance
+    procedure :: corrected => system_corrected
     procedure :: pindex => system_pindex
   end type multipole_system_t
 
@@ -64,6 +66,14 @@ module kf_multipole_system
       real(wp), intent(inout) :: a(lda, *)
       integer, intent(out) :: info
     end subroutine dpotrf
+    subroutine dpotrs(uplo, n, nrhs, a, lda, b, ldb, info)
+      import :: wp
+      character(len=1), intent(in) :: uplo
+      integer, intent(in) :: n, nrhs, lda, ldb
+      real(wp), intent(in) :: a(lda, *)
+      real(wp), intent(inout) :: b(ldb, *)
+      integer, intent(out) :: info
+    end subroutine dpotrs
     subroutine dpotri(uplo, n, a, lda, info)
       import :: wp
       character(len=1), intent(in) :: uplo
@@ -171,6 +181,7 @@ contains
       this%nqt = 2*(h - 3)*nsph
       this%n6 = 6*nsph
       if (allocated(this%k)) deallocate (this%k, this%bp, this%w6, this%bq, this%d6)
+      if (allocated(this%zt)) deallocate (this%zt, this%x6, this%t6)
       allocate (this%k(this%nr, this%nr), this%bp(h*nsph, h*nsph), this%w6(this%n6, this%n6))
       allocate (this%bq(max(1, this%nqt), 5), this%d6(this%n6, 5))
     end if
@@ -430,6 +441,62 @@ contains
       end do
     end do
   end subroutine system_strain_disturbance
+
+  !> Friction route (MULTIPOLE.md 13.3): zeta = grand friction of the system plus `dzeta`
+  !> (6N x 6N), x = zeta_FE:E of the system for the five basis strains plus `dx` (6N x 5);
+  !> returns the translational mobility of torque-free spheres mu (3N x 3N) = translational
+  !> block of zeta^-1, and the disturbance (3N x 5) = translational part of zeta^-1 x.
+  !> Project units; dzeta and dx are in project units too.
+  subroutine system_corrected(this, dzeta, dx, mu, dist, error)
+    class(multipole_system_t), intent(inout) :: this
+    real(wp), intent(in) :: dzeta(:, :), dx(:, :)
+    real(wp), intent(out) :: mu(:, :), dist(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: info, i, j, n6
+    character(len=24) :: buf
+
+    n6 = this%n6
+    if (.not. allocated(this%zt)) allocate (this%zt(n6, n6), this%x6(n6, 5), this%t6(n6, 5))
+    call this%grand_friction(this%zt, error)
+    if (allocated(error)) return
+    call this%strain_disturbance(this%t6)
+    ! x = zeta (U - U_inf) of the free spheres (F = 0 in [F;T] = zeta (U - U_inf) - x).
+    call dgemm('N', 'N', n6, 5, n6, 1.0_wp, this%zt, n6, this%t6, n6, 0.0_wp, this%x6, n6)
+    this%zt = this%zt + dzeta
+    this%x6 = this%x6 + dx
+    call dpotrf('L', n6, this%zt, n6, info)
+    if (info /= 0) then
+      write (buf, '(i0)') info
+      call fatal_error(error, 'Cholesky factorisation of the lubrication-corrected friction '// &
+                       'failed (dpotrf info = '//trim(buf)//')')
+      return
+    end if
+    call dpotrs('L', n6, 5, this%zt, n6, this%x6, n6, info)
+    if (info /= 0) then
+      call fatal_error(error, 'dpotrs failed on the lubrication-corrected friction')
+      return
+    end if
+    call dpotri('L', n6, this%zt, n6, info)
+    if (info /= 0) then
+      write (buf, '(i0)') info
+      call fatal_error(error, 'inversion of the lubrication-corrected friction failed (dpotri info = '// &
+                       trim(buf)//')')
+      return
+    end if
+    do j = 1, this%n
+      do i = 1, this%n
+        if (i >= j) then
+          mu(3*i - 2:3*i, 3*j - 2:3*j) = this%zt(6*i - 5:6*i - 3, 6*j - 5:6*j - 3)
+        else
+          mu(3*i - 2:3*i, 3*j - 2:3*j) = transpose(this%zt(6*j - 5:6*j - 3, 6*i - 5:6*i - 3))
+        end if
+      end do
+      do i = 1, 3
+        mu(3*j - 3 + i, 3*j - 3 + i + 1:3*j) = mu(3*j - 3 + i + 1:3*j, 3*j - 3 + i)
+      end do
+      dist(3*j - 2:3*j, 1:5) = this%x6(6*j - 5:6*j - 3, 1:5)
+    end do
+  end subroutine system_corrected
 
   !> Basis strain k = 1..5: xx-zz, yy-zz, xy+yx, xz+zx, yz+zy.
   pure function strain_basis(k) result(e)

@@ -1,0 +1,139 @@
+!> The multipole hydrodynamic model (PHYSICS.md 3.3): N-sphere induced-force multipoles
+!> truncated at order L, optionally with two-sphere lubrication corrections (HYDROLIB scheme,
+!> MULTIPOLE.md 13.3) and the BWE overlap rule.
+!>
+!> prepare(r) assembles and factorises the system and caches the translational mobility mu
+!> (3N x 3N) and the disturbance of free beads for the five basis strains; apply_mobility and
+!> add_strain_disturbance are then matrix-vector products.
+module kf_hydro_multipole
+  use kf_kinds, only: wp
+  use kf_error, only: error_t, fatal_error
+  use kf_hydro_model, only: hydro_model_t
+  use kf_multipole_system, only: multipole_system_t, strain_coefficients
+  implicit none
+  private
+
+  !> Multipole model of order L with or without lubrication corrections.
+  type, extends(hydro_model_t), public :: multipole_model_t
+    integer :: order = 2
+    logical :: lubrication = .false.
+    real(wp) :: eps_lub = 1.0e-4_wp      !< BWE shift: overlapping pairs are evaluated at 1 + eps_lub
+    type(multipole_system_t) :: sys
+    real(wp), allocatable :: mu(:, :)    !< 3N x 3N translational mobility
+    real(wp), allocatable :: dist(:, :)  !< 3N x 5 disturbance for the basis strains
+    real(wp), allocatable :: dz(:, :), dx(:, :) !< summed pair corrections (6N x 6N, 6N x 5)
+  contains
+    procedure :: init => multipole_init
+    procedure :: prepare => multipole_prepare
+    procedure :: apply_mobility => multipole_apply
+    procedure :: add_strain_disturbance => multipole_disturbance
+    procedure :: name => multipole_name
+    procedure :: mobility_matrix => multipole_mobility_matrix
+  end type multipole_model_t
+
+contains
+
+  !> Order L (1..20), lubrication on/off, BWE shift eps_lub (0 < eps_lub < 0.5).
+  subroutine multipole_init(this, order, lubrication, eps_lub, error)
+    class(multipole_model_t), intent(inout) :: this
+    integer, intent(in) :: order
+    logical, intent(in) :: lubrication
+    real(wp), intent(in) :: eps_lub
+    type(error_t), allocatable, intent(out) :: error
+    character(len=32) :: buf
+
+    if (.not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) then
+      write (buf, '(es12.4)') eps_lub
+      call fatal_error(error, 'multipole: eps_lub = '//trim(adjustl(buf))// &
+                       ' not allowed (0 < eps_lub < 0.5)')
+      return
+    end if
+    if (lubrication) then
+      call fatal_error(error, 'multipole: lubrication corrections are not available in this '// &
+                       'build yet (kf_lubrication not integrated); use lubrication = off')
+      return
+    end if
+    this%order = order
+    this%lubrication = lubrication
+    this%eps_lub = eps_lub
+    this%n = 0
+    call this%sys%init(order, 1.0_wp + eps_lub, error)
+  end subroutine multipole_init
+
+  !> Assemble and factorise for bead centres r(3, N); cache mu and the strain disturbances.
+  subroutine multipole_prepare(this, r, error)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: nb
+
+    nb = size(r, 2)
+    if (nb /= this%n .or. .not. allocated(this%mu)) then
+      if (allocated(this%mu)) deallocate (this%mu, this%dist)
+      allocate (this%mu(3*nb, 3*nb), this%dist(3*nb, 5))
+    end if
+    this%n = 0
+    call this%sys%factorise(r, error)
+    if (allocated(error)) return
+    call this%sys%translational_mobility(this%mu)
+    call disturbance_translational(this)
+    this%n = nb
+  end subroutine multipole_prepare
+
+  !> The translational part of the system's free-sphere disturbance for the basis strains.
+  subroutine disturbance_translational(this)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), allocatable :: d6(:, :)
+    integer :: i
+    allocate (d6(this%sys%n6, 5))
+    call this%sys%strain_disturbance(d6)
+    do i = 1, this%sys%n
+      this%dist(3*i - 2:3*i, :) = d6(6*i - 5:6*i - 3, :)
+    end do
+  end subroutine disturbance_translational
+
+  !> u = mu f.
+  subroutine multipole_apply(this, f, u)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(in) :: f(:, :)
+    real(wp), intent(out) :: u(:, :)
+    integer :: i, j
+    u = 0.0_wp
+    do j = 1, this%n
+      do i = 1, this%n
+        u(:, i) = u(:, i) + matmul(this%mu(3*i - 2:3*i, 3*j - 2:3*j), f(:, j))
+      end do
+    end do
+  end subroutine multipole_apply
+
+  !> u = u + C:E for the symmetric traceless rate of strain e.
+  subroutine multipole_disturbance(this, e, u)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(in) :: e(3, 3)
+    real(wp), intent(inout) :: u(:, :)
+    real(wp) :: c(5)
+    integer :: i
+    c = strain_coefficients(e)
+    do i = 1, this%n
+      u(:, i) = u(:, i) + matmul(this%dist(3*i - 2:3*i, :), c)
+    end do
+  end subroutine multipole_disturbance
+
+  !> "multipole L=<order>" plus " lubrication" when corrections are on.
+  function multipole_name(this) result(label)
+    class(multipole_model_t), intent(in) :: this
+    character(len=:), allocatable :: label
+    character(len=16) :: buf
+    write (buf, '(i0)') this%order
+    label = 'multipole L='//trim(buf)
+    if (this%lubrication) label = label//' lubrication'
+  end function multipole_name
+
+  !> The cached 3N x 3N mobility.
+  subroutine multipole_mobility_matrix(this, mu)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(out) :: mu(:, :)
+    mu = this%mu
+  end subroutine multipole_mobility_matrix
+
+end module kf_hydro_multipole
