@@ -45,7 +45,8 @@ module kf_multipole_system
     real(wp), allocatable :: gr(:, :), y(:)
     real(wp), allocatable :: zt(:, :), x6(:, :), t6(:, :) !< friction route work (6N x 6N, 6N x 5)
     complex(wp), allocatable :: ih(:, :)
-    !> Seconds spent in the last assembly (incl. p elimination) and factorisation.
+    !> Seconds spent in the last assembly of the pair blocks and in the factorisation
+    !> (p-moment elimination and Cholesky).
     real(wp) :: t_assembly = 0.0_wp, t_factor = 0.0_wp
   contains
     procedure :: init => system_init
@@ -258,6 +259,7 @@ contains
       end do
     end do
 
+    call system_clock(c1)
     ! Exact elimination of the p-moments (their block is the identity): K_phiphi -= B B^T.
     cs = 2*na + 1
     if (na > 0) then
@@ -266,7 +268,6 @@ contains
                  this%k(cs, 1), this%nr)
     end if
     call dsyrk('L', 'N', nc, np, -1.0_wp, this%bp(na + 1, 1), nphi, 1.0_wp, this%k(cs, cs), this%nr)
-    call system_clock(c1)
 
     call dpotrf('L', this%nr, this%k, this%nr, info)
     call system_clock(c2)
@@ -358,19 +359,31 @@ contains
     end do
   end subroutine system_grand_mobility
 
-  !> The 3N x 3N translational mobility of torque-free spheres (project units).
+  !> The 3N x 3N translational mobility of torque-free spheres (project units). The force
+  !> moments come first in P and L_PP is lower triangular, so mu_tt = L_tt L_tt^T.
   subroutine system_translational_mobility(this, mu)
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(out) :: mu(:, :)
-    real(wp), allocatable :: mob(:, :)
-    integer :: i, j
-    allocate (mob(this%n6, this%n6))
-    call this%grand_mobility(mob)
+    integer :: i, j, c, cc, n3
+    n3 = 3*this%n
+    call copy_lpp(this)
+    call dsyrk('L', 'N', n3, n3, 1.0_wp, this%w6, this%n6, 0.0_wp, this%w6(1, n3 + 1), this%n6)
+    ! the lower triangle of w6(1:n3, n3+1:2*n3) now holds S_tt
     do j = 1, this%n
-      do i = 1, this%n
-        mu(3*i - 2:3*i, 3*j - 2:3*j) = mob(6*i - 5:6*i - 3, 6*j - 5:6*j - 3)
+      do cc = 1, 3
+        do i = 1, this%n
+          do c = 1, 3
+            mu(3*(i - 1) + c, 3*(j - 1) + cc) = pi*this%scal(c)*this%scal(cc)* &
+              stt(this%pindex(i, c), this%pindex(j, cc))
+          end do
+        end do
       end do
     end do
+  contains
+    pure real(wp) function stt(p, q)
+      integer, intent(in) :: p, q
+      stt = this%w6(max(p, q), n3 + min(p, q))
+    end function stt
   end subroutine system_translational_mobility
 
   !> The 6N x 6N generalised friction (inverse of the grand mobility), project units:
