@@ -29,6 +29,7 @@ module kf_hydro_multipole
     procedure :: add_strain_disturbance => multipole_disturbance
     procedure :: name => multipole_name
     procedure :: mobility_matrix => multipole_mobility_matrix
+    procedure :: friction_matrix => multipole_friction_matrix
   end type multipole_model_t
 
 contains
@@ -135,5 +136,15 @@ contains
     real(wp), intent(out) :: mu(:, :)
     mu = this%mu
   end subroutine multipole_mobility_matrix
+
+  !> The 6N x 6N generalised friction [F; T] = zeta [U; Omega] (project units, ordering
+  !> [U_1, Omega_1, U_2, ...]) at the last prepare, including the lubrication corrections.
+  subroutine multipole_friction_matrix(this, zeta, error)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(out) :: zeta(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    call this%sys%grand_friction(zeta, error)
+    if (allocated(error)) return
+  end subroutine multipole_friction_matrix
 
 end module kf_hydro_multipole
