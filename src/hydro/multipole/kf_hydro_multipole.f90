@@ -21,6 +21,7 @@ module kf_hydro_multipole
     type(multipole_system_t) :: sys
     real(wp), allocatable :: mu(:, :)    !< 3N x 3N translational mobility
     real(wp), allocatable :: dist(:, :)  !< 3N x 5 disturbance for the basis strains
+    real(wp), allocatable :: fbuf(:, :)  !< 3N x 2 work for apply_mobility
     real(wp), allocatable :: dz(:, :), dx(:, :) !< summed pair corrections (6N x 6N, 6N x 5)
   contains
     procedure :: init => multipole_init
@@ -31,6 +32,17 @@ module kf_hydro_multipole
     procedure :: mobility_matrix => multipole_mobility_matrix
     procedure :: friction_matrix => multipole_friction_matrix
   end type multipole_model_t
+
+  interface
+    subroutine dgemv(trans, m, n, alpha, a, lda, x, incx, beta, y, incy)
+      import :: wp
+      character(len=1), intent(in) :: trans
+      integer, intent(in) :: m, n, lda, incx, incy
+      real(wp), intent(in) :: alpha, beta
+      real(wp), intent(in) :: a(lda, *), x(*)
+      real(wp), intent(inout) :: y(*)
+    end subroutine dgemv
+  end interface
 
 contains
 
@@ -70,8 +82,8 @@ contains
 
     nb = size(r, 2)
     if (nb /= this%n .or. .not. allocated(this%mu)) then
-      if (allocated(this%mu)) deallocate (this%mu, this%dist)
-      allocate (this%mu(3*nb, 3*nb), this%dist(3*nb, 5))
+      if (allocated(this%mu)) deallocate (this%mu, this%dist, this%fbuf)
+      allocate (this%mu(3*nb, 3*nb), this%dist(3*nb, 5), this%fbuf(3*nb, 2))
     end if
     this%n = 0
     call this%sys%factorise(r, error)
@@ -98,13 +110,11 @@ contains
     class(multipole_model_t), intent(inout) :: this
     real(wp), intent(in) :: f(:, :)
     real(wp), intent(out) :: u(:, :)
-    integer :: i, j
-    u = 0.0_wp
-    do j = 1, this%n
-      do i = 1, this%n
-        u(:, i) = u(:, i) + matmul(this%mu(3*i - 2:3*i, 3*j - 2:3*j), f(:, j))
-      end do
-    end do
+    integer :: n3
+    n3 = 3*this%n
+    this%fbuf(:, 1) = reshape(f(:, 1:this%n), [n3])
+    call dgemv('N', n3, n3, 1.0_wp, this%mu, n3, this%fbuf(:, 1), 1, 0.0_wp, this%fbuf(:, 2), 1)
+    u(:, 1:this%n) = reshape(this%fbuf(:, 2), [3, this%n])
   end subroutine multipole_apply
 
   !> u = u + C:E for the symmetric traceless rate of strain e.
