@@ -1,23 +1,26 @@
-!> knotflow-bench-multipole: time of one evaluation of the multipole hydrodynamics (assembly incl.
-!> the p-moment elimination, Cholesky factorisation, solves for mobility and shear disturbance)
-!> for self-avoiding random chains (bond 1.02, non-bonded distance >= 1.05, fixed seed) with
-!> N = 10, 20, 99, 152 and L = 1..4. Best of 2-5 repeated evaluations (arrays reused).
-!> Usage: knotflow-bench-multipole [max_seconds]  (combinations predicted to exceed it are skipped;
-!> default 60). Run with OPENBLAS_NUM_THREADS=1 for single-core figures.
+!> knotflow-bench-multipole: wall time of one evaluation of the multipole hydrodynamics
+!> (multipole_model_t%prepare: assembly of the pair blocks, factorisation = p-moment elimination
+!> + Cholesky, solves for mobility and shear disturbance, lubrication corrections and the
+!> friction route) for self-avoiding random chains (bond 1.02, non-bonded centre distance
+!> >= 1.05, fixed seed) with N = 10, 20, 99, 152, L = 1..4, without and with lubrication.
+!> Best of 2-5 repeated evaluations (arrays reused, as in a time integration).
+!> Usage: knotflow-bench-multipole [max_seconds]  (combinations predicted to take longer are
+!> skipped; default 60). Run with OPENBLAS_NUM_THREADS=1 for single-core figures.
 program knotflow_bench_multipole
   use, intrinsic :: iso_fortran_env, only: output_unit, error_unit, int64
   use kf_kinds, only: wp
   use kf_error, only: error_t
-  use kf_multipole_system, only: multipole_system_t
+  use kf_hydro_multipole, only: multipole_model_t
   implicit none
 
   integer, parameter :: sizes(4) = [10, 20, 99, 152]
-  type(multipole_system_t) :: sys
+  type(multipole_model_t) :: model
   type(error_t), allocatable :: error
-  real(wp), allocatable :: r(:, :), mu(:, :), dist(:, :)
-  real(wp) :: t_asm, t_fac, t_sol, t_tot, best, predicted, max_seconds, t_prev
-  integer :: is, order, n, rep, nrep, ios, l_prev
+  real(wp), allocatable :: r(:, :)
+  real(wp) :: t_asm, t_fac, t_lub, t_sol, t_tot, best, predicted, max_seconds, t_prev
+  integer :: is, order, n, rep, nrep, ios, n_prev, ilub
   integer(int64) :: c0, c1, crate
+  logical :: lub
   character(len=64) :: arg
 
   max_seconds = 60.0_wp
@@ -31,52 +34,53 @@ program knotflow_bench_multipole
     end if
   end if
 
-  write (output_unit, '(a)') '#   N  L  unknowns  assembly[s]  factor[s]   solve[s]   total[s]  '// &
-    'assembly%  factor%  solve%'
-  do order = 1, 4
-    t_prev = 0.0_wp
-    l_prev = 0
-    do is = 1, size(sizes)
-      n = sizes(is)
-      ! cost grows like N^3 for the factorisation
-      if (l_prev > 0) then
-        predicted = t_prev*(real(n, wp)/real(l_prev, wp))**3
-        if (predicted > max_seconds) then
-          write (output_unit, '(i5,i3,a,f10.1,a)') n, order, '  skipped (predicted ', predicted, ' s)'
-          cycle
-        end if
+  write (output_unit, '(a)') '#   N  L lub  assembly[s] factor[s]  solve[s]    lub[s]  total[s]'// &
+    '  asm%  fac%  sol%  lub%'
+  do ilub = 0, 1
+    lub = (ilub == 1)
+    do order = 1, 4
+      t_prev = 0.0_wp
+      n_prev = 0
+      call model%init(order, lub, 1.0e-4_wp, error)
+      if (allocated(error)) then
+        write (output_unit, '(a)') '# skipped: '//error%message
+        exit
       end if
-      call random_chain(n, 20150509, r)
-      call sys%init(order, 1.0001_wp, error)
-      if (allocated(error)) call fail(error%message)
-      if (allocated(mu)) deallocate (mu, dist)
-      allocate (mu(3*n, 3*n), dist(6*n, 5))
-      ! repeated calls reuse the arrays (as in a time integration): the first call pays for
-      ! allocation and first touch of the memory, so report the best of several calls
-      nrep = 2
-      if (n <= 99) nrep = 3
-      if (n <= 20) nrep = 5
-      best = huge(1.0_wp)
-      do rep = 1, nrep
-        call system_clock(c0, crate)
-        call sys%factorise(r, error)
-        if (allocated(error)) call fail(error%message)
-        call sys%translational_mobility(mu)
-        call sys%strain_disturbance(dist)
-        call system_clock(c1)
-        t_tot = real(c1 - c0, wp)/real(crate, wp)
-        if (t_tot < best) then
-          best = t_tot
-          t_asm = sys%t_assembly
-          t_fac = sys%t_factor
-          t_sol = t_tot - t_asm - t_fac
+      do is = 1, size(sizes)
+        n = sizes(is)
+        if (n_prev > 0) then
+          predicted = t_prev*(real(n, wp)/real(n_prev, wp))**3
+          if (predicted > max_seconds) then
+            write (output_unit, '(i5,i3,l4,a,f8.1,a)') n, order, lub, '  skipped (predicted ', &
+              predicted, ' s)'
+            cycle
+          end if
         end if
+        call random_chain(n, 20150509, r)
+        nrep = 2
+        if (n <= 99) nrep = 3
+        if (n <= 20) nrep = 5
+        best = huge(1.0_wp)
+        do rep = 1, nrep
+          call system_clock(c0, crate)
+          call model%prepare(r, error)
+          if (allocated(error)) call fail(error%message)
+          call system_clock(c1)
+          t_tot = real(c1 - c0, wp)/real(crate, wp)
+          if (t_tot < best) then
+            best = t_tot
+            t_asm = model%sys%t_assembly
+            t_fac = model%sys%t_factor
+            t_lub = model%t_lubrication
+            t_sol = t_tot - t_asm - t_fac - t_lub
+          end if
+        end do
+        write (output_unit, '(i5,i3,l4,5f10.4,4f6.1)') n, order, lub, t_asm, t_fac, t_sol, t_lub, &
+          best, 100*t_asm/best, 100*t_fac/best, 100*t_sol/best, 100*t_lub/best
+        flush (output_unit)
+        t_prev = best
+        n_prev = n
       end do
-      write (output_unit, '(i5,i3,i10,4f11.4,3f9.1)') n, order, sys%nr + n*order*(order + 2), &
-        t_asm, t_fac, t_sol, best, 100*t_asm/best, 100*t_fac/best, 100*t_sol/best
-      flush (output_unit)
-      t_prev = best
-      l_prev = n
     end do
   end do
 

@@ -23,6 +23,9 @@ module kf_hydro_multipole
     real(wp), allocatable :: dist(:, :)  !< 3N x 5 disturbance for the basis strains
     real(wp), allocatable :: fbuf(:, :)  !< 3N x 2 work for apply_mobility
     real(wp), allocatable :: dz(:, :), dx(:, :) !< summed pair corrections (6N x 6N, 6N x 5)
+    integer :: n_lub_pairs = 0           !< pairs corrected at the last prepare
+    integer :: n_overlaps = 0            !< overlapping pairs (r <= 1) at the last prepare
+    real(wp) :: t_lubrication = 0.0_wp   !< seconds in the lubrication part of the last prepare
   contains
     procedure :: init => multipole_init
     procedure :: prepare => multipole_prepare
@@ -88,6 +91,7 @@ contains
     this%n = 0
     call this%sys%factorise(r, error)
     if (allocated(error)) return
+    this%n_overlaps = this%sys%n_clamped
     call this%sys%translational_mobility(this%mu)
     call disturbance_translational(this)
     this%n = nb
