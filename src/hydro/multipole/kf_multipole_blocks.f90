@@ -178,6 +178,7 @@ contains
     integer :: p, q, gp, gq, ia, ib, a, b, nterm, s, kk, kflat, lambda, mu, off, na, nbb, t
     complex(wp) :: w, z
     real(wp) :: big, sg
+    integer :: touched(16), ntouch, it
 
     this%nslot = 2*((2*this%order + 1)*(2*this%order + 2)/2)
     allocate (acc(2*this%nslot), slots(this%nb*this%nb*16), coefs(this%nb*this%nb*16))
@@ -194,7 +195,7 @@ contains
         p = ungrp(gp)
         na = 2
         if (this%widx(1, p) == this%widx(2, p)) na = 1
-        acc = 0.0_wp
+        ntouch = 0
         do ib = 1, nbb
           b = this%widx(ib, q)
           do ia = 1, na
@@ -218,13 +219,18 @@ contains
               if (z == (0.0_wp, 0.0_wp)) cycle
               lambda = modulo(kflat - 1, 2*this%order + 1)
               mu = (kflat - 1)/(2*this%order + 1) - 2*this%order
+              s = off + slot_of(lambda, abs(mu), 0)
+              if (.not. any(touched(1:ntouch) == s)) then
+                ntouch = ntouch + 1
+                touched(ntouch) = s
+                acc(s) = 0.0_wp
+                acc(s + 1) = 0.0_wp
+              end if
               if (mu >= 0) then
-                s = off + slot_of(lambda, mu, 0)
                 acc(s) = acc(s) + real(z, wp)
                 acc(s + 1) = acc(s + 1) - aimag(z)
               else
                 sg = real(1 - 2*modulo(mu, 2), wp)
-                s = off + slot_of(lambda, -mu, 0)
                 acc(s) = acc(s) + sg*real(z, wp)
                 acc(s + 1) = acc(s + 1) + sg*aimag(z)
               end if
@@ -232,13 +238,19 @@ contains
           end do
         end do
         this%term_ptr(gp + this%nb*(gq - 1)) = nterm + 1
-        big = maxval(abs(acc))
-        do s = 1, size(acc)
-          if (abs(acc(s)) > 1.0e-13_wp*big) then
-            nterm = nterm + 1
-            slots(nterm) = s
-            coefs(nterm) = acc(s)
-          end if
+        big = 0.0_wp
+        do it = 1, ntouch
+          big = max(big, abs(acc(touched(it))), abs(acc(touched(it) + 1)))
+        end do
+        call sort_small(touched(1:ntouch))
+        do it = 1, ntouch
+          do s = touched(it), touched(it) + 1
+            if (abs(acc(s)) > 1.0e-13_wp*big) then
+              nterm = nterm + 1
+              slots(nterm) = s
+              coefs(nterm) = acc(s)
+            end if
+          end do
         end do
       end do
     end do
@@ -246,6 +258,22 @@ contains
     this%term_slot = slots(1:nterm)
     this%term_coef = coefs(1:nterm)
   end subroutine build_real_terms
+
+  !> Insertion sort of a few integers.
+  pure subroutine sort_small(v)
+    integer, intent(inout) :: v(:)
+    integer :: i, j, x
+    do i = 2, size(v)
+      x = v(i)
+      j = i - 1
+      do while (j >= 1)
+        if (v(j) <= x) exit
+        v(j + 1) = v(j)
+        j = j - 1
+      end do
+      v(j + 1) = x
+    end do
+  end subroutine sort_small
 
   !> Scaled real translation block in grouped order for displacement d (receiver - source):
   !> ihf = irregular harmonics of d (shape (0:2L, -2L:2L), passed whole), y = work of size
