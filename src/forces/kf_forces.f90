@@ -164,7 +164,7 @@ contains
 
   !> Discrete-elastica bending. With w+ = b1 - c b2 and w- = b2 - c b1 (b1, b2 the unit bonds
   !> before and after bead i, c = cos beta, |w+| = |w-| = sin beta):
-  !>   F_{i+1} = (A/l0) beta w+ / (|w+| l_i),  F_{i-1} = (A/l0) beta w- / (|w-| l_{i-1}),
+  !>   F_{i+1} = (A/l0) beta w+ / (|w+| l_i),  F_{i-1} = -(A/l0) beta w- / (|w-| l_{i-1}),
   !>   F_i = -(F_{i-1} + F_{i+1}).
   !> Using w/|w| avoids dividing by sin beta: the force stays bounded (|F| <= A beta / (l0 l))
   !> as beta -> pi and vanishes smoothly as beta -> 0; an exactly degenerate w gives zero.
@@ -194,7 +194,7 @@ contains
         fp = 0.0_wp
       end if
       if (nm > 0.0_wp) then
-        fm = (a_over_l0*beta/(nm*l1))*wm
+        fm = -(a_over_l0*beta/(nm*l1))*wm
       else
         fm = 0.0_wp
       end if

@@ -231,7 +231,7 @@ contains
         end if
         do q = 1, 3
           do p = 1, 3
-            blk(p, q) = bb*d(p)*d(q)
+            blk(p, q) = bb*(d(p)*d(q))
           end do
           blk(q, q) = blk(q, q) + a
         end do
