@@ -15,6 +15,8 @@ program knotflow_mobility
   use kf_error, only: error_t, fatal_error
   use kf_hydro_model, only: hydro_model_t
   use kf_hydro_multipole, only: multipole_model_t
+  use kf_hydro_factory, only: make_hydro_model
+  use kf_scene, only: hydro_params_t
   implicit none
 
   interface
@@ -95,7 +97,15 @@ program knotflow_mobility
       call move_alloc(mp, model)
     end block
   case default
-    call die('--model '//model_name//': not available in this build (only multipole)')
+    block
+      type(hydro_params_t) :: params
+      params%model = model_name
+      params%order = order
+      params%lubrication = lubrication
+      params%eps_lub = eps_lub
+      call make_hydro_model(params, eps_lub, model, error)
+      if (allocated(error)) call die(error%message)
+    end block
   end select
 
   call model%prepare(r, error)
