@@ -19,8 +19,9 @@ module kf_near_contact
 
   !> Join window of the exact functions (in xi).
   real(wp), parameter, public :: xi_join_lo = 0.01_wp, xi_join_hi = 0.02_wp
-  !> Window (in xi) over which the subtracted singular part is switched off in the tables.
-  real(wp), parameter, public :: xi_sing_lo = 0.2_wp, xi_sing_hi = 0.6_wp
+  !> Window (in u = sqrt(xi)) over which the subtracted singular part is switched off in the
+  !> tables (xi from 0.09 to 1, r from 1.045 d to 1.5 d).
+  real(wp), parameter, public :: u_sing_lo = 0.3_wp, u_sing_hi = 1.0_wp
 
   real(wp), parameter :: zeta3 = 1.2020569031595942854_wp
 
@@ -78,10 +79,22 @@ contains
     f = near_coeff(1, :)/xi + near_coeff(2, :)*lg + near_coeff(3, :)*xi*lg
   end subroutine singular_part
 
-  !> Weight of the subtracted singular part: 1 near contact, 0 beyond xi_sing_hi (C2).
+  !> Weight of the subtracted singular part: exactly 1 near contact, 0 beyond u_sing_hi, with an
+  !> infinitely differentiable transition in u = sqrt(xi) (so the tabulated remainder is smooth
+  !> on the table's grid in u).
   pure real(wp) function singular_weight(xi)
     real(wp), intent(in) :: xi
-    singular_weight = 1.0_wp - smoothstep((xi - xi_sing_lo)/(xi_sing_hi - xi_sing_lo))
+    real(wp) :: t, a, b
+    t = (sqrt(xi) - u_sing_lo)/(u_sing_hi - u_sing_lo)
+    if (t <= 0.0_wp) then
+      singular_weight = 1.0_wp
+    else if (t >= 1.0_wp) then
+      singular_weight = 0.0_wp
+    else
+      a = exp(-1.0_wp/t)
+      b = exp(-1.0_wp/(1.0_wp - t))
+      singular_weight = b/(a + b)
+    end if
   end function singular_weight
 
   !> Truncation order used for the converged multipole functions at gap xi (MULTIPOLE.md 12.2:
