@@ -89,7 +89,8 @@ contains
   end function cutoff
 
   !> Corrections f_exact - f_L of the 22 resistance functions at centre distance r (r > 1),
-  !> including the taper; zero for r >= cutoff. No overlap rule here (see pair_correction).
+  !> including the taper; zero for r >= cutoff. No overlap rule here (see pair_correction);
+  !> gaps are clamped to xi >= 1e-12 so that r <= 1 cannot produce NaN or a division by 0.
   pure subroutine correction_functions(this, r, df)
     class(lubrication_t), intent(in) :: this
     real(wp), intent(in) :: r
@@ -99,7 +100,7 @@ contains
 
     df = 0.0_wp
     if (r >= this%r_cut) return
-    xi = 2.0_wp*(r - 1.0_wp)
+    xi = max(2.0_wp*(r - 1.0_wp), 1.0e-12_wp)
     u = sqrt(xi)
     i = min(this%n - 1, int(u/this%h) + 1)
     t = u/this%h - real(i - 1, wp)

@@ -11,12 +11,12 @@ module kf_pair_tensor
   use kf_kinds, only: wp
   use kf_error, only: error_t
   use kf_lapack, only: cholesky_factor, cholesky_invert
-  use kf_two_sphere, only: n_functions, i_xa11, i_ya11, i_yb11, i_xc11, i_yc11, i_xg11, i_yg11, &
+  use kf_two_sphere, only: n_functions, two_sphere_resistance, i_xa11, i_ya11, i_yb11, i_xc11, i_yc11, i_xg11, i_yg11, &
     i_yh11
   implicit none
   private
 
-  public :: pair_tensors, pair_mobility_functions
+  public :: pair_tensors, pair_mobility_functions, two_sphere_mobility
 
 contains
 
@@ -131,5 +131,20 @@ contains
     end if
     mob = 3.0_wp*[zeta(3, 3), zeta(3, 9), zeta(1, 1), zeta(1, 7)]
   end subroutine pair_mobility_functions
+
+  !> Mobility functions [x11a, x12a, y11a, y12a] of the pair at centre distance r (units of d),
+  !> multipole truncated at `order` (the inverse of the order-L pair friction, i.e. the Schur
+  !> complement of the multipole system onto forces and torques).
+  subroutine two_sphere_mobility(r, order, mob, error)
+    real(wp), intent(in) :: r
+    integer, intent(in) :: order
+    real(wp), intent(out) :: mob(4)
+    type(error_t), allocatable, intent(out) :: error
+    real(wp) :: f(n_functions)
+    mob = 0.0_wp
+    call two_sphere_resistance(r, order, f, error)
+    if (allocated(error)) return
+    call pair_mobility_functions(f, mob, error)
+  end subroutine two_sphere_mobility
 
 end module kf_pair_tensor
