@@ -25,7 +25,7 @@ kf_as_root() {
 }
 
 # System packages (Debian 12 names).  Installed with apt-get only when dpkg says missing.
-KF_APT_PACKAGES=(gfortran cmake make git pkg-config libopenmpi-dev openmpi-bin libhdf5-dev
+KF_APT_PACKAGES=(gcc gfortran cmake make git pkg-config openssh-client libopenmpi-dev openmpi-bin libhdf5-dev
                  libopenblas-dev liblapack-dev libfftw3-dev python3 python3-pip python3-venv)
 
 kf_ensure_system_packages() {
@@ -54,23 +54,26 @@ kf_ensure_system_packages() {
 }
 
 # Python: the tools package (tools/pyproject.toml, editable, with its [test] extra) or, before
-# it exists, numpy h5py matplotlib pytest.  A Python that refuses pip installs (PEP 668, e.g.
-# Debian's /usr/bin/python3) gets a virtual environment in build/venv that still sees the
-# system site-packages.  Sets KF_PY to the interpreter to use and puts its bin/ first on PATH.
+# it exists, numpy h5py matplotlib pytest.  Installs go into a virtual environment of this
+# checkout, build/venv, created with --system-site-packages so that packages the base Python
+# already has are reused: nothing is installed into the base Python (which may be shared with
+# other checkouts, or refuse pip installs under PEP 668 as Debian's /usr/bin/python3 does).
+# An interpreter that already runs inside a virtual environment is used as it is.
+# Sets KF_PY to the interpreter to use and puts its bin/ first on PATH.
 kf_ensure_python() {
   local py="${KNOTFLOW_PYTHON:-python3}"
   command -v "$py" >/dev/null 2>&1 || kf_die "python interpreter '$py' not found"
   py="$(command -v "$py")"
-  local stdlib
-  stdlib="$("$py" -c 'import sysconfig; print(sysconfig.get_path("stdlib"))')"
   local in_venv
-  in_venv="$("$py" -c 'import sys; print(int(sys.prefix != sys.base_prefix))')"
-  if [ "$in_venv" = 0 ] && [ -f "$stdlib/EXTERNALLY-MANAGED" ]; then
+  in_venv="$("$py" -c 'import sys; print(int(sys.prefix != sys.base_prefix))')" \
+    || kf_die "cannot run $py"
+  if [ "$in_venv" = 0 ]; then
     local venv="$KF_ROOT/build/venv"
     if [ ! -x "$venv/bin/python" ]; then
-      kf_log "creating a virtual environment in $venv ($py is externally managed)"
+      kf_log "creating the virtual environment $venv (sees $py's packages)"
       mkdir -p "$KF_ROOT/build"
-      "$py" -m venv --system-site-packages "$venv" || kf_die "python3 -m venv failed"
+      "$py" -m venv --system-site-packages "$venv" </dev/null \
+        || kf_die "$py -m venv failed (Debian: apt-get install python3-venv)"
     fi
     py="$venv/bin/python"
   fi

@@ -9,7 +9,8 @@ module kf_hydro_multipole
   use kf_kinds, only: wp
   use kf_error, only: error_t, fatal_error
   use kf_hydro_model, only: hydro_model_t
-  use kf_multipole_system, only: multipole_system_t, strain_coefficients
+  use kf_multipole_system, only: multipole_system_t, strain_coefficients, strain_basis
+  use kf_lubrication, only: lubrication_t
   implicit none
   private
 
@@ -23,6 +24,7 @@ module kf_hydro_multipole
     real(wp), allocatable :: dist(:, :)  !< 3N x 5 disturbance for the basis strains
     real(wp), allocatable :: fbuf(:, :)  !< 3N x 2 work for apply_mobility
     real(wp), allocatable :: dz(:, :), dx(:, :) !< summed pair corrections (6N x 6N, 6N x 5)
+    type(lubrication_t) :: lub
     integer :: n_lub_pairs = 0           !< pairs corrected at the last prepare
     integer :: n_overlaps = 0            !< overlapping pairs (r <= 1) at the last prepare
     real(wp) :: t_lubrication = 0.0_wp   !< seconds in the lubrication part of the last prepare
@@ -65,9 +67,8 @@ contains
       return
     end if
     if (lubrication) then
-      call fatal_error(error, 'multipole: lubrication corrections are not available in this '// &
-                       'build yet (kf_lubrication not integrated); use lubrication = off')
-      return
+      call this%lub%init(order, eps_lub, error)
+      if (allocated(error)) return
     end if
     this%order = order
     this%lubrication = lubrication
@@ -87,15 +88,68 @@ contains
     if (nb /= this%n .or. .not. allocated(this%mu)) then
       if (allocated(this%mu)) deallocate (this%mu, this%dist, this%fbuf)
       allocate (this%mu(3*nb, 3*nb), this%dist(3*nb, 5), this%fbuf(3*nb, 2))
+      if (this%lubrication) then
+        if (allocated(this%dz)) deallocate (this%dz, this%dx)
+        allocate (this%dz(6*nb, 6*nb), this%dx(6*nb, 5))
+      end if
     end if
     this%n = 0
     call this%sys%factorise(r, error)
     if (allocated(error)) return
     this%n_overlaps = this%sys%n_clamped
-    call this%sys%translational_mobility(this%mu)
-    call disturbance_translational(this)
+    if (this%lubrication) then
+      call lubrication_route(this, r, error)
+      if (allocated(error)) return
+    else
+      call this%sys%translational_mobility(this%mu)
+      call disturbance_translational(this)
+    end if
     this%n = nb
   end subroutine multipole_prepare
+
+  !> Friction route with the pair corrections of every pair closer than lub%cutoff():
+  !> zeta = zeta_L + sum dzeta, x = x_L + sum dxe:E (five basis strains).
+  subroutine lubrication_route(this, r, error)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    real(wp) :: dzeta(12, 12), dxe(12, 3, 3), d(3), rc, bas(3, 3, 5)
+    integer :: i, j, k, nb, ii(12), a, b
+    integer(8) :: c0, c1, crate
+
+    call system_clock(c0, crate)
+    nb = size(r, 2)
+    rc = this%lub%cutoff()
+    do k = 1, 5
+      bas(:, :, k) = strain_basis(k)
+    end do
+    this%dz = 0.0_wp
+    this%dx = 0.0_wp
+    this%n_lub_pairs = 0
+    do i = 1, nb
+      do j = i + 1, nb
+        d = r(:, j) - r(:, i)
+        if (norm2(d) >= rc) cycle
+        call this%lub%pair_correction(d, dzeta, dxe)
+        this%n_lub_pairs = this%n_lub_pairs + 1
+        ii(1:6) = [(6*(i - 1) + k, k = 1, 6)]
+        ii(7:12) = [(6*(j - 1) + k, k = 1, 6)]
+        do b = 1, 12
+          do a = 1, 12
+            this%dz(ii(a), ii(b)) = this%dz(ii(a), ii(b)) + dzeta(a, b)
+          end do
+        end do
+        do k = 1, 5
+          do a = 1, 12
+            this%dx(ii(a), k) = this%dx(ii(a), k) + sum(dxe(a, :, :)*bas(:, :, k))
+          end do
+        end do
+      end do
+    end do
+    call this%sys%corrected(this%dz, this%dx, this%mu, this%dist, error)
+    call system_clock(c1)
+    this%t_lubrication = real(c1 - c0, wp)/real(crate, wp)
+  end subroutine lubrication_route
 
   !> The translational part of the system's free-sphere disturbance for the basis strains.
   subroutine disturbance_translational(this)
@@ -159,6 +213,7 @@ contains
     type(error_t), allocatable, intent(out) :: error
     call this%sys%grand_friction(zeta, error)
     if (allocated(error)) return
+    if (this%lubrication) zeta = zeta + this%dz
   end subroutine multipole_friction_matrix
 
 end module kf_hydro_multipole

@@ -13,8 +13,10 @@
 !> mobility 1/3 and rotational mobility 1; Cartesian ordering per sphere [U(3), Omega(3)].
 !>
 !> Overlapping spheres (BWE rule applied to the multipole part too): the pair blocks of a pair
-!> with centre distance r <= 1 are evaluated at r = min_distance = 1 + eps along the line of
-!> centres (the plain system is not positive definite for overlapping spheres).
+!> with centre distance r < min_distance = 1 + eps_lub are evaluated at r = min_distance along
+!> the line of centres (the plain system is not positive definite for overlapping spheres);
+!> this is the distance at which kf_lubrication evaluates that pair's correction, so the pair
+!> part of the corrected friction is continuous.
 module kf_multipole_system
   use kf_kinds, only: wp
   use kf_constants, only: pi
@@ -29,12 +31,12 @@ module kf_multipole_system
   !> The factorised N-sphere system.
   type, public :: multipole_system_t
     type(multipole_layout_t) :: lay
-    real(wp) :: min_distance = 1.0_wp   !< overlapping pairs (|d| <= 1) are evaluated here
+    real(wp) :: min_distance = 1.0_wp   !< pairs with |d| < min_distance are evaluated there
     integer :: n = 0        !< number of spheres
     integer :: nr = 0       !< size of K (phi and chi unknowns), 2 N L(L+2)
     integer :: nqt = 0      !< unknowns of K outside P (they come first)
     integer :: n6 = 0       !< 6N
-    integer :: n_clamped = 0 !< overlapping pairs (|d| <= 1) at the last factorise
+    integer :: n_clamped = 0 !< pairs closer than min_distance at the last factorise
     integer :: kmap(3) = [2, 3, 1] !< P component (1..3 = real q 0..2) of Cartesian x, y, z
     real(wp) :: scal(6) = 0.0_wp !< moment_hat = scal(c) * Cartesian force/torque component c
     real(wp), allocatable :: k(:, :)     !< K, then its Cholesky factor (lower triangle)
@@ -110,8 +112,8 @@ module kf_multipole_system
 
 contains
 
-  !> Truncation order L (1..20) and the distance min_distance (> 1) at which overlapping pairs
-  !> (|d| <= 1) are evaluated; min_distance <= 0 disables the overlap treatment.
+  !> Truncation order L (1..20) and the distance min_distance (1 + eps_lub) at which closer
+  !> (overlapping) pairs are evaluated; min_distance <= 0 disables the overlap treatment.
   subroutine system_init(this, order, min_distance, error)
     class(multipole_system_t), intent(inout) :: this
     integer, intent(in) :: order
@@ -230,7 +232,7 @@ contains
           this%n = 0
           return
         end if
-        if (dist <= 1.0_wp .and. this%min_distance > 0.0_wp) then
+        if (dist < this%min_distance) then
           d = d*(this%min_distance/dist)
           this%n_clamped = this%n_clamped + 1
         end if
