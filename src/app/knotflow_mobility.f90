@@ -3,6 +3,9 @@
 !>   knotflow-mobility FILE [--model none|rpy|multipole] [--order L] [--lubrication on|off]
 !>                          [--eps-lub X] [--output mobility|shear]
 !>
+!> Defaults: --model multipole --order 2 --lubrication on --eps-lub 1e-4 --output mobility
+!> (eps_lub: overlapping pairs, r <= 1, are evaluated at 1 + eps_lub; it is also passed to the
+!> factory as the tolerance for none/rpy, which ignore it).
 !> FILE: one bead per line "x y z" (blank lines and lines starting with # are ignored).
 !> mobility: 3N lines of 3N numbers, row 3(i-1)+a = velocity component, column 3(j-1)+b = force
 !> component (project units: an isolated bead has 1/3). shear: N lines of the velocity minus
@@ -36,7 +39,7 @@ program knotflow_mobility
 
   model_name = 'multipole'
   order = 2
-  lubrication = .false.
+  lubrication = .true.
   eps_lub = 1.0e-4_wp
   output = 'mobility'
   file = ''
