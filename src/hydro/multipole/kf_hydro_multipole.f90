@@ -23,6 +23,7 @@ module kf_hydro_multipole
     real(wp), allocatable :: mu(:, :)    !< 3N x 3N translational mobility
     real(wp), allocatable :: dist(:, :)  !< 3N x 5 disturbance for the basis strains
     real(wp), allocatable :: fbuf(:, :)  !< 3N x 2 work for apply_mobility
+    real(wp), allocatable :: d6(:, :)    !< 6N x 5 work (disturbance incl. rotations)
     real(wp), allocatable :: dz(:, :), dx(:, :) !< summed pair corrections (6N x 6N, 6N x 5)
     type(lubrication_t) :: lub
     integer :: n_lub_pairs = 0           !< pairs corrected at the last prepare
@@ -86,8 +87,8 @@ contains
 
     nb = size(r, 2)
     if (nb /= this%n .or. .not. allocated(this%mu)) then
-      if (allocated(this%mu)) deallocate (this%mu, this%dist, this%fbuf)
-      allocate (this%mu(3*nb, 3*nb), this%dist(3*nb, 5), this%fbuf(3*nb, 2))
+      if (allocated(this%mu)) deallocate (this%mu, this%dist, this%fbuf, this%d6)
+      allocate (this%mu(3*nb, 3*nb), this%dist(3*nb, 5), this%fbuf(3*nb, 2), this%d6(6*nb, 5))
       if (this%lubrication) then
         if (allocated(this%dz)) deallocate (this%dz, this%dx)
         allocate (this%dz(6*nb, 6*nb), this%dx(6*nb, 5))
@@ -154,12 +155,10 @@ contains
   !> The translational part of the system's free-sphere disturbance for the basis strains.
   subroutine disturbance_translational(this)
     class(multipole_model_t), intent(inout) :: this
-    real(wp), allocatable :: d6(:, :)
     integer :: i
-    allocate (d6(this%sys%n6, 5))
-    call this%sys%strain_disturbance(d6)
+    call this%sys%strain_disturbance(this%d6)
     do i = 1, this%sys%n
-      this%dist(3*i - 2:3*i, :) = d6(6*i - 5:6*i - 3, :)
+      this%dist(3*i - 2:3*i, :) = this%d6(6*i - 5:6*i - 3, :)
     end do
   end subroutine disturbance_translational
 
