@@ -1,8 +1,9 @@
 !> knotflow-bench-multipole: wall time of one evaluation of the multipole hydrodynamics
 !> (multipole_model_t%prepare: assembly of the pair blocks, factorisation = p-moment elimination
 !> + Cholesky, solves for mobility and shear disturbance, lubrication corrections and the
-!> friction route) for self-avoiding random chains (bond 1.02, non-bonded centre distance
-!> >= 1.05, fixed seed) with N = 10, 20, 99, 152, L = 1..4, without and with lubrication.
+!> friction route) for N = 10, 20 (self-avoiding random chains: bond 1.02, non-bonded centre
+!> distance >= 1.05, fixed seed), 99 (the open trefoil of PHYSICS.md 5, orientation a) and 152
+!> (the candy-cane), L = 1..4, without and with lubrication.
 !> Best of 2-5 repeated evaluations (arrays reused, as in a time integration).
 !> Usage: knotflow-bench-multipole [max_seconds]  (combinations predicted to take longer are
 !> skipped; default 60). Run with OPENBLAS_NUM_THREADS=1 for single-core figures.
@@ -11,6 +12,8 @@ program knotflow_bench_multipole
   use kf_kinds, only: wp
   use kf_error, only: error_t
   use kf_hydro_multipole, only: multipole_model_t
+  use kf_scene, only: chain_params_t
+  use kf_chain_shapes, only: build_initial_chain
   implicit none
 
   integer, parameter :: sizes(4) = [10, 20, 99, 152]
@@ -56,7 +59,7 @@ program knotflow_bench_multipole
             cycle
           end if
         end if
-        call random_chain(n, 20150509, r)
+        call bench_chain(n, r)
         nrep = 2
         if (n <= 99) nrep = 3
         if (n <= 20) nrep = 5
@@ -85,6 +88,26 @@ program knotflow_bench_multipole
   end do
 
 contains
+
+  !> The benchmark geometry with N beads.
+  subroutine bench_chain(nbeads, pos)
+    integer, intent(in) :: nbeads
+    real(wp), allocatable, intent(out) :: pos(:, :)
+    type(chain_params_t) :: params
+    real(wp) :: rotation(3, 3)
+    select case (nbeads)
+    case (99)
+      params%shape = 'trefoil'
+    case (152)
+      params%shape = 'candycane'
+    case default
+      call random_chain(nbeads, 20150509, pos)
+      return
+    end select
+    call build_initial_chain(params, pos, rotation, error)
+    if (allocated(error)) call fail(error%message)
+    if (size(pos, 2) /= nbeads) call fail('unexpected number of beads in '//trim(params%shape))
+  end subroutine bench_chain
 
   subroutine fail(message)
     character(len=*), intent(in) :: message
