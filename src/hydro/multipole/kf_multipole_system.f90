@@ -164,7 +164,7 @@ contains
     integer :: lo(5), hi(5), ks(4, 2), bs(4, 2), ps(2)
     integer(8) :: c0, c1, c2, crate
     real(wp) :: d(3), dist
-    character(len=64) :: buf
+    character(len=64) :: buf, buf2
 
     nsph = size(r, 2)
     if (nsph < 1) then
@@ -278,8 +278,10 @@ contains
     if (info /= 0) then
       write (buf, '(i0)') info
       if (info > 0) then
+        write (buf2, '(i0)') this%n_clamped
         call fatal_error(error, 'Cholesky factorisation of the multipole system failed: matrix not '// &
-                         'positive definite (leading minor '//trim(buf)//'); overlapping spheres?')
+                         'positive definite (leading minor '//trim(buf)//'); '//trim(buf2)// &
+                         ' overlapping pairs (mutually overlapping spheres are not supported)')
       else
         call fatal_error(error, 'dpotrf: illegal argument '//trim(buf)//' for the multipole system')
       end if
