@@ -1,0 +1,215 @@
+!> knotflow-mobility: the 3N x 3N mobility or the shear disturbance of beads read from a file.
+!>
+!>   knotflow-mobility FILE [--model none|rpy|multipole] [--order L] [--lubrication on|off]
+!>                          [--eps-lub X] [--output mobility|shear]
+!>
+!> Defaults: --model multipole --order 2 --lubrication on --eps-lub 1e-4 --output mobility
+!> (eps_lub: overlapping pairs, r <= 1, are evaluated at 1 + eps_lub; it is also passed to the
+!> factory as the tolerance for none/rpy, which ignore it).
+!> FILE: one bead per line "x y z" (blank lines and lines starting with # are ignored).
+!> mobility: 3N lines of 3N numbers, row 3(i-1)+a = velocity component, column 3(j-1)+b = force
+!> component (project units: an isolated bead has 1/3). shear: N lines of the velocity minus
+!> v0 of force-free, torque-free beads in simple shear v0 = (z, 0, 0).
+!> Errors: one line on stderr and exit code 2.
+program knotflow_mobility
+  use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
+  use, intrinsic :: iso_c_binding, only: c_int
+  use kf_kinds, only: wp
+  use kf_error, only: error_t, fatal_error
+  use kf_hydro_model, only: hydro_model_t
+  use kf_hydro_multipole, only: multipole_model_t
+  use kf_hydro_factory, only: make_hydro_model
+  use kf_scene, only: hydro_params_t
+  implicit none
+
+  interface
+    subroutine c_exit(status) bind(C, name='exit')
+      import :: c_int
+      integer(c_int), value :: status
+    end subroutine c_exit
+  end interface
+
+  character(len=:), allocatable :: file, model_name, output, arg, val
+  integer :: order, i, j, nargs, ios, n
+  logical :: lubrication
+  real(wp) :: eps_lub, e(3, 3)
+  real(wp), allocatable :: r(:, :), mu(:, :), u(:, :)
+  class(hydro_model_t), allocatable :: model
+  type(error_t), allocatable :: error
+
+  model_name = 'multipole'
+  order = 2
+  lubrication = .true.
+  eps_lub = 1.0e-4_wp
+  output = 'mobility'
+  file = ''
+
+  nargs = command_argument_count()
+  i = 1
+  do while (i <= nargs)
+    arg = get_arg(i)
+    select case (arg)
+    case ('--model', '--order', '--lubrication', '--eps-lub', '--output')
+      if (i == nargs) call die('option '//arg//' needs a value')
+      val = get_arg(i + 1)
+      i = i + 2
+      select case (arg)
+      case ('--model')
+        if (val /= 'none' .and. val /= 'rpy' .and. val /= 'multipole') &
+          call die('--model '//val//': allowed values are none, rpy, multipole')
+        model_name = val
+      case ('--order')
+        read (val, *, iostat=ios) order
+        if (ios /= 0 .or. verify(trim(val), '0123456789') /= 0) &
+          call die('--order '//val//': expected an integer 1..20')
+        if (order < 1 .or. order > 20) call die('--order '//val//': expected an integer 1..20')
+      case ('--lubrication')
+        if (val /= 'on' .and. val /= 'off') call die('--lubrication '//val//': allowed values are on, off')
+        lubrication = (val == 'on')
+      case ('--eps-lub')
+        read (val, *, iostat=ios) eps_lub
+        if (ios /= 0) call die('--eps-lub '//val//': expected a number in (0, 0.5)')
+        if (.not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) &
+          call die('--eps-lub '//val//': expected a number in (0, 0.5)')
+      case ('--output')
+        if (val /= 'mobility' .and. val /= 'shear') &
+          call die('--output '//val//': allowed values are mobility, shear')
+        output = val
+      end select
+    case default
+      if (arg(1:min(1, len(arg))) == '-') call die('unknown option '//arg// &
+        ' (allowed: --model, --order, --lubrication, --eps-lub, --output)')
+      if (len(file) > 0) call die('more than one coordinate file given: '//file//' and '//arg)
+      file = arg
+      i = i + 1
+    end select
+  end do
+  if (len(file) == 0) call die('no coordinate file given (usage: knotflow-mobility FILE [options])')
+
+  call read_beads(file, r, error)
+  if (allocated(error)) call die(error%message)
+  n = size(r, 2)
+
+  select case (model_name)
+  case ('multipole')
+    block
+      type(multipole_model_t), allocatable :: mp
+      allocate (mp)
+      call mp%init(order, lubrication, eps_lub, error)
+      if (allocated(error)) call die(error%message)
+      call move_alloc(mp, model)
+    end block
+  case default
+    block
+      type(hydro_params_t) :: params
+      params%model = model_name
+      params%order = order
+      params%lubrication = lubrication
+      params%eps_lub = eps_lub
+      call make_hydro_model(params, eps_lub, model, error)
+      if (allocated(error)) call die(error%message)
+    end block
+  end select
+
+  call model%prepare(r, error)
+  if (allocated(error)) call die(error%message)
+
+  select case (output)
+  case ('mobility')
+    allocate (mu(3*n, 3*n))
+    call model%mobility_matrix(mu)
+    do i = 1, 3*n
+      write (output_unit, '(*(1x, es24.16e3))') (mu(i, j), j = 1, 3*n)
+    end do
+  case ('shear')
+    allocate (u(3, n))
+    e = 0.0_wp
+    e(1, 3) = 0.5_wp
+    e(3, 1) = 0.5_wp
+    u = 0.0_wp
+    call model%add_strain_disturbance(e, u)
+    do i = 1, n
+      write (output_unit, '(3(1x, es24.16e3))') u(:, i)
+    end do
+  end select
+
+contains
+
+  function get_arg(k) result(s)
+    integer, intent(in) :: k
+    character(len=:), allocatable :: s
+    integer :: l
+    call get_command_argument(k, length=l)
+    allocate (character(len=l) :: s)
+    if (l > 0) call get_command_argument(k, s)
+  end function get_arg
+
+  !> One line on stderr, exit code 2.
+  subroutine die(message)
+    character(len=*), intent(in) :: message
+    write (error_unit, '(a)') 'knotflow-mobility: error: '//message
+    flush (error_unit)
+    flush (output_unit)
+    call c_exit(2_c_int)
+  end subroutine die
+
+  !> Read bead centres: one "x y z" per line, blank and # lines ignored.
+  subroutine read_beads(path, pos, err)
+    character(len=*), intent(in) :: path
+    real(wp), allocatable, intent(out) :: pos(:, :)
+    type(error_t), allocatable, intent(out) :: err
+    integer :: unit, stat, nline, nb
+    character(len=1024) :: line
+    character(len=256) :: iomsg
+    character(len=32) :: buf
+    real(wp), allocatable :: tmp(:, :)
+    real(wp) :: xyz(3)
+
+    open (newunit=unit, file=path, status='old', action='read', iostat=stat, iomsg=iomsg)
+    if (stat /= 0) then
+      call fatal_error(err, 'cannot open coordinate file '//path//': '//trim(iomsg))
+      return
+    end if
+    allocate (tmp(3, 64))
+    nb = 0
+    nline = 0
+    do
+      read (unit, '(a)', iostat=stat, iomsg=iomsg) line
+      if (is_iostat_end(stat)) exit
+      nline = nline + 1
+      write (buf, '(i0)') nline
+      if (stat /= 0) then
+        call fatal_error(err, 'reading '//path//' line '//trim(buf)//': '//trim(iomsg))
+        close (unit)
+        return
+      end if
+      line = adjustl(line)
+      if (len_trim(line) == 0) cycle
+      if (line(1:1) == '#') cycle
+      read (line, *, iostat=stat) xyz
+      if (stat /= 0 .or. any(abs(xyz) > huge(1.0_wp)) .or. any(xyz /= xyz)) then
+        call fatal_error(err, 'coordinate file '//path//' line '//trim(buf)// &
+                         ': expected three numbers "x y z", got "'//trim(line)//'"')
+        close (unit)
+        return
+      end if
+      nb = nb + 1
+      if (nb > size(tmp, 2)) then
+        block
+          real(wp), allocatable :: bigger(:, :)
+          allocate (bigger(3, 2*size(tmp, 2)))
+          bigger(:, 1:size(tmp, 2)) = tmp
+          call move_alloc(bigger, tmp)
+        end block
+      end if
+      tmp(:, nb) = xyz
+    end do
+    close (unit)
+    if (nb == 0) then
+      call fatal_error(err, 'coordinate file '//path//' contains no beads')
+      return
+    end if
+    pos = tmp(:, 1:nb)
+  end subroutine read_beads
+
+end program knotflow_mobility

@@ -1,0 +1,302 @@
+!> Initial chain shapes (PHYSICS.md section 5): the open trefoil (orientations a-e), the
+!> candy-cane with a seeded random rotation, straight and random chains, and coordinate files.
+module kf_chain_shapes
+  use kf_kinds, only: wp
+  use kf_constants, only: pi, two_pi
+  use kf_error, only: error_t, fatal_error
+  use kf_scene, only: chain_params_t
+  use kf_random, only: rng_t
+  use kf_text_coords, only: read_coordinates
+  implicit none
+  private
+
+  public :: build_initial_chain, trefoil_closed_points, random_rotation
+
+  integer, parameter, public :: trefoil_points = 100     !< points on the closed trefoil
+  integer, parameter, public :: candycane_beads = 152
+  integer, parameter :: candycane_arc_points = 62
+  real(wp), parameter :: candycane_radius = 20.0_wp
+  real(wp), parameter :: candycane_ds = 0.05105_wp
+  real(wp), parameter :: candycane_rod_spacing = 1.02_wp
+
+  ! 5-point Gauss-Legendre rule on [-1, 1].
+  real(wp), parameter :: gl_x(5) = [-0.9061798459386640_wp, -0.5384693101056831_wp, 0.0_wp, &
+                                    0.5384693101056831_wp, 0.9061798459386640_wp]
+  real(wp), parameter :: gl_w(5) = [0.2369268850561891_wp, 0.4786286704993665_wp, &
+                                    0.5688888888888889_wp, 0.4786286704993665_wp, 0.2369268850561891_wp]
+
+contains
+
+  !> Build the initial bead positions r(3, N) described by `params`. `rotation` is the random
+  !> rotation applied to the candy-cane (r = rotation * r_unrotated), the identity otherwise.
+  subroutine build_initial_chain(params, r, rotation, error)
+    type(chain_params_t), intent(in) :: params
+    real(wp), allocatable, intent(out) :: r(:, :)
+    real(wp), intent(out) :: rotation(3, 3)
+    type(error_t), allocatable, intent(out) :: error
+    character(len=32) :: buf
+
+    rotation = identity3()
+    if (.not. (params%bond_length > 0.0_wp .and. params%bond_length < huge(1.0_wp))) then
+      write (buf, '(g0)') params%bond_length
+      call fatal_error(error, 'chain: bond_length = '//trim(buf)//' is invalid (must be > 0)')
+      return
+    end if
+    select case (trim(params%shape))
+    case ('trefoil')
+      call build_trefoil(params, r, error)
+    case ('candycane')
+      call build_candycane(params, r, rotation)
+    case ('straight')
+      call build_straight(params, r, error)
+    case ('random')
+      call build_random(params, r, error)
+    case ('file')
+      if (len_trim(params%coordinate_file) == 0) then
+        call fatal_error(error, "chain: shape = 'file' needs coordinate_file (it is empty)")
+        return
+      end if
+      call read_coordinates(trim(params%coordinate_file), r, error)
+      if (allocated(error)) return
+      if (size(r, 2) < 2) then
+        call fatal_error(error, "chain: coordinate_file '"//trim(params%coordinate_file)// &
+          "' holds fewer than 2 beads")
+      end if
+    case default
+      call fatal_error(error, "chain: shape = '"//trim(params%shape)// &
+        "' is unknown (allowed: trefoil, candycane, straight, random, file)")
+    end select
+  end subroutine build_initial_chain
+
+  pure function identity3() result(m)
+    real(wp) :: m(3, 3)
+    m = 0.0_wp
+    m(1, 1) = 1.0_wp
+    m(2, 2) = 1.0_wp
+    m(3, 3) = 1.0_wp
+  end function identity3
+
+  !> The trefoil curve (sin s + 2 sin 2s, cos s - 2 cos 2s, -sin 3s) and its derivative.
+  pure function trefoil_curve(s) result(c)
+    real(wp), intent(in) :: s
+    real(wp) :: c(3)
+    c = [sin(s) + 2.0_wp*sin(2.0_wp*s), cos(s) - 2.0_wp*cos(2.0_wp*s), -sin(3.0_wp*s)]
+  end function trefoil_curve
+
+  pure function trefoil_speed(s) result(v)
+    real(wp), intent(in) :: s
+    real(wp) :: v
+    v = norm2([cos(s) + 4.0_wp*cos(2.0_wp*s), -sin(s) + 4.0_wp*sin(2.0_wp*s), -3.0_wp*cos(3.0_wp*s)])
+  end function trefoil_speed
+
+  !> Arc length of the unscaled trefoil from 0 to s (composite 5-point Gauss-Legendre).
+  pure function trefoil_arc(s) result(arc)
+    real(wp), intent(in) :: s
+    real(wp) :: arc, h, a
+    integer :: m, k, q
+    m = max(1, ceiling(abs(s)/0.02_wp))
+    h = s/m
+    arc = 0.0_wp
+    do k = 1, m
+      a = (k - 1)*h
+      do q = 1, 5
+        arc = arc + 0.5_wp*h*gl_w(q)*trefoil_speed(a + 0.5_wp*h*(gl_x(q) + 1.0_wp))
+      end do
+    end do
+  end function trefoil_arc
+
+  !> The 100 points of the closed trefoil, evenly spaced in arc length from s = 0 and scaled so
+  !> that the arc spacing is `spacing`; `scale` returns the scale factor used.
+  subroutine trefoil_closed_points(spacing, p, scale)
+    real(wp), intent(in) :: spacing
+    real(wp), intent(out) :: p(3, trefoil_points)
+    real(wp), intent(out) :: scale
+    real(wp) :: total, target, s
+    integer :: k, it
+    total = trefoil_arc(two_pi)
+    scale = spacing*trefoil_points/total
+    s = 0.0_wp
+    do k = 1, trefoil_points
+      target = (k - 1)*total/trefoil_points
+      if (k > 1) s = s + (total/trefoil_points)/trefoil_speed(s)
+      do it = 1, 50
+        s = s - (trefoil_arc(s) - target)/trefoil_speed(s)
+        if (abs(trefoil_arc(s) - target) < 1.0e-14_wp*total) exit
+      end do
+      p(:, k) = scale*trefoil_curve(s)
+    end do
+  end subroutine trefoil_closed_points
+
+  !> The open trefoil: drop point `trefoil_removed_point` and start the chain after it.
+  subroutine build_trefoil(params, r, error)
+    type(chain_params_t), intent(in) :: params
+    real(wp), allocatable, intent(out) :: r(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    real(wp) :: p(3, trefoil_points), rot(3, 3), scale
+    integer :: k, m
+    character(len=32) :: buf
+
+    m = params%trefoil_removed_point
+    if (m < 1 .or. m > trefoil_points) then
+      write (buf, '(i0)') m
+      call fatal_error(error, 'chain: trefoil_removed_point = '//trim(buf)//' is out of range (allowed: 1..100)')
+      return
+    end if
+    rot = 0.0_wp
+    select case (params%orientation)
+    case ('a')
+      rot = identity3()
+    case ('b')   ! about x by pi/2: y -> z, z -> -y
+      rot(1, 1) = 1.0_wp
+      rot(3, 2) = 1.0_wp
+      rot(2, 3) = -1.0_wp
+    case ('c')   ! about x by pi
+      rot(1, 1) = 1.0_wp
+      rot(2, 2) = -1.0_wp
+      rot(3, 3) = -1.0_wp
+    case ('d')   ! about z by pi/2: x -> y, y -> -x
+      rot(2, 1) = 1.0_wp
+      rot(1, 2) = -1.0_wp
+      rot(3, 3) = 1.0_wp
+    case ('e')   ! about z by 3 pi/2: x -> -y, y -> x
+      rot(2, 1) = -1.0_wp
+      rot(1, 2) = 1.0_wp
+      rot(3, 3) = 1.0_wp
+    case default
+      call fatal_error(error, "chain: orientation = '"//params%orientation// &
+        "' is unknown (allowed: a, b, c, d, e)")
+      return
+    end select
+    call trefoil_closed_points(params%bond_length, p, scale)
+    allocate (r(3, trefoil_points - 1))
+    do k = 1, trefoil_points - 1
+      r(:, k) = matmul(rot, p(:, modulo(m + k - 1, trefoil_points) + 1))
+    end do
+  end subroutine build_trefoil
+
+  !> The candy-cane: rod (-1.02 (91 - s), 0, 0), s = 1..90, then the semicircle
+  !> (20 cos s, 20 sin s + 20, 0) from s = -pi/2 in steps 0.05105 (62 points); then a uniformly
+  !> random rotation about the origin drawn from `seed`.
+  subroutine build_candycane(params, r, rotation)
+    type(chain_params_t), intent(in) :: params
+    real(wp), allocatable, intent(out) :: r(:, :)
+    real(wp), intent(out) :: rotation(3, 3)
+    type(rng_t) :: rng
+    integer :: k, n_rod
+    real(wp) :: s
+
+    n_rod = candycane_beads - candycane_arc_points
+    allocate (r(3, candycane_beads))
+    do k = 1, n_rod
+      r(:, k) = [-candycane_rod_spacing*(n_rod + 1 - k), 0.0_wp, 0.0_wp]
+    end do
+    do k = 0, candycane_arc_points - 1
+      s = -0.5_wp*pi + k*candycane_ds
+      r(:, n_rod + 1 + k) = [candycane_radius*cos(s), candycane_radius*sin(s) + candycane_radius, 0.0_wp]
+    end do
+    call rng%init(params%seed)
+    rotation = random_rotation(rng)
+    r = matmul(rotation, r)
+  end subroutine build_candycane
+
+  !> A uniformly distributed rotation matrix (Shoemake's random unit quaternion, 1992).
+  function random_rotation(rng) result(m)
+    type(rng_t), intent(inout) :: rng
+    real(wp) :: m(3, 3)
+    real(wp) :: u1, u2, u3, w, x, y, z
+    u1 = rng%uniform()
+    u2 = rng%uniform()
+    u3 = rng%uniform()
+    x = sqrt(1.0_wp - u1)*sin(two_pi*u2)
+    y = sqrt(1.0_wp - u1)*cos(two_pi*u2)
+    z = sqrt(u1)*sin(two_pi*u3)
+    w = sqrt(u1)*cos(two_pi*u3)
+    m(1, :) = [1.0_wp - 2.0_wp*(y*y + z*z), 2.0_wp*(x*y - w*z), 2.0_wp*(x*z + w*y)]
+    m(2, :) = [2.0_wp*(x*y + w*z), 1.0_wp - 2.0_wp*(x*x + z*z), 2.0_wp*(y*z - w*x)]
+    m(3, :) = [2.0_wp*(x*z - w*y), 2.0_wp*(y*z + w*x), 1.0_wp - 2.0_wp*(x*x + y*y)]
+  end function random_rotation
+
+  !> n_beads along straight_direction with spacing bond_length, centred at the origin.
+  subroutine build_straight(params, r, error)
+    type(chain_params_t), intent(in) :: params
+    real(wp), allocatable, intent(out) :: r(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    real(wp) :: u(3), norm
+    integer :: k
+    character(len=32) :: buf
+    if (params%n_beads < 2) then
+      write (buf, '(i0)') params%n_beads
+      call fatal_error(error, 'chain: n_beads = '//trim(buf)//' is too small (must be >= 2)')
+      return
+    end if
+    norm = norm2(params%straight_direction)
+    if (.not. norm > 0.0_wp) then
+      call fatal_error(error, 'chain: straight_direction = 0 0 0 is invalid (must be non-zero)')
+      return
+    end if
+    u = params%straight_direction/norm
+    allocate (r(3, params%n_beads))
+    do k = 1, params%n_beads
+      r(:, k) = (k - 0.5_wp*(params%n_beads + 1))*params%bond_length*u
+    end do
+  end subroutine build_straight
+
+  !> A random walk of n_beads with steps bond_length in uniformly random directions, keeping
+  !> non-adjacent beads at least 1 apart (up to 1000 tries per bead, 100 restarts), centred
+  !> at its centre of mass. Deterministic for a given seed.
+  subroutine build_random(params, r, error)
+    type(chain_params_t), intent(in) :: params
+    real(wp), allocatable, intent(out) :: r(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    type(rng_t) :: rng
+    real(wp) :: u(3), cz, phi, trial(3)
+    integer :: n, i, j, attempt, restart
+    logical :: ok
+    character(len=32) :: buf
+    n = params%n_beads
+    if (n < 2) then
+      write (buf, '(i0)') n
+      call fatal_error(error, 'chain: n_beads = '//trim(buf)//' is too small (must be >= 2)')
+      return
+    end if
+    if (params%bond_length <= 0.5_wp) then
+      write (buf, '(g0)') params%bond_length
+      call fatal_error(error, 'chain: bond_length = '//trim(buf)// &
+        ' is too small for shape = random (must be > 0.5 so that non-adjacent beads can be 1 apart)')
+      return
+    end if
+    allocate (r(3, n))
+    call rng%init(params%seed)
+    do restart = 1, 100
+      r(:, 1) = 0.0_wp
+      do i = 2, n
+        ok = .false.
+        do attempt = 1, 1000
+          cz = 2.0_wp*rng%uniform() - 1.0_wp
+          phi = two_pi*rng%uniform()
+          u = [sqrt(1.0_wp - cz*cz)*cos(phi), sqrt(1.0_wp - cz*cz)*sin(phi), cz]
+          trial = r(:, i - 1) + params%bond_length*u
+          ok = .true.
+          do j = 1, i - 2
+            if (sum((trial - r(:, j))**2) < 1.0_wp) then
+              ok = .false.
+              exit
+            end if
+          end do
+          if (ok) exit
+        end do
+        if (.not. ok) exit
+        r(:, i) = trial
+      end do
+      if (ok) exit
+    end do
+    if (.not. ok) then
+      call fatal_error(error, 'chain: could not grow a self-avoiding random chain (n_beads too large?)')
+      return
+    end if
+    do j = 1, 3
+      r(j, :) = r(j, :) - sum(r(j, :))/n
+    end do
+  end subroutine build_random
+
+end module kf_chain_shapes

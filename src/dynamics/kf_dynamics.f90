@@ -1,0 +1,75 @@
+!> The equations of motion (PHYSICS.md section 3): dr_i/dt = G r_i + sum_j mu_ij F_j(r)
+!> + sum_j C_ij : E, assembled from a forces_t, a hydrodynamic model and a flow_t that are
+!> all built once from the scene. As an ode_system_t the state y is r(3, N).
+module kf_dynamics
+  use kf_kinds, only: wp, i8
+  use kf_error, only: error_t
+  use kf_scene, only: scene_t
+  use kf_forces, only: forces_t
+  use kf_flow, only: flow_t
+  use kf_hydro_model, only: hydro_model_t
+  use kf_hydro_factory, only: make_hydro_model
+  use kf_ode_system, only: ode_system_t
+  implicit none
+  private
+
+  !> Forces, hydrodynamics and ambient flow of one case.
+  type, extends(ode_system_t), public :: dynamics_t
+    type(forces_t) :: forces
+    class(hydro_model_t), allocatable :: model
+    type(flow_t) :: flow
+    integer :: n = 0                     !< number of beads
+    integer(i8) :: evaluations = 0       !< calls of velocity
+    real(wp), allocatable :: f(:, :)     !< work: forces of the last evaluation
+    real(wp), allocatable :: u(:, :)     !< work: mu F of the last evaluation
+  contains
+    procedure :: init => dynamics_init
+    procedure :: velocity => dynamics_velocity
+    procedure :: derivative => dynamics_derivative
+  end type dynamics_t
+
+contains
+
+  !> Build forces, hydrodynamic model and flow from the scene for a chain of n_beads.
+  subroutine dynamics_init(this, scene, n_beads, error)
+    class(dynamics_t), intent(out) :: this
+    type(scene_t), intent(in) :: scene
+    integer, intent(in) :: n_beads
+    type(error_t), allocatable, intent(out) :: error
+    call this%forces%init(scene%forces, n_beads, scene%chain%bond_length, error)
+    if (allocated(error)) return
+    call this%flow%init(scene%flow, error)
+    if (allocated(error)) return
+    call make_hydro_model(scene%hydro, scene%integrator%tolerance, this%model, error)
+    if (allocated(error)) return
+    this%n = n_beads
+    allocate (this%f(3, n_beads), this%u(3, n_beads))
+  end subroutine dynamics_init
+
+  !> Bead velocities v(3, N) at positions r(3, N).
+  subroutine dynamics_velocity(this, r, v, error)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    real(wp), intent(out) :: v(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    this%evaluations = this%evaluations + 1
+    call this%forces%compute(r, this%f)
+    call this%model%prepare(r, error)
+    if (allocated(error)) return
+    call this%model%apply_mobility(this%f, this%u)
+    call this%flow%velocity(r, v)
+    v = v + this%u
+    if (this%flow%has_strain) call this%model%add_strain_disturbance(this%flow%e, v)
+  end subroutine dynamics_velocity
+
+  !> The ode_system_t interface: dydt = velocity(y) (the system is autonomous).
+  subroutine dynamics_derivative(this, t, y, dydt, error)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: t
+    real(wp), intent(in) :: y(:, :)
+    real(wp), intent(out) :: dydt(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    call this%velocity(y, dydt, error)
+  end subroutine dynamics_derivative
+
+end module kf_dynamics

@@ -1,0 +1,168 @@
+!> Lubrication (two-body) corrections to the order-L multipole friction (MULTIPOLE.md 13.3,
+!> PHYSICS.md 3.3): dzeta = zeta_exact(pair) - zeta_L(pair) and the strain-coupling difference,
+!> in the Cartesian Jeffrey-Onishi/Kim-Karrila form, project units.
+!>
+!> The scalar corrections f_exact - f_L of the 22 two-sphere functions come from the generated
+!> tables of kf_lubrication_data (regular remainders on a uniform grid in u = sqrt(xi),
+!> xi = 2 (r - 1)) interpolated with a cubic spline (clamped, zero slope at contact, where the
+!> remainder is even in u) plus the analytic singular part w(xi) (g1/xi + g2 ln(1/xi) +
+!> g3 xi ln(1/xi)). The result is multiplied by a C2 taper that brings it to exactly zero at the
+!> cutoff r_c(L).
+!>
+!> BWE overlap rule: pairs at |d| <= 1 are evaluated at (1 + eps_lub) d/|d|. To keep the
+!> correction continuous, centre distances between 1 and 1 + eps_lub are clamped the same way:
+!> the correction is evaluated at max(|d|, 1 + eps_lub).
+module kf_lubrication
+  use kf_kinds, only: wp
+  use kf_error, only: error_t, fatal_error
+  use kf_two_sphere, only: n_functions, has_strain
+  use kf_near_contact, only: singular_part, singular_weight, smoothstep
+  use kf_pair_tensor, only: pair_tensors
+  use kf_lubrication_data, only: lub_max_order, lub_cutoff, lub_n_grid, lubrication_table
+  implicit none
+  private
+
+  !> Fraction of (r_c - 1) over which the correction is tapered to zero before the cutoff.
+  real(wp), parameter :: taper_fraction = 0.1_wp
+
+  !> Pair lubrication corrections for multipole truncation order L.
+  type, public :: lubrication_t
+    private
+    integer :: order = 0
+    real(wp) :: eps_lub = 1.0e-4_wp
+    real(wp) :: r_cut = 1.0_wp          !< cutoff centre distance
+    real(wp) :: r_taper = 1.0_wp        !< start of the taper
+    real(wp) :: h = 1.0_wp              !< grid step in u
+    integer :: n = 0                    !< grid points
+    integer :: nf = n_functions         !< number of represented functions (10 for L = 1)
+    real(wp), allocatable :: val(:, :)  !< tabulated remainders (n, 22)
+    real(wp), allocatable :: d2(:, :)   !< spline second derivatives (n, 22)
+  contains
+    procedure :: init
+    procedure :: cutoff
+    procedure :: correction_functions
+    procedure :: pair_correction
+  end type lubrication_t
+
+contains
+
+  !> Set up the corrections for truncation order `order` (1..6) and BWE parameter eps_lub > 0.
+  subroutine init(this, order, eps_lub, error)
+    class(lubrication_t), intent(inout) :: this
+    integer, intent(in) :: order
+    real(wp), intent(in) :: eps_lub
+    type(error_t), allocatable, intent(out) :: error
+    character(len=40) :: buf
+    integer :: k
+
+    if (order < 1 .or. order > lub_max_order) then
+      write (buf, '(i0)') order
+      call fatal_error(error, 'lubrication: truncation order '//trim(buf)// &
+        ' not tabulated (allowed 1..6)')
+      return
+    end if
+    if (.not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) then
+      write (buf, '(es12.4)') eps_lub
+      call fatal_error(error, 'lubrication: eps_lub = '//trim(adjustl(buf))// &
+        ' out of range (0 < eps_lub < 0.5)')
+      return
+    end if
+    this%order = order
+    this%eps_lub = eps_lub
+    this%r_cut = lub_cutoff(order)
+    this%r_taper = this%r_cut - taper_fraction*(this%r_cut - 1.0_wp)
+    this%n = lub_n_grid(order)
+    this%h = sqrt(2.0_wp*(this%r_cut - 1.0_wp))/real(this%n - 1, wp)
+    this%nf = merge(n_functions, 10, has_strain(order))
+    call lubrication_table(order, this%val)
+    if (allocated(this%d2)) deallocate (this%d2)
+    allocate (this%d2(this%n, n_functions))
+    do k = 1, n_functions
+      call spline_second_derivatives(this%val(:, k), this%h, this%d2(:, k))
+    end do
+  end subroutine init
+
+  !> Centre distance (units of d) at and beyond which the corrections vanish.
+  pure real(wp) function cutoff(this)
+    class(lubrication_t), intent(in) :: this
+    cutoff = this%r_cut
+  end function cutoff
+
+  !> Corrections f_exact - f_L of the 22 resistance functions at centre distance r (r > 1),
+  !> including the taper; zero for r >= cutoff. No overlap rule here (see pair_correction);
+  !> gaps are clamped to xi >= 1e-12 so that r <= 1 cannot produce NaN or a division by 0.
+  pure subroutine correction_functions(this, r, df)
+    class(lubrication_t), intent(in) :: this
+    real(wp), intent(in) :: r
+    real(wp), intent(out) :: df(n_functions)
+    real(wp) :: xi, u, t, sing(n_functions), w, taper
+    integer :: i
+
+    df = 0.0_wp
+    if (r >= this%r_cut) return
+    xi = max(2.0_wp*(r - 1.0_wp), 1.0e-12_wp)
+    u = sqrt(xi)
+    i = min(this%n - 1, int(u/this%h) + 1)
+    t = u/this%h - real(i - 1, wp)
+    df(1:this%nf) = (1.0_wp - t)*this%val(i, 1:this%nf) + t*this%val(i + 1, 1:this%nf) &
+      + this%h**2/6.0_wp*(((1.0_wp - t)**3 - (1.0_wp - t))*this%d2(i, 1:this%nf) &
+                          + (t**3 - t)*this%d2(i + 1, 1:this%nf))
+    w = singular_weight(xi)
+    if (w > 0.0_wp) then
+      call singular_part(xi, sing)
+      df(1:this%nf) = df(1:this%nf) + w*sing(1:this%nf)
+    end if
+    taper = 1.0_wp - smoothstep((r - this%r_taper)/(this%r_cut - this%r_taper))
+    df = taper*df
+  end subroutine correction_functions
+
+  !> Pair correction for d = R_j - R_i: dzeta(12,12) (ordering [U_i, Omega_i, U_j, Omega_j] ->
+  !> [F_i, T_i, F_j, T_j], symmetric) and dxe(12,3,3) (delta x_k = sum dxe(k,a,b) E(a,b)).
+  !> Zero for |d| >= cutoff; overlapping pairs follow the BWE rule.
+  pure subroutine pair_correction(this, d, dzeta, dxe)
+    class(lubrication_t), intent(in) :: this
+    real(wp), intent(in) :: d(3)
+    real(wp), intent(out) :: dzeta(12, 12)
+    real(wp), intent(out) :: dxe(12, 3, 3)
+    real(wp) :: r, dhat(3), df(n_functions)
+
+    r = norm2(d)
+    if (r >= this%r_cut) then
+      dzeta = 0.0_wp
+      dxe = 0.0_wp
+      return
+    end if
+    if (r > 0.0_wp) then
+      dhat = d/r
+    else
+      dhat = [0.0_wp, 0.0_wp, 1.0_wp]   ! coincident centres: no direction, take z
+    end if
+    call this%correction_functions(max(r, 1.0_wp + this%eps_lub), df)
+    call pair_tensors(df, dhat, dzeta, dxe)
+  end subroutine pair_correction
+
+  !> Second derivatives of the cubic spline through y on a uniform grid of step h, clamped with
+  !> zero slope at the first point and natural at the last.
+  pure subroutine spline_second_derivatives(y, h, m)
+    real(wp), intent(in) :: y(:)
+    real(wp), intent(in) :: h
+    real(wp), intent(out) :: m(:)
+    real(wp) :: c(size(y)), rhs(size(y)), piv
+    integer :: i, n
+    n = size(y)
+    ! Row 1: 2 m1 + m2 = 6 (y2 - y1)/h^2; rows i: m(i-1) + 4 m(i) + m(i+1) = 6 (second diff)/h^2;
+    ! row n: m(n) = 0. Thomas algorithm.
+    c(1) = 0.5_wp
+    rhs(1) = 3.0_wp*(y(2) - y(1))/h**2
+    do i = 2, n - 1
+      piv = 4.0_wp - c(i - 1)
+      c(i) = 1.0_wp/piv
+      rhs(i) = (6.0_wp*(y(i + 1) - 2.0_wp*y(i) + y(i - 1))/h**2 - rhs(i - 1))/piv
+    end do
+    m(n) = 0.0_wp
+    do i = n - 1, 1, -1
+      m(i) = rhs(i) - c(i)*m(i + 1)
+    end do
+  end subroutine spline_second_derivatives
+
+end module kf_lubrication

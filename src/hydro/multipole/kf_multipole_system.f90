@@ -1,0 +1,550 @@
+!> The N-sphere multipole system (MULTIPOLE.md sections 7-11) for equal spheres of diameter 1,
+!> in the real scaled form. Structure used:
+!> * the p-moments of different spheres do not interact (no p<-p translation) and their scaled
+!>   self block is the identity, and they couple only to phi-moments: they are eliminated
+!>   first, exactly, by one product K_phiphi -= B B^T (B = the phi<-p couplings, DSYRK/DGEMM);
+!> * the remaining (phi, chi) system K is factorised by one dense Cholesky with the
+!>   force/torque moments (set P) ordered last: the trailing factor L_PP satisfies
+!>   L_PP L_PP^T = the Schur complement onto P (the grand mobility in moment form), and L_PQ,
+!>   L_QQ give the shear disturbance of free spheres by one triangular solve and one product.
+!> Global order of K: [phi n>=2 (all spheres), chi n>=2, phi n=1, chi n=1].
+!>
+!> Results are in project units (PHYSICS.md section 1): an isolated sphere has translational
+!> mobility 1/3 and rotational mobility 1; Cartesian ordering per sphere [U(3), Omega(3)].
+!>
+!> Overlapping spheres (BWE rule applied to the multipole part too): the pair blocks of a pair
+!> with centre distance r < min_distance = 1 + eps_lub are evaluated at r = min_distance along
+!> the line of centres (the plain system is not positive definite for overlapping spheres);
+!> this is the distance at which kf_lubrication evaluates that pair's correction, so the pair
+!> part of the corrected friction is continuous.
+module kf_multipole_system
+  use kf_kinds, only: wp
+  use kf_constants, only: pi
+  use kf_error, only: error_t, fatal_error
+  use kf_multipole_blocks, only: multipole_layout_t, pair_block_grouped, fam_phi, fam_p
+  use kf_solid_harmonics, only: irregular_harmonics
+  implicit none
+  private
+
+  public :: strain_basis, strain_coefficients
+
+  !> The factorised N-sphere system.
+  type, public :: multipole_system_t
+    type(multipole_layout_t) :: lay
+    real(wp) :: min_distance = 1.0_wp   !< pairs with |d| < min_distance are evaluated there
+    integer :: n = 0        !< number of spheres
+    integer :: nr = 0       !< size of K (phi and chi unknowns), 2 N L(L+2)
+    integer :: nqt = 0      !< unknowns of K outside P (they come first)
+    integer :: n6 = 0       !< 6N
+    integer :: n_clamped = 0 !< pairs closer than min_distance at the last factorise
+    integer :: kmap(3) = [2, 3, 1] !< P component (1..3 = real q 0..2) of Cartesian x, y, z
+    real(wp) :: scal(6) = 0.0_wp !< moment_hat = scal(c) * Cartesian force/torque component c
+    real(wp), allocatable :: k(:, :)     !< K, then its Cholesky factor (lower triangle)
+    real(wp), allocatable :: bp(:, :)    !< phi <- p couplings (rows phi, columns p)
+    real(wp), allocatable :: w6(:, :)    !< 6N x 6N work
+    real(wp), allocatable :: bq(:, :)    !< nqt x 5 work
+    real(wp), allocatable :: d6(:, :)    !< 6N x 5 work
+    real(wp), allocatable :: gr(:, :), y(:)
+    real(wp), allocatable :: zt(:, :), x6(:, :), t6(:, :) !< friction route work (6N x 6N, 6N x 5)
+    complex(wp), allocatable :: ih(:, :)
+    !> Seconds spent in the last assembly of the pair blocks and in the factorisation
+    !> (p-moment elimination and Cholesky).
+    real(wp) :: t_assembly = 0.0_wp, t_factor = 0.0_wp
+  contains
+    procedure :: init => system_init
+    procedure :: factorise => system_factorise
+    procedure :: grand_mobility => system_grand_mobility
+    procedure :: translational_mobility => system_translational_mobility
+    procedure :: grand_friction => system_grand_friction
+    procedure :: strain_disturbance => system_strain_disturbance
+    procedure :: corrected => system_corrected
+    procedure :: pindex => system_pindex
+  end type multipole_system_t
+
+  interface
+    subroutine dpotrf(uplo, n, a, lda, info)
+      import :: wp
+      character(len=1), intent(in) :: uplo
+      integer, intent(in) :: n, lda
+      real(wp), intent(inout) :: a(lda, *)
+      integer, intent(out) :: info
+    end subroutine dpotrf
+    subroutine dpotrs(uplo, n, nrhs, a, lda, b, ldb, info)
+      import :: wp
+      character(len=1), intent(in) :: uplo
+      integer, intent(in) :: n, nrhs, lda, ldb
+      real(wp), intent(in) :: a(lda, *)
+      real(wp), intent(inout) :: b(ldb, *)
+      integer, intent(out) :: info
+    end subroutine dpotrs
+    subroutine dpotri(uplo, n, a, lda, info)
+      import :: wp
+      character(len=1), intent(in) :: uplo
+      integer, intent(in) :: n, lda
+      real(wp), intent(inout) :: a(lda, *)
+      integer, intent(out) :: info
+    end subroutine dpotri
+    subroutine dtrsm(side, uplo, transa, diag, m, n, alpha, a, lda, b, ldb)
+      import :: wp
+      character(len=1), intent(in) :: side, uplo, transa, diag
+      integer, intent(in) :: m, n, lda, ldb
+      real(wp), intent(in) :: alpha
+      real(wp), intent(in) :: a(lda, *)
+      real(wp), intent(inout) :: b(ldb, *)
+    end subroutine dtrsm
+    subroutine dgemm(transa, transb, m, n, k, alpha, a, lda, b, ldb, beta, c, ldc)
+      import :: wp
+      character(len=1), intent(in) :: transa, transb
+      integer, intent(in) :: m, n, k, lda, ldb, ldc
+      real(wp), intent(in) :: alpha, beta
+      real(wp), intent(in) :: a(lda, *), b(ldb, *)
+      real(wp), intent(inout) :: c(ldc, *)
+    end subroutine dgemm
+    subroutine dsyrk(uplo, trans, n, k, alpha, a, lda, beta, c, ldc)
+      import :: wp
+      character(len=1), intent(in) :: uplo, trans
+      integer, intent(in) :: n, k, lda, ldc
+      real(wp), intent(in) :: alpha, beta
+      real(wp), intent(in) :: a(lda, *)
+      real(wp), intent(inout) :: c(ldc, *)
+    end subroutine dsyrk
+  end interface
+
+contains
+
+  !> Truncation order L (1..20) and the distance min_distance (1 + eps_lub) at which closer
+  !> (overlapping) pairs are evaluated; min_distance <= 0 disables the overlap treatment.
+  subroutine system_init(this, order, min_distance, error)
+    class(multipole_system_t), intent(inout) :: this
+    integer, intent(in) :: order
+    real(wp), intent(in) :: min_distance
+    type(error_t), allocatable, intent(out) :: error
+    character(len=32) :: buf
+    integer :: c, s
+
+    if (order < 1 .or. order > 20) then
+      write (buf, '(i0)') order
+      call fatal_error(error, 'multipole order L = '//trim(buf)//' not allowed (1 <= L <= 20)')
+      return
+    end if
+    call this%lay%init(order)
+    this%min_distance = min_distance
+    this%n = 0
+    associate (lay => this%lay)
+      do s = 0, 1
+        c = 3*s
+        this%scal(c + 1) = -1.0_wp/(sqrt(2.0_wp)*lay%sigma_real(lay%index(1, s, 1)))
+        this%scal(c + 2) = 1.0_wp/(sqrt(2.0_wp)*lay%sigma_real(lay%index(1, s, 2)))
+        this%scal(c + 3) = 1.0_wp/lay%sigma_real(lay%index(1, s, 0))
+      end do
+    end associate
+    if (allocated(this%gr)) deallocate (this%gr, this%y, this%ih)
+    allocate (this%gr(this%lay%nb, this%lay%nb), this%y(2*this%lay%nslot))
+    allocate (this%ih(0:2*order, -2*order:2*order))
+  end subroutine system_init
+
+  !> Index in P (1..6N) of Cartesian component c (1..3 force, 4..6 torque) of sphere i.
+  pure integer function system_pindex(this, i, c) result(p)
+    class(multipole_system_t), intent(in) :: this
+    integer, intent(in) :: i, c
+    if (c <= 3) then
+      p = 3*(i - 1) + this%kmap(c)
+    else
+      p = 3*this%n + 3*(i - 1) + this%kmap(c - 3)
+    end if
+  end function system_pindex
+
+  !> Assemble the scaled real system for centres r(3, N), eliminate the p-moments and
+  !> factorise (Cholesky).
+  subroutine system_factorise(this, r, error)
+    class(multipole_system_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: nsph, h, nb, i, j, x, yr, n, q, info, na, nc, nphi, np, cs, t, pc
+    integer :: lo(5), hi(5), ks(4, 2), bs(4, 2), ps(2)
+    integer(8) :: c0, c1, c2, crate
+    real(wp) :: d(3), dist
+    character(len=64) :: buf, buf2
+
+    nsph = size(r, 2)
+    if (nsph < 1) then
+      call fatal_error(error, 'multipole system: no spheres')
+      return
+    end if
+    if (this%lay%order < 1) then
+      call fatal_error(error, 'multipole system: init was not called')
+      return
+    end if
+    call system_clock(c0, crate)
+    h = this%lay%h
+    nb = this%lay%nb
+    if (nsph /= this%n .or. .not. allocated(this%k)) then
+      this%n = nsph
+      this%nr = 2*h*nsph
+      this%nqt = 2*(h - 3)*nsph
+      this%n6 = 6*nsph
+      if (allocated(this%k)) deallocate (this%k, this%bp, this%w6, this%bq, this%d6)
+      if (allocated(this%zt)) deallocate (this%zt, this%x6, this%t6)
+      allocate (this%k(this%nr, this%nr), this%bp(h*nsph, h*nsph), this%w6(this%n6, this%n6))
+      allocate (this%bq(max(1, this%nqt), 5), this%d6(this%n6, 5))
+    end if
+    na = (h - 3)*nsph
+    nc = 3*nsph
+    nphi = h*nsph
+    np = h*nsph
+    ! Grouped local runs: 1 phi n>=2, 2 chi n>=2, 3 phi1, 4 chi1, 5 p.
+    lo = [1, h - 2, 2*h - 5, 2*h - 2, 2*h + 1]
+    hi = [h - 3, 2*h - 6, 2*h - 3, 2*h, 3*h]
+
+    this%n_clamped = 0
+    do i = 1, nsph
+      call starts(i, ks(:, 1), bs(:, 1), ps(1))
+      do x = 1, 4
+        do yr = x, 4
+          this%k(ks(yr, 1):ks(yr, 1) + hi(yr) - lo(yr), ks(x, 1):ks(x, 1) + hi(x) - lo(x)) = 0.0_wp
+        end do
+      end do
+      do t = 1, 2*h
+        pc = kpos(t, ks(:, 1))
+        this%k(pc, pc) = 1.0_wp
+      end do
+      this%bp(bs(1, 1):bs(1, 1) + hi(1) - lo(1), ps(1):ps(1) + h - 1) = 0.0_wp
+      this%bp(bs(3, 1):bs(3, 1) + 2, ps(1):ps(1) + h - 1) = 0.0_wp
+      do n = 1, this%lay%order
+        do q = 0, 2*n
+          t = this%lay%grp(this%lay%index(n, fam_phi, q))
+          pc = this%lay%grp(this%lay%index(n, fam_p, q))
+          this%bp(bpos(t, bs(:, 1)), ps(1) + pc - lo(5)) = -this%lay%cn(n)
+        end do
+      end do
+    end do
+
+    do i = 1, nsph
+      call starts(i, ks(:, 1), bs(:, 1), ps(1))
+      do j = i + 1, nsph
+        call starts(j, ks(:, 2), bs(:, 2), ps(2))
+        ! Receiver j (rows), source i (columns).
+        d = r(:, j) - r(:, i)
+        dist = norm2(d)
+        if (dist <= 0.0_wp) then
+          write (buf, '(i0," and ",i0)') i, j
+          call fatal_error(error, 'multipole system: spheres '//trim(buf)//' coincide')
+          this%n = 0
+          return
+        end if
+        if (dist < this%min_distance) then
+          d = d*(this%min_distance/dist)
+          this%n_clamped = this%n_clamped + 1
+        end if
+        call irregular_harmonics(d, 2*this%lay%order, this%ih)
+        call pair_block_grouped(this%lay, d, this%ih, this%y, this%gr)
+        do x = 1, 4
+          if (hi(x) < lo(x)) cycle
+          do yr = 1, 4
+            if (hi(yr) < lo(yr)) cycle
+            if (yr >= x) then
+              this%k(ks(yr, 2):ks(yr, 2) + hi(yr) - lo(yr), ks(x, 1):ks(x, 1) + hi(x) - lo(x)) = &
+                this%gr(lo(yr):hi(yr), lo(x):hi(x))
+            else
+              this%k(ks(x, 1):ks(x, 1) + hi(x) - lo(x), ks(yr, 2):ks(yr, 2) + hi(yr) - lo(yr)) = &
+                transpose(this%gr(lo(yr):hi(yr), lo(x):hi(x)))
+            end if
+          end do
+        end do
+        do x = 1, 3, 2
+          if (hi(x) < lo(x)) cycle
+          this%bp(bs(x, 2):bs(x, 2) + hi(x) - lo(x), ps(1):ps(1) + h - 1) = &
+            this%gr(lo(x):hi(x), lo(5):hi(5))
+          this%bp(bs(x, 1):bs(x, 1) + hi(x) - lo(x), ps(2):ps(2) + h - 1) = &
+            transpose(this%gr(lo(5):hi(5), lo(x):hi(x)))
+        end do
+      end do
+    end do
+
+    call system_clock(c1)
+    ! Exact elimination of the p-moments (their block is the identity): K_phiphi -= B B^T.
+    cs = 2*na + 1
+    if (na > 0) then
+      call dsyrk('L', 'N', na, np, -1.0_wp, this%bp, nphi, 1.0_wp, this%k, this%nr)
+      call dgemm('N', 'T', nc, na, np, -1.0_wp, this%bp(na + 1, 1), nphi, this%bp, nphi, 1.0_wp, &
+                 this%k(cs, 1), this%nr)
+    end if
+    call dsyrk('L', 'N', nc, np, -1.0_wp, this%bp(na + 1, 1), nphi, 1.0_wp, this%k(cs, cs), this%nr)
+
+    call dpotrf('L', this%nr, this%k, this%nr, info)
+    call system_clock(c2)
+    this%t_assembly = real(c1 - c0, wp)/real(crate, wp)
+    this%t_factor = real(c2 - c1, wp)/real(crate, wp)
+    if (info /= 0) then
+      write (buf, '(i0)') info
+      if (info > 0) then
+        write (buf2, '(i0)') this%n_clamped
+        call fatal_error(error, 'Cholesky factorisation of the multipole system failed: matrix not '// &
+                         'positive definite (leading minor '//trim(buf)//'); '//trim(buf2)// &
+                         ' overlapping pairs (mutually overlapping spheres are not supported)')
+      else
+        call fatal_error(error, 'dpotrf: illegal argument '//trim(buf)//' for the multipole system')
+      end if
+      this%n = 0
+    end if
+
+  contains
+
+    !> Global starts of the runs of sphere s in K (ksv), in the rows of B (bsv), p column (psv).
+    pure subroutine starts(s, ksv, bsv, psv)
+      integer, intent(in) :: s
+      integer, intent(out) :: ksv(4), bsv(4), psv
+      ksv(1) = (h - 3)*(s - 1) + 1
+      ksv(2) = (h - 3)*nsph + (h - 3)*(s - 1) + 1
+      ksv(3) = 2*(h - 3)*nsph + 3*(s - 1) + 1
+      ksv(4) = 2*(h - 3)*nsph + 3*nsph + 3*(s - 1) + 1
+      bsv = 0
+      bsv(1) = (h - 3)*(s - 1) + 1
+      bsv(3) = (h - 3)*nsph + 3*(s - 1) + 1
+      psv = h*(s - 1) + 1
+    end subroutine starts
+
+    !> Position in K of grouped local index g (1..2h) given the run starts.
+    pure integer function kpos(g, ksv)
+      integer, intent(in) :: g, ksv(4)
+      integer :: rr
+      do rr = 4, 1, -1
+        if (g >= lo(rr)) exit
+      end do
+      kpos = ksv(rr) + g - lo(rr)
+    end function kpos
+
+    !> Row of B of grouped phi index g given the run starts.
+    pure integer function bpos(g, bsv)
+      integer, intent(in) :: g, bsv(4)
+      if (g >= lo(3)) then
+        bpos = bsv(3) + g - lo(3)
+      else
+        bpos = bsv(1) + g - lo(1)
+      end if
+    end function bpos
+
+  end subroutine system_factorise
+
+  !> Copy L_PP (lower, upper part zeroed) into w6.
+  subroutine copy_lpp(this)
+    class(multipole_system_t), intent(inout) :: this
+    integer :: j
+    do j = 1, this%n6
+      this%w6(1:j - 1, j) = 0.0_wp
+      this%w6(j:this%n6, j) = this%k(this%nqt + j:this%nr, this%nqt + j)
+    end do
+  end subroutine copy_lpp
+
+  !> The 6N x 6N grand mobility (velocities and angular velocities from applied forces and
+  !> torques), project units, ordering [U_1, Omega_1, U_2, ...].
+  subroutine system_grand_mobility(this, mob)
+    class(multipole_system_t), intent(inout) :: this
+    real(wp), intent(out) :: mob(:, :)
+    real(wp), allocatable :: s(:, :)
+    integer :: i, j, c, cc, n6
+
+    n6 = this%n6
+    call copy_lpp(this)
+    allocate (s(n6, n6))
+    call dsyrk('L', 'N', n6, n6, 1.0_wp, this%w6, n6, 0.0_wp, s, n6)
+    do j = 1, n6
+      s(j, j + 1:n6) = s(j + 1:n6, j)
+    end do
+    do j = 1, this%n
+      do cc = 1, 6
+        do i = 1, this%n
+          do c = 1, 6
+            mob(6*(i - 1) + c, 6*(j - 1) + cc) = pi*this%scal(c)*this%scal(cc)* &
+              s(this%pindex(i, c), this%pindex(j, cc))
+          end do
+        end do
+      end do
+    end do
+  end subroutine system_grand_mobility
+
+  !> The 3N x 3N translational mobility of torque-free spheres (project units). The force
+  !> moments come first in P and L_PP is lower triangular, so mu_tt = L_tt L_tt^T.
+  subroutine system_translational_mobility(this, mu)
+    class(multipole_system_t), intent(inout) :: this
+    real(wp), intent(out) :: mu(:, :)
+    integer :: i, j, c, cc, n3
+    n3 = 3*this%n
+    call copy_lpp(this)
+    call dsyrk('L', 'N', n3, n3, 1.0_wp, this%w6, this%n6, 0.0_wp, this%w6(1, n3 + 1), this%n6)
+    ! the lower triangle of w6(1:n3, n3+1:2*n3) now holds S_tt
+    do j = 1, this%n
+      do cc = 1, 3
+        do i = 1, this%n
+          do c = 1, 3
+            mu(3*(i - 1) + c, 3*(j - 1) + cc) = pi*this%scal(c)*this%scal(cc)* &
+              stt(this%pindex(i, c), this%pindex(j, cc))
+          end do
+        end do
+      end do
+    end do
+  contains
+    pure real(wp) function stt(p, q)
+      integer, intent(in) :: p, q
+      stt = this%w6(max(p, q), n3 + min(p, q))
+    end function stt
+  end subroutine system_translational_mobility
+
+  !> The 6N x 6N generalised friction (inverse of the grand mobility), project units:
+  !> [F; T] = zeta [U; Omega] for applied forces and torques in a quiescent fluid.
+  subroutine system_grand_friction(this, zeta, error)
+    class(multipole_system_t), intent(inout) :: this
+    real(wp), intent(out) :: zeta(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: i, j, c, cc, n6, info
+    character(len=24) :: buf
+
+    n6 = this%n6
+    call copy_lpp(this)
+    call dpotri('L', n6, this%w6, n6, info)
+    if (info /= 0) then
+      write (buf, '(i0)') info
+      call fatal_error(error, 'inversion of the multipole grand mobility failed (dpotri info = '// &
+                       trim(buf)//')')
+      return
+    end if
+    do j = 1, n6
+      this%w6(j, j + 1:n6) = this%w6(j + 1:n6, j)
+    end do
+    do j = 1, this%n
+      do cc = 1, 6
+        do i = 1, this%n
+          do c = 1, 6
+            zeta(6*(i - 1) + c, 6*(j - 1) + cc) = this%w6(this%pindex(i, c), &
+              this%pindex(j, cc))/(pi*this%scal(c)*this%scal(cc))
+          end do
+        end do
+      end do
+    end do
+  end subroutine system_grand_friction
+
+  !> Disturbance [U - U_inf; Omega - Omega_inf] (6N) of force-free, torque-free spheres for the
+  !> five basis strains of `strain_basis` (columns). Zero at L = 1 (no strain coupling).
+  subroutine system_strain_disturbance(this, dist)
+    class(multipole_system_t), intent(inout) :: this
+    real(wp), intent(out) :: dist(:, :)
+    real(wp) :: y(5, 5), rt2
+    integer :: i, k, q, t, c
+
+    dist(1:this%n6, 1:5) = 0.0_wp
+    if (this%lay%order < 2) return
+    rt2 = sqrt(2.0_wp)
+    ! Real-form strain coefficients y(q, k) (section 7) of basis strain k.
+    y(:, 1) = [-1.0_wp, 0.0_wp, 0.0_wp, rt2, 0.0_wp]
+    y(:, 2) = [-1.0_wp, 0.0_wp, 0.0_wp, -rt2, 0.0_wp]
+    y(:, 3) = [0.0_wp, 0.0_wp, 0.0_wp, 0.0_wp, -2.0_wp*rt2]
+    y(:, 4) = [0.0_wp, -rt2, 0.0_wp, 0.0_wp, 0.0_wp]
+    y(:, 5) = [0.0_wp, 0.0_wp, rt2, 0.0_wp, 0.0_wp]
+    this%bq = 0.0_wp
+    do i = 1, this%n
+      do q = 0, 4
+        t = this%lay%index(2, fam_phi, q)
+        this%bq((this%lay%h - 3)*(i - 1) + q + 1, :) = this%lay%sigma_real(t)*y(q + 1, :)
+      end do
+    end do
+    call dtrsm('L', 'L', 'N', 'N', this%nqt, 5, 1.0_wp, this%k, this%nr, this%bq, this%nqt)
+    call dgemm('N', 'N', this%n6, 5, this%nqt, -1.0_wp, this%k(this%nqt + 1, 1), this%nr, &
+               this%bq, this%nqt, 0.0_wp, this%d6, this%n6)
+    do k = 1, 5
+      do i = 1, this%n
+        do c = 1, 6
+          dist(6*(i - 1) + c, k) = this%scal(c)*this%d6(this%pindex(i, c), k)
+        end do
+      end do
+    end do
+  end subroutine system_strain_disturbance
+
+  !> Friction route (MULTIPOLE.md 13.3): zeta = grand friction of the system plus `dzeta`
+  !> (6N x 6N), x = zeta_FE:E of the system for the five basis strains plus `dx` (6N x 5);
+  !> returns the translational mobility of torque-free spheres mu (3N x 3N) = translational
+  !> block of zeta^-1, and the disturbance (3N x 5) = translational part of zeta^-1 x.
+  !> Project units; dzeta and dx are in project units too.
+  subroutine system_corrected(this, dzeta, dx, mu, dist, error)
+    class(multipole_system_t), intent(inout) :: this
+    real(wp), intent(in) :: dzeta(:, :), dx(:, :)
+    real(wp), intent(out) :: mu(:, :), dist(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: info, i, j, n6
+    character(len=24) :: buf
+
+    n6 = this%n6
+    if (.not. allocated(this%zt)) allocate (this%zt(n6, n6), this%x6(n6, 5), this%t6(n6, 5))
+    call this%grand_friction(this%zt, error)
+    if (allocated(error)) return
+    call this%strain_disturbance(this%t6)
+    ! x = zeta (U - U_inf) of the free spheres (F = 0 in [F;T] = zeta (U - U_inf) - x).
+    call dgemm('N', 'N', n6, 5, n6, 1.0_wp, this%zt, n6, this%t6, n6, 0.0_wp, this%x6, n6)
+    this%zt = this%zt + dzeta
+    this%x6 = this%x6 + dx
+    call dpotrf('L', n6, this%zt, n6, info)
+    if (info /= 0) then
+      write (buf, '(i0)') info
+      call fatal_error(error, 'Cholesky factorisation of the lubrication-corrected friction '// &
+                       'failed (dpotrf info = '//trim(buf)//')')
+      return
+    end if
+    call dpotrs('L', n6, 5, this%zt, n6, this%x6, n6, info)
+    if (info /= 0) then
+      call fatal_error(error, 'dpotrs failed on the lubrication-corrected friction')
+      return
+    end if
+    call dpotri('L', n6, this%zt, n6, info)
+    if (info /= 0) then
+      write (buf, '(i0)') info
+      call fatal_error(error, 'inversion of the lubrication-corrected friction failed (dpotri info = '// &
+                       trim(buf)//')')
+      return
+    end if
+    do j = 1, this%n
+      do i = 1, this%n
+        if (i >= j) then
+          mu(3*i - 2:3*i, 3*j - 2:3*j) = this%zt(6*i - 5:6*i - 3, 6*j - 5:6*j - 3)
+        else
+          mu(3*i - 2:3*i, 3*j - 2:3*j) = transpose(this%zt(6*j - 5:6*j - 3, 6*i - 5:6*i - 3))
+        end if
+      end do
+      do i = 1, 3
+        mu(3*j - 3 + i, 3*j - 3 + i + 1:3*j) = mu(3*j - 3 + i + 1:3*j, 3*j - 3 + i)
+      end do
+      dist(3*j - 2:3*j, 1:5) = this%x6(6*j - 5:6*j - 3, 1:5)
+    end do
+  end subroutine system_corrected
+
+  !> Basis strain k = 1..5: xx-zz, yy-zz, xy+yx, xz+zx, yz+zy.
+  pure function strain_basis(k) result(e)
+    integer, intent(in) :: k
+    real(wp) :: e(3, 3)
+    e = 0.0_wp
+    select case (k)
+    case (1)
+      e(1, 1) = 1.0_wp
+      e(3, 3) = -1.0_wp
+    case (2)
+      e(2, 2) = 1.0_wp
+      e(3, 3) = -1.0_wp
+    case (3)
+      e(1, 2) = 1.0_wp
+      e(2, 1) = 1.0_wp
+    case (4)
+      e(1, 3) = 1.0_wp
+      e(3, 1) = 1.0_wp
+    case (5)
+      e(2, 3) = 1.0_wp
+      e(3, 2) = 1.0_wp
+    end select
+  end function strain_basis
+
+  !> Coefficients of a symmetric traceless strain in the basis of `strain_basis`.
+  pure function strain_coefficients(e) result(c)
+    real(wp), intent(in) :: e(3, 3)
+    real(wp) :: c(5)
+    c = [e(1, 1), e(2, 2), 0.5_wp*(e(1, 2) + e(2, 1)), 0.5_wp*(e(1, 3) + e(3, 1)), &
+         0.5_wp*(e(2, 3) + e(3, 2))]
+  end function strain_coefficients
+
+end module kf_multipole_system

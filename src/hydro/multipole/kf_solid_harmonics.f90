@@ -1,0 +1,84 @@
+!> Regular and irregular solid harmonics with the normalisation of MULTIPOLE.md section 2:
+!>   R_n^m = r^n P_n^m(cos theta) e^{i m phi} / (n+m)!,
+!>   I_n^m = (n-m)! P_n^m(cos theta) e^{i m phi} / r^(n+1),
+!> Condon-Shortley phase included, evaluated by Cartesian recurrences (no trigonometry).
+!> Negative orders follow from X_n^{-m} = (-1)^m conj(X_n^m).
+module kf_solid_harmonics
+  use kf_kinds, only: wp
+  implicit none
+  private
+
+  public :: regular_harmonics, irregular_harmonics
+
+contains
+
+  !> Regular solid harmonics rh(n, m) = R_n^m(r) for 0 <= n <= nmax, |m| <= n
+  !> (entries with |m| > n are set to zero).
+  pure subroutine regular_harmonics(r, nmax, rh)
+    real(wp), intent(in) :: r(3)
+    integer, intent(in) :: nmax
+    complex(wp), intent(out) :: rh(0:nmax, -nmax:nmax)
+    complex(wp) :: xp
+    real(wp) :: z, r2
+    integer :: n, m
+
+    rh = (0.0_wp, 0.0_wp)
+    xp = cmplx(r(1), r(2), kind=wp)
+    z = r(3)
+    r2 = sum(r**2)
+    rh(0, 0) = (1.0_wp, 0.0_wp)
+    do m = 0, nmax
+      if (m > 0) rh(m, m) = -xp/real(2*m, wp)*rh(m - 1, m - 1)
+      do n = m + 1, nmax
+        if (n - 2 >= m) then
+          rh(n, m) = (real(2*n - 1, wp)*z*rh(n - 1, m) - r2*rh(n - 2, m))/real(n*n - m*m, wp)
+        else
+          rh(n, m) = real(2*n - 1, wp)*z*rh(n - 1, m)/real(n*n - m*m, wp)
+        end if
+      end do
+    end do
+    call fill_negative(nmax, rh)
+  end subroutine regular_harmonics
+
+  !> Irregular solid harmonics ih(n, m) = I_n^m(r) for 0 <= n <= nmax, |m| <= n (r /= 0).
+  pure subroutine irregular_harmonics(r, nmax, ih)
+    real(wp), intent(in) :: r(3)
+    integer, intent(in) :: nmax
+    complex(wp), intent(out) :: ih(0:nmax, -nmax:nmax)
+    complex(wp) :: xp
+    real(wp) :: z, r2, rinv2
+    integer :: n, m
+
+    ih = (0.0_wp, 0.0_wp)
+    xp = cmplx(r(1), r(2), kind=wp)
+    z = r(3)
+    r2 = sum(r**2)
+    rinv2 = 1.0_wp/r2
+    ih(0, 0) = cmplx(1.0_wp/sqrt(r2), 0.0_wp, kind=wp)
+    do m = 0, nmax
+      if (m > 0) ih(m, m) = -real(2*m - 1, wp)*xp*rinv2*ih(m - 1, m - 1)
+      do n = m + 1, nmax
+        if (n - 2 >= m) then
+          ih(n, m) = (real(2*n - 1, wp)*z*ih(n - 1, m) &
+                      - real((n - 1)**2 - m*m, wp)*ih(n - 2, m))*rinv2
+        else
+          ih(n, m) = real(2*n - 1, wp)*z*ih(n - 1, m)*rinv2
+        end if
+      end do
+    end do
+    call fill_negative(nmax, ih)
+  end subroutine irregular_harmonics
+
+  !> X_n^{-m} = (-1)^m conj(X_n^m).
+  pure subroutine fill_negative(nmax, h)
+    integer, intent(in) :: nmax
+    complex(wp), intent(inout) :: h(0:nmax, -nmax:nmax)
+    integer :: n, m
+    do n = 1, nmax
+      do m = 1, n
+        h(n, -m) = real((-1)**m, wp)*conjg(h(n, m))
+      end do
+    end do
+  end subroutine fill_negative
+
+end module kf_solid_harmonics
