@@ -14,6 +14,7 @@ module kf_knot_closure
   real(wp), parameter, public :: closure_radius_factor = 10.0_wp
   integer, parameter, public :: default_closures = 1000
   integer(i8), parameter, public :: default_knot_seed = 1972_i8
+  integer(i8), parameter :: projection_stream_offset = 2_i8**40
 
   !> The result of the closures of one chain.
   type, public :: knot_stats_t
@@ -55,7 +56,8 @@ contains
     real(wp), intent(in), optional :: points(:, :)
     logical, intent(in), optional :: reduce
     logical, intent(in), optional :: per_closure
-    type(knot_rng_t) :: rng
+    type(knot_rng_t) :: rng, rng_projection
+    integer(i8) :: st
     real(wp), allocatable :: poly(:, :)
     real(wp) :: centre(3), radius
     integer, allocatable :: types(:)
@@ -69,11 +71,12 @@ contains
       call fatal_error(error, 'knot closures: the number of closures must be >= 1, got '//trim(buf))
       return
     end if
-    if (present(stream)) then
-      call rng_init(rng, seed, stream)
-    else
-      call rng_init(rng, seed, 0_i8)
-    end if
+    st = 0_i8
+    if (present(stream)) st = stream
+    ! closure points and projection directions come from separate streams, so that the points
+    ! depend only on (seed, stream) and not on how many projections were tried
+    call rng_init(rng, seed, st)
+    call rng_init(rng_projection, seed, st + projection_stream_offset)
     stats%closures = nc
     stats%seed = seed
     allocate (types(nc))
@@ -90,7 +93,7 @@ contains
         types(k) = type_unknot        ! at most 5 sticks (or a single point): always unknotted
         cycle
       end if
-      call classify_polygon(poly, rng, types(k), error, reduce=reduce)
+      call classify_polygon(poly, rng_projection, types(k), error, reduce=reduce)
       if (allocated(error)) return
     end do
     do k = 1, n_knot_types
