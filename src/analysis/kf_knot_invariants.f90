@@ -166,7 +166,12 @@ contains
         qx = x(b) - x(a)
         qy = y(b) - y(a)
         den = rx*sy - ry*sx
-        if (abs(den) <= tol*max(lr*ls, tol*extent**2)) return   ! (near) parallel and close: retry
+        if (abs(den) <= tol*max(lr*ls, tol*extent**2)) then
+          ! (near) parallel: no crossing unless the two lie on one line and overlap
+          if (abs(qx*ry - qy*rx) > tol*extent*max(lr, tol*extent) .or. &
+              abs(qx*sy - qy*sx) > tol*extent*max(ls, tol*extent)) cycle
+          return
+        end if
         t = (qx*sy - qy*sx)/den
         u = (qx*ry - qy*rx)/den
         if (t < -tol .or. t > 1.0_wp + tol .or. u < -tol .or. u > 1.0_wp + tol) cycle
