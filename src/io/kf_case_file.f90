@@ -467,9 +467,7 @@ contains
     character(len=*), intent(in) :: name
     real(wp), intent(in) :: value(:)
     type(error_t), allocatable, intent(out) :: error
-    real(wp), allocatable :: v(:)
-    v = value
-    call h5_write_attr(this%file, '/', name, v, error)
+    call h5_write_attr(this%file, '/', name, value, error)
   end subroutine write_attr_real1
 
   subroutine write_attr_real2(this, name, value, error)
@@ -477,9 +475,7 @@ contains
     character(len=*), intent(in) :: name
     real(wp), intent(in) :: value(:, :)
     type(error_t), allocatable, intent(out) :: error
-    real(wp), allocatable :: v(:, :)
-    v = value
-    call h5_write_attr(this%file, '/', name, v, error)
+    call h5_write_attr(this%file, '/', name, value, error)
   end subroutine write_attr_real2
 
   ! ---------------------------------------------------------------- inspecting files
