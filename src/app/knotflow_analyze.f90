@@ -11,7 +11,13 @@ program knotflow_analyze
   use kf_knot_matrix, only: knot_matrix, knot_core, is_slipknot, default_min_length, &
     default_matrix_closures
   use kf_knot_input, only: read_points
-  use kf_analysis_farm, only: analysis_farm_t, farm_start, farm_stop, farm_max
+  use kf_analysis_farm, only: analysis_farm_t, farm_start, farm_stop, farm_max, farm_sum, farm_any, &
+    farm_barrier
+  use kf_h5, only: h5_initialize, h5_finalize
+  use kf_case_file, only: read_frames
+  use kf_knot_case, only: frame_knots_t, shape_analysis_t, select_frames, analyse_frame_knots, analyse_shapes
+  use kf_knot_store, only: stored_matrix_t, read_previous_knots, read_previous_matrix, write_analysis
+  use kf_transitions, only: detect_transitions, default_low, default_high
   implicit none
 
   integer, parameter :: max_files = 4096
@@ -43,7 +49,7 @@ program knotflow_analyze
   call farm_start(farm, error)
   if (allocated(error)) call die(error%message)
   if (is_case_file(opt%files(1))) then
-    call fatal_error(error, 'HDF5 case files: not supported by this build yet (file '//trim(opt%files(1))//')')
+    call analyse_case_files(opt, farm, error)
   else
     call analyse_coordinates(opt, farm, error)
   end if
@@ -143,8 +149,8 @@ contains
           opt%closure_points = val
         case ('--matrix-frames')
           opt%matrix_frames = val
-          if (trim(val) /= 'last' .and. verify(trim(val), '0123456789,') /= 0) &
-            call bad(error, arg, val, '"last" or a comma-separated list of frame numbers')
+          if (verify(trim(val), '0123456789,last') /= 0) &
+            call bad(error, arg, val, '"last" or a comma-separated list of frame numbers and "last"')
         end select
         if (allocated(error)) return
       case default
@@ -166,7 +172,15 @@ contains
       call fatal_error(error, 'no input file given')
       return
     end if
-    if (.not. is_case_file(opt%files(1)) .and. opt%nfiles > 1) then
+    if (is_case_file(opt%files(1))) then
+      do i = 2, opt%nfiles
+        if (.not. is_case_file(opt%files(i))) then
+          call fatal_error(error, 'input '//trim(opt%files(i))//': expected a case file (.h5) like '// &
+            trim(opt%files(1)))
+          return
+        end if
+      end do
+    else if (opt%nfiles > 1) then
       call fatal_error(error, 'a coordinate file is analysed alone: got '//trim(opt%files(2))//' as well')
       return
     end if
@@ -305,6 +319,167 @@ contains
       s = trim(s)//'}'
       write (output_unit, '(a)') s
   end subroutine print_json
+
+  !> Mode 2: HDF5 case files; writes /analysis of each (the trajectory is never touched).
+  subroutine analyse_case_files(opt, farm, error)
+    type(options_t), intent(in) :: opt
+    type(analysis_farm_t), intent(in) :: farm
+    type(error_t), allocatable, intent(out) :: error
+    integer :: ifile
+    call h5_initialize(error)
+    if (allocated(error)) return
+    do ifile = 1, opt%nfiles
+      call analyse_case(trim(opt%files(ifile)), opt, farm, error)
+      if (farm_any(farm, allocated(error))) then
+        if (.not. allocated(error)) call fatal_error(error, 'case file '//trim(opt%files(ifile))// &
+          ': failed on another rank')
+        return
+      end if
+    end do
+    call h5_finalize(error)
+  end subroutine analyse_case_files
+
+  !> Analyse one case file.
+  subroutine analyse_case(path, opt, farm, error)
+    character(len=*), intent(in) :: path
+    type(options_t), intent(in) :: opt
+    type(analysis_farm_t), intent(in) :: farm
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: t(:), r(:, :, :), flat(:), ev_time(:)
+    integer(i8), allocatable :: todo(:), need(:), mframes(:), ev_frame(:)
+    integer, allocatable :: ev_kind(:), ev_pos(:), pos_of(:)
+    type(frame_knots_t) :: prev, fresh, all
+    type(shape_analysis_t) :: shapes
+    type(stored_matrix_t), allocatable :: mats(:)
+    logical :: found
+    integer :: nframes, n, k, m, nneed
+    call read_frames(path, t, r, error)
+    if (allocated(error)) return
+    nframes = size(t)
+    n = size(r, 2)
+    if (nframes < 1) then
+      call fatal_error(error, 'case file '//path//': /frames is empty (nothing to analyse)')
+      return
+    end if
+    call matrix_frame_list(opt%matrix_frames, nframes, path, mframes, error)
+    if (allocated(error)) return
+    todo = select_frames(nframes, opt%stride)
+    if (opt%force) then
+      allocate (prev%frame_index(0))
+    else
+      call read_previous_knots(path, opt%closures, opt%seed, prev, error)
+      if (allocated(error)) return
+    end if
+    ! frames still to do; pos_of(k) = position of todo(k) in prev (0 if absent)
+    allocate (pos_of(size(todo)))
+    do k = 1, size(todo)
+      pos_of(k) = 0
+      do m = 1, size(prev%frame_index)
+        if (prev%frame_index(m) == todo(k)) pos_of(k) = m
+      end do
+    end do
+    nneed = count(pos_of == 0)
+    need = pack(todo, pos_of == 0)
+    call analyse_frame_knots(r, t, need, opt%closures, opt%seed, fresh, error, part=farm%rank, nparts=farm%size)
+    if (farm_any(farm, allocated(error))) then
+      if (.not. allocated(error)) call fatal_error(error, 'case file '//path//': failed on another rank')
+      return
+    end if
+    call farm_sum(farm, fresh%kf)
+    flat = reshape(fresh%spectrum, [size(fresh%spectrum)])
+    call farm_sum(farm, flat)
+    fresh%spectrum = reshape(flat, shape(fresh%spectrum))
+    ! merge previous and fresh results in the order of todo
+    allocate (all%frame_index(size(todo)), all%time(size(todo)), all%kf(size(todo)), &
+              all%spectrum(n_knot_types, size(todo)), all%dominant(size(todo)))
+    m = 0
+    do k = 1, size(todo)
+      all%frame_index(k) = todo(k)
+      all%time(k) = t(todo(k) + 1)
+      if (pos_of(k) > 0) then
+        all%kf(k) = prev%kf(pos_of(k))
+        all%spectrum(:, k) = prev%spectrum(:, pos_of(k))
+      else
+        m = m + 1
+        all%kf(k) = fresh%kf(m)
+        all%spectrum(:, k) = fresh%spectrum(:, m)
+      end if
+      all%dominant(k) = maxloc(all%spectrum(:, k), 1)
+    end do
+    call detect_transitions(all%kf, default_low, default_high, ev_kind, ev_pos)
+    ev_frame = all%frame_index(ev_pos)
+    ev_time = all%time(ev_pos)
+    ! knot matrices
+    allocate (mats(size(mframes)))
+    do k = 1, size(mframes)
+      found = .false.
+      if (.not. opt%force) then
+        call read_previous_matrix(path, mframes(k), opt%matrix_closures, opt%min_length, mats(k), found, error)
+        if (allocated(error)) return
+      end if
+      if (found) cycle
+      mats(k)%frame = mframes(k)
+      mats(k)%time = t(mframes(k) + 1)
+      allocate (mats(k)%k(n, n))
+      call knot_matrix(r(:, :, mframes(k) + 1), opt%matrix_closures, opt%seed, opt%min_length, mats(k)%k, &
+                       error, part=farm%rank, nparts=farm%size)
+      if (farm_any(farm, allocated(error))) then
+        if (.not. allocated(error)) call fatal_error(error, 'case file '//path//': failed on another rank')
+        return
+      end if
+      flat = reshape(mats(k)%k, [n*n])
+      where (ieee_is_nan(flat)) flat = -huge(1.0_wp)
+      call farm_max(farm, flat)
+      where (flat < -1.0_wp) flat = ieee_nan()
+      mats(k)%k = reshape(flat, [n, n])
+    end do
+    if (farm%rank == 0) then
+      call analyse_shapes(r, t, shapes, error)
+      if (.not. allocated(error)) &
+        call write_analysis(path, all, opt%closures, opt%seed, ev_kind, ev_frame, ev_time, default_low, &
+                            default_high, mats, opt%matrix_closures, opt%min_length, shapes, error)
+      if (.not. allocated(error)) write (output_unit, '(a,i0,a,i0,a,i0,a)') trim(path)//': ', size(todo), &
+        ' frames (', nneed, ' new), ', size(ev_kind), ' events written to /analysis'
+    end if
+    call farm_barrier(farm)
+  end subroutine analyse_case
+
+  !> The frames of --matrix-frames ('' none, 'last', or a comma-separated list), checked.
+  subroutine matrix_frame_list(spec, nframes, path, frames, error)
+    character(len=*), intent(in) :: spec, path
+    integer, intent(in) :: nframes
+    integer(i8), allocatable, intent(out) :: frames(:)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: i, j, k, stat
+    integer(i8) :: v
+    character(len=24) :: buf
+    allocate (frames(0))
+    if (len_trim(spec) == 0) return
+    i = 1
+    do while (i <= len_trim(spec))
+      j = index(spec(i:), ',')
+      k = merge(len_trim(spec), i + j - 2, j == 0)
+      write (buf, '(i0)') nframes - 1
+      if (k >= i .and. spec(i:max(i, k)) == 'last') then
+        frames = [frames, int(nframes - 1, i8)]
+        i = k + 2
+        cycle
+      end if
+      read (spec(i:max(i, k)), *, iostat=stat) v
+      if (stat /= 0 .or. k < i) then
+        call fatal_error(error, 'option --matrix-frames: invalid value "'//trim(spec)// &
+          '" (allowed: "last" or frame numbers 0..'//trim(buf)//')')
+        return
+      end if
+      if (v < 0 .or. v >= nframes) then
+        call fatal_error(error, 'option --matrix-frames: frame '//spec(i:k)//' is not in '//path// &
+          ' (allowed: 0..'//trim(buf)//')')
+        return
+      end if
+      frames = [frames, v]
+      i = k + 2
+    end do
+  end subroutine matrix_frame_list
 
   function itoa(v) result(s)
     integer(i8), intent(in) :: v
