@@ -238,10 +238,12 @@ class PfFile:
 
 
 def write_if_changed(path, text):
-    """Write text unless the file already holds it (avoids needless recompilation)."""
+    """Write text unless the file already holds it; then only refresh its time stamp, so
+    that the build tool sees the output as up to date."""
     if os.path.exists(path):
         with open(path, encoding="utf-8") as handle:
             if handle.read() == text:
+                os.utime(path, None)
                 return
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     with open(path, "w", encoding="utf-8") as handle:
