@@ -76,7 +76,11 @@ module kf_case_file
     integer(i8) :: nframes = 0
     real(wp) :: last_time = 0.0_wp
   contains
-    procedure :: create
+    !> create(path, case_name, n_beads, scene_text, [scene_attrs,] rotation, error): the
+    !> scene attributes can also be written afterwards with `write_attribute`.
+    generic :: create => create_with_attrs, create_plain
+    procedure, private :: create_with_attrs, create_plain
+    procedure :: scene_text => file_scene_text
     procedure :: open_resume
     procedure :: append_frame
     procedure :: set_status
@@ -198,7 +202,7 @@ contains
   !> status 'running' first, then build information, case name, the scene as namelist text,
   !> every entry of `scene_attrs`, the initial random rotation (identity if none) and the
   !> empty extendible /frames datasets. The file is flushed before returning.
-  subroutine create(this, path, case_name, n_beads, scene_text, scene_attrs, rotation, error)
+  subroutine create_with_attrs(this, path, case_name, n_beads, scene_text, scene_attrs, rotation, error)
     class(case_file_t), intent(inout) :: this
     character(len=*), intent(in) :: path, case_name, scene_text
     integer, intent(in) :: n_beads
@@ -245,7 +249,27 @@ contains
       call h5_create_extendible(this%file, '/frames/integrator/rejected', h5_int64, [integer ::], error)
     if (allocated(error)) return
     call h5_flush(this%file, error)
-  end subroutine create
+  end subroutine create_with_attrs
+
+  !> `create` without an attribute list (the caller writes them with `write_attribute`).
+  subroutine create_plain(this, path, case_name, n_beads, scene_text, rotation, error)
+    class(case_file_t), intent(inout) :: this
+    character(len=*), intent(in) :: path, case_name, scene_text
+    integer, intent(in) :: n_beads
+    real(wp), intent(in) :: rotation(3, 3)
+    type(error_t), allocatable, intent(out) :: error
+    type(attribute_list_t) :: none
+    call this%create_with_attrs(path, case_name, n_beads, scene_text, none, rotation, error)
+  end subroutine create_plain
+
+  !> The scene text stored in the open file ('' when it cannot be read).
+  function file_scene_text(this) result(text)
+    class(case_file_t), intent(in) :: this
+    character(len=:), allocatable :: text
+    type(error_t), allocatable :: error
+    call h5_read_attr(this%file, '/', 'scene', text, error)
+    if (allocated(error)) text = ''
+  end function file_scene_text
 
   !> Append frame (t, r(3, N)) with its shape observables and cumulative integrator counts,
   !> rewrite /checkpoint with this state and flush the file.
