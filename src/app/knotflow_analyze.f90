@@ -173,6 +173,11 @@ contains
       return
     end if
     if (is_case_file(opt%files(1))) then
+      if (opt%matrix .or. opt%json .or. opt%per_closure .or. len_trim(opt%closure_points) > 0) then
+        call fatal_error(error, 'options --matrix, --json, --per-closure and --closure-points apply to '// &
+          'coordinate files, not to case files (use --matrix-frames for knot matrices)')
+        return
+      end if
       do i = 2, opt%nfiles
         if (.not. is_case_file(opt%files(i))) then
           call fatal_error(error, 'input '//trim(opt%files(i))//': expected a case file (.h5) like '// &
@@ -180,6 +185,10 @@ contains
           return
         end if
       end do
+    else if (opt%stride /= 1 .or. opt%force .or. len_trim(opt%matrix_frames) > 0) then
+      call fatal_error(error, 'options --stride, --force and --matrix-frames apply to case files (.h5), '// &
+        'not to the coordinate file '//trim(opt%files(1)))
+      return
     else if (opt%nfiles > 1) then
       call fatal_error(error, 'a coordinate file is analysed alone: got '//trim(opt%files(2))//' as well')
       return

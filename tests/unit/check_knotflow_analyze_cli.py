@@ -42,7 +42,7 @@ def main():
     assert run(exe, chain, '--closures', '300', '--seed', '5', '--json').stdout == p.stdout
     # bad input: one error line, non-zero exit
     for args, word in [(['--closures', 'x'], '--closures'), (['--min-length', '1'], '--min-length'),
-                       (['--bogus'], '--bogus'), (['--seed'], '--seed')]:
+                       (['--bogus'], '--bogus'), (['--seed'], '--seed'), (['--stride', '2'], '--stride')]:
         p = run(exe, chain, *args)
         lines = p.stderr.strip().splitlines()
         assert p.returncode != 0 and len(lines) == 1 and word in lines[0], (args, p.stderr)
@@ -96,6 +96,8 @@ def check_case_file(exe, work):
         assert f['analysis/shape/mode'].shape == (nf,)
     p = run(exe, path, *args)
     assert p.returncode == 0 and '0 new' in p.stdout, p.stdout
+    p = run(exe, path, '--json')
+    assert p.returncode != 0 and '--json' in p.stderr
     p = run(exe, path, '--matrix-frames', '99')
     assert p.returncode != 0 and '--matrix-frames' in p.stderr and len(p.stderr.strip().splitlines()) == 1
     with h5py.File(path) as f:
