@@ -184,6 +184,24 @@ class PreprocessorTest(unittest.TestCase):
             self.assertIn("call pfunit_run_mpi_test('test_j', 'test_x', pf1_t1, [1, 2])",
                           handle.read())
 
+    def test_npes_larger_than_mpi_pes(self):
+        path = self.write("test_k.pf", """
+            module test_k
+              use funit
+              use pfunit
+            contains
+              @mpitest(npes=[4])
+              subroutine test_x(this)
+                class(MpiTestMethod), intent(inout) :: this
+              end subroutine test_x
+            end module test_k
+            """)
+        out = os.path.join(self.tmp.name, "drv.F90")
+        proc = self.run_tool("driver", "--mpi", "--np", "2", "--name", "t", "-o", out, path)
+        self.assertNotEqual(proc.returncode, 0)
+        self.assertIn("test_k.pf:6:", proc.stderr)
+        self.assertIn("raise MPI_PES", proc.stderr)
+
     def test_options(self):
         self.assertEqual(funitproc.parse_options("npes=[1, 3], ifdef=FOO"),
                          {"npes": [1, 3], "ifdef": "FOO"})

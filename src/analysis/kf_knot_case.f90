@@ -1,0 +1,133 @@
+!> Analysis of a whole trajectory (the computations behind /analysis of a case file, without
+!> any I/O): k_f and spectrum of selected frames (each frame with its own random stream
+!> (seed, frame index), so the result does not depend on how frames are shared among ranks),
+!> transitions, modes from the shape series and spectra of R_g, phi and the end-to-end vector.
+module kf_knot_case
+  use kf_kinds, only: wp, i8
+  use kf_error, only: error_t
+  use kf_shape, only: shape_t, compute_shape
+  use kf_knot_invariants, only: n_knot_types
+  use kf_knot_closure, only: knot_stats_t, analyse_closures
+  use kf_modes, only: frame_mode, case_mode
+  use kf_spectra, only: power_spectrum, dominant_period, unwrap_phase, detrend
+  implicit none
+  private
+
+  !> Knot statistics of a set of frames.
+  type, public :: frame_knots_t
+    integer(i8), allocatable :: frame_index(:)   !< 0-based frame numbers
+    real(wp), allocatable :: time(:)
+    real(wp), allocatable :: kf(:)
+    real(wp), allocatable :: spectrum(:, :)      !< (n_knot_types, nk)
+    integer, allocatable :: dominant(:)          !< type index of each frame
+  end type frame_knots_t
+
+  !> Modes and spectra of the shape series.
+  type, public :: shape_analysis_t
+    integer, allocatable :: mode(:)
+    integer :: case_mode = 0
+    real(wp), allocatable :: frequency(:), power_rg(:), power_phi(:), power_end_to_end(:)
+    real(wp) :: period_rg = 0.0_wp, period_phi = 0.0_wp
+  end type shape_analysis_t
+
+  public :: select_frames, analyse_frame_knots, analyse_shapes, frame_stream
+
+contains
+
+  !> Stream of frame k (0-based) for the whole-chain closures.
+  elemental integer(i8) function frame_stream(k)
+    integer(i8), intent(in) :: k
+    frame_stream = k
+  end function frame_stream
+
+  !> Frames 0, stride, 2 stride, ... of nframes, plus the last frame.
+  function select_frames(nframes, stride) result(idx)
+    integer, intent(in) :: nframes, stride
+    integer(i8), allocatable :: idx(:)
+    integer :: k, n
+    n = (nframes - 1)/stride + 1
+    if (modulo(nframes - 1, stride) /= 0) n = n + 1
+    allocate (idx(n))
+    do k = 1, (nframes - 1)/stride + 1
+      idx(k) = int((k - 1)*stride, i8)
+    end do
+    if (modulo(nframes - 1, stride) /= 0) idx(n) = int(nframes - 1, i8)
+  end function select_frames
+
+  !> k_f, spectrum and dominant type of the frames `todo` (0-based) of r(3, N, nframes); with
+  !> part/nparts only every nparts-th of them (the others stay zero, to be summed over ranks).
+  subroutine analyse_frame_knots(r, t, todo, closures, seed, res, error, part, nparts)
+    real(wp), intent(in) :: r(:, :, :), t(:)
+    integer(i8), intent(in) :: todo(:)
+    integer, intent(in) :: closures
+    integer(i8), intent(in) :: seed
+    type(frame_knots_t), intent(out) :: res
+    type(error_t), allocatable, intent(out) :: error
+    integer, intent(in), optional :: part, nparts
+    type(knot_stats_t) :: st
+    integer :: k, nk, p, np
+    character(len=24) :: buf
+    p = 0
+    np = 1
+    if (present(part)) p = part
+    if (present(nparts)) np = nparts
+    nk = size(todo)
+    allocate (res%frame_index(nk), res%time(nk), res%kf(nk), res%spectrum(n_knot_types, nk), res%dominant(nk))
+    res%frame_index = todo
+    res%kf = 0.0_wp
+    res%spectrum = 0.0_wp
+    res%dominant = 0
+    do k = 1, nk
+      res%time(k) = t(todo(k) + 1)
+      if (modulo(k - 1, np) /= p) cycle
+      call analyse_closures(r(:, :, todo(k) + 1), closures, seed, st, error, stream=frame_stream(todo(k)))
+      if (allocated(error)) then
+        write (buf, '(i0)') todo(k)
+        error%message = 'frame '//trim(buf)//': '//error%message
+        return
+      end if
+      res%kf(k) = st%kf
+      res%spectrum(:, k) = st%spectrum
+      res%dominant(k) = st%dominant
+    end do
+  end subroutine analyse_frame_knots
+
+  !> Modes and spectra from the shapes of all frames r(3, N, nframes) at times t (uniform).
+  subroutine analyse_shapes(r, t, res, error)
+    real(wp), intent(in) :: r(:, :, :), t(:)
+    type(shape_analysis_t), intent(out) :: res
+    type(error_t), allocatable, intent(out) :: error
+    type(shape_t), allocatable :: s(:)
+    real(wp), allocatable :: rg(:), phi(:), f(:), pw(:), e2e(:, :)
+    integer :: k, nf, c
+    nf = size(r, 3)
+    allocate (s(nf), rg(nf), phi(nf), e2e(3, nf))
+    do k = 1, nf
+      call compute_shape(r(:, :, k), s(k), error)
+      if (allocated(error)) return
+      rg(k) = s(k)%rg
+      phi(k) = s(k)%phi
+      e2e(:, k) = r(:, size(r, 2), k) - r(:, 1, k)
+    end do
+    res%mode = frame_mode(s)
+    res%case_mode = case_mode(res%mode)
+    if (nf < 4) then
+      allocate (res%frequency(0), res%power_rg(0), res%power_phi(0), res%power_end_to_end(0))
+      return
+    end if
+    call power_spectrum(rg, t(2) - t(1), res%frequency, res%power_rg, error)
+    if (allocated(error)) return
+    call power_spectrum(detrend(unwrap_phase(phi)), t(2) - t(1), f, res%power_phi, error)
+    if (allocated(error)) return
+    allocate (res%power_end_to_end(size(f)))
+    res%power_end_to_end = 0.0_wp
+    do c = 1, 3
+      call power_spectrum(e2e(c, :), t(2) - t(1), f, pw, error)
+      if (allocated(error)) return
+      res%power_end_to_end = res%power_end_to_end + pw
+    end do
+    res%period_rg = dominant_period(res%frequency, res%power_rg)
+    res%period_phi = dominant_period(res%frequency, res%power_phi)
+  end subroutine analyse_shapes
+
+end module kf_knot_case

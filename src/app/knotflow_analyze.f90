@@ -1,0 +1,514 @@
+!> knotflow-analyze: knot analysis of a coordinate file (text + --json), or of HDF5 case files
+!> (the /analysis group). A thin program: parse and validate options, run the library, report.
+!> Errors become one line on stderr and a non-zero exit.
+program knotflow_analyze
+  use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
+  use kf_kinds, only: wp, i8
+  use kf_error, only: error_t, fatal_error
+  use kf_knot_invariants, only: n_knot_types, knot_type_names
+  use kf_knot_closure, only: knot_stats_t, analyse_closures, default_closures, default_knot_seed
+  use kf_knot_matrix, only: knot_matrix, knot_core, is_slipknot, default_min_length, &
+    default_matrix_closures
+  use kf_knot_input, only: read_points
+  use kf_analysis_farm, only: analysis_farm_t, farm_start, farm_stop, farm_max, farm_sum, farm_any, &
+    farm_barrier
+  use kf_h5, only: h5_initialize, h5_finalize
+  use kf_case_file, only: read_frames
+  use kf_knot_case, only: frame_knots_t, shape_analysis_t, select_frames, analyse_frame_knots, analyse_shapes
+  use kf_knot_store, only: stored_matrix_t, read_previous_knots, read_previous_matrix, write_analysis
+  use kf_transitions, only: detect_transitions, default_low, default_high
+  implicit none
+
+  integer, parameter :: max_files = 4096
+  integer, parameter :: path_len = 1024
+
+  !> Command-line options.
+  type :: options_t
+    integer :: closures = default_closures
+    integer(i8) :: seed = default_knot_seed
+    logical :: matrix = .false.
+    integer :: matrix_closures = default_matrix_closures
+    integer :: min_length = default_min_length
+    character(len=path_len) :: closure_points = ''
+    logical :: json = .false.
+    logical :: per_closure = .false.
+    integer :: stride = 1
+    character(len=path_len) :: matrix_frames = ''
+    logical :: force = .false.
+    integer :: nfiles = 0
+    character(len=path_len) :: files(max_files)
+  end type options_t
+
+  type(options_t) :: opt
+  type(error_t), allocatable :: error
+  type(analysis_farm_t) :: farm
+
+  call parse_options(opt, error)
+  if (allocated(error)) call die(error%message)
+  call farm_start(farm, error)
+  if (allocated(error)) call die(error%message)
+  if (is_case_file(opt%files(1))) then
+    call analyse_case_files(opt, farm, error)
+  else
+    call analyse_coordinates(opt, farm, error)
+  end if
+  if (allocated(error)) call die(error%message)
+  call farm_stop(farm)
+
+contains
+
+  logical function is_case_file(path)
+    character(len=*), intent(in) :: path
+    integer :: n
+    n = len_trim(path)
+    is_case_file = .false.
+    if (n >= 3) is_case_file = path(n - 2:n) == '.h5'
+    if (n >= 5) is_case_file = is_case_file .or. path(n - 4:n) == '.hdf5'
+  end function is_case_file
+
+  subroutine die(message)
+    use, intrinsic :: iso_c_binding, only: c_int
+    character(len=*), intent(in) :: message
+    interface
+      subroutine c_exit(status) bind(c, name='exit')
+        import :: c_int
+        integer(c_int), value :: status
+      end subroutine c_exit
+    end interface
+    write (error_unit, '(a)') 'knotflow-analyze: error: '//message
+    flush (error_unit)
+    call c_exit(1_c_int)          ! one line and a non-zero exit status, no runtime backtrace
+  end subroutine die
+
+  subroutine usage()
+    write (output_unit, '(a)') &
+      'usage: knotflow-analyze chain.xyz [--closures N] [--seed S] [--matrix] [--matrix-closures N]', &
+      '                        [--min-length M] [--closure-points FILE] [--json] [--per-closure]', &
+      '       knotflow-analyze CASE.h5 [CASE2.h5 ...] [--closures N] [--seed S] [--stride K]', &
+      '                        [--matrix-frames k1,k2|last] [--min-length M] [--force]'
+  end subroutine usage
+
+  !> Read and validate the command line.
+  subroutine parse_options(opt, error)
+    type(options_t), intent(inout) :: opt
+    type(error_t), allocatable, intent(out) :: error
+    integer :: i, n, stat
+    character(len=path_len) :: arg, val
+    n = command_argument_count()
+    if (n == 0) then
+      call usage()
+      call fatal_error(error, 'no input file given')
+      return
+    end if
+    i = 0
+    do while (i < n)
+      i = i + 1
+      call get_command_argument(i, arg)
+      select case (trim(arg))
+      case ('-h', '--help')
+        call usage()
+        stop
+      case ('--matrix')
+        opt%matrix = .true.
+      case ('--json')
+        opt%json = .true.
+      case ('--per-closure')
+        opt%per_closure = .true.
+      case ('--force')
+        opt%force = .true.
+      case ('--closures', '--seed', '--min-length', '--closure-points', '--stride', '--matrix-frames', &
+            '--matrix-closures')
+        if (i == n) then
+          call fatal_error(error, 'option '//trim(arg)//': missing value')
+          return
+        end if
+        i = i + 1
+        call get_command_argument(i, val)
+        select case (trim(arg))
+        case ('--closures')
+          read (val, *, iostat=stat) opt%closures
+          if (stat /= 0 .or. opt%closures < 1 .or. verify(trim(val), '0123456789') /= 0) &
+            call bad(error, arg, val, 'an integer >= 1')
+        case ('--matrix-closures')
+          read (val, *, iostat=stat) opt%matrix_closures
+          if (stat /= 0 .or. opt%matrix_closures < 1 .or. verify(trim(val), '0123456789') /= 0) &
+            call bad(error, arg, val, 'an integer >= 1')
+        case ('--seed')
+          read (val, *, iostat=stat) opt%seed
+          if (stat /= 0 .or. verify(trim(val), '-0123456789') /= 0) call bad(error, arg, val, 'an integer')
+        case ('--min-length')
+          read (val, *, iostat=stat) opt%min_length
+          if (stat /= 0 .or. opt%min_length < 2 .or. verify(trim(val), '0123456789') /= 0) &
+            call bad(error, arg, val, 'an integer >= 2')
+        case ('--stride')
+          read (val, *, iostat=stat) opt%stride
+          if (stat /= 0 .or. opt%stride < 1 .or. verify(trim(val), '0123456789') /= 0) &
+            call bad(error, arg, val, 'an integer >= 1')
+        case ('--closure-points')
+          opt%closure_points = val
+        case ('--matrix-frames')
+          opt%matrix_frames = val
+          if (verify(trim(val), '0123456789,last') /= 0) &
+            call bad(error, arg, val, '"last" or a comma-separated list of frame numbers and "last"')
+        end select
+        if (allocated(error)) return
+      case default
+        if (arg(1:1) == '-') then
+          call fatal_error(error, 'unknown option '//trim(arg)//' (allowed: --closures, --seed, --matrix, '// &
+            '--matrix-closures, --min-length, --closure-points, --json, --per-closure, --stride, '// &
+            '--matrix-frames, --force)')
+          return
+        end if
+        if (opt%nfiles == max_files) then
+          call fatal_error(error, 'too many input files')
+          return
+        end if
+        opt%nfiles = opt%nfiles + 1
+        opt%files(opt%nfiles) = arg
+      end select
+    end do
+    if (opt%nfiles == 0) then
+      call fatal_error(error, 'no input file given')
+      return
+    end if
+    if (is_case_file(opt%files(1))) then
+      if (opt%matrix .or. opt%json .or. opt%per_closure .or. len_trim(opt%closure_points) > 0) then
+        call fatal_error(error, 'options --matrix, --json, --per-closure and --closure-points apply to '// &
+          'coordinate files, not to case files (use --matrix-frames for knot matrices)')
+        return
+      end if
+      do i = 2, opt%nfiles
+        if (.not. is_case_file(opt%files(i))) then
+          call fatal_error(error, 'input '//trim(opt%files(i))//': expected a case file (.h5) like '// &
+            trim(opt%files(1)))
+          return
+        end if
+      end do
+    else if (opt%stride /= 1 .or. opt%force .or. len_trim(opt%matrix_frames) > 0) then
+      call fatal_error(error, 'options --stride, --force and --matrix-frames apply to case files (.h5), '// &
+        'not to the coordinate file '//trim(opt%files(1)))
+      return
+    else if (opt%nfiles > 1) then
+      call fatal_error(error, 'a coordinate file is analysed alone: got '//trim(opt%files(2))//' as well')
+      return
+    end if
+  end subroutine parse_options
+
+  !> The error for an invalid option value.
+  subroutine bad(error, name, value, allowed)
+    type(error_t), allocatable, intent(out) :: error
+    character(len=*), intent(in) :: name, value, allowed
+    call fatal_error(error, 'option '//trim(name)//': invalid value "'//trim(value)//'" (allowed: '// &
+      allowed//')')
+  end subroutine bad
+
+  !> Mode 1: one chain from a text coordinate file.
+  subroutine analyse_coordinates(opt, farm, error)
+    type(options_t), intent(in) :: opt
+    type(analysis_farm_t), intent(in) :: farm
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: r(:, :), pts(:, :), kmat(:, :), flat(:)
+    type(knot_stats_t) :: st
+    integer :: core(2), n
+    logical :: found, slip
+    call read_points(opt%files(1), r, error)
+    if (allocated(error)) return
+    n = size(r, 2)
+    if (len_trim(opt%closure_points) > 0) then
+      call read_points(opt%closure_points, pts, error)
+      if (allocated(error)) return
+      call analyse_closures(r, size(pts, 2), opt%seed, st, error, points=pts, per_closure=.true.)
+    else
+      call analyse_closures(r, opt%closures, opt%seed, st, error, per_closure=.true.)
+    end if
+    if (allocated(error)) return
+    found = .false.
+    slip = .false.
+    if (opt%matrix) then
+      allocate (kmat(n, n))
+      call knot_matrix(r, opt%matrix_closures, opt%seed, opt%min_length, kmat, error, &
+                       part=farm%rank, nparts=farm%size)
+      if (allocated(error)) return
+      flat = reshape(kmat, [n*n])
+      where (ieee_is_nan(flat)) flat = -huge(1.0_wp)
+      call farm_max(farm, flat)
+      kmat = reshape(flat, [n, n])
+      where (kmat < -1.0_wp) kmat = ieee_nan()
+      call knot_core(kmat, core, found)
+      slip = is_slipknot(kmat, st%kf)
+    end if
+    if (farm%rank /= 0) return
+    if (opt%json) then
+      call print_json(opt, n, st, kmat, found, core, slip)
+    else
+      call print_text(opt, n, st, found, core, slip)
+    end if
+  end subroutine analyse_coordinates
+
+  !> The human-readable report of one chain.
+  subroutine print_text(opt, n, st, found, core, slip)
+    type(options_t), intent(in) :: opt
+    integer, intent(in) :: n, core(2)
+    type(knot_stats_t), intent(in) :: st
+    logical, intent(in) :: found, slip
+      integer :: k, i
+      write (output_unit, '(a,a)') 'file:      ', trim(opt%files(1))
+      write (output_unit, '(a,i0)') 'beads:     ', n
+      write (output_unit, '(a,i0,a,i0)') 'closures:  ', st%closures, '   seed: ', st%seed
+      write (output_unit, '(a,f8.4)') 'k_f:       ', st%kf
+      write (output_unit, '(a)') 'spectrum:'
+      do k = 1, n_knot_types
+        if (st%spectrum(k) > 0.0_wp) write (output_unit, '(4x,a6,f8.4)') knot_type_names(k), st%spectrum(k)
+      end do
+      write (output_unit, '(a,a)') 'dominant:  ', trim(knot_type_names(st%dominant))
+      if (opt%per_closure) then
+        write (output_unit, '(a)') 'per closure:'
+        write (output_unit, '(10(1x,a5))') (knot_type_names(st%per_closure(i)), i=1, st%closures)
+      end if
+      if (opt%matrix) then
+        write (output_unit, '(a,i0,a,i0)') 'knot matrix: closures per subchain ', opt%matrix_closures, &
+          ', min length ', opt%min_length
+        if (found) then
+          write (output_unit, '(a,i0,a,i0,a)') 'knot core: beads ', core(1), '..', core(2), ' (0-based)'
+        else
+          write (output_unit, '(a)') 'knot core: none'
+        end if
+        write (output_unit, '(a,l1)') 'slipknot:  ', slip
+      end if
+  end subroutine print_text
+
+  !> The JSON object of one chain (the convention shared with knotflow-kf).
+  subroutine print_json(opt, n, st, kmat, found, core, slip)
+    type(options_t), intent(in) :: opt
+    integer, intent(in) :: n, core(2)
+    type(knot_stats_t), intent(in) :: st
+    real(wp), allocatable, intent(in) :: kmat(:, :)
+    logical, intent(in) :: found, slip
+      character(len=:), allocatable :: s
+      integer :: k, i, j
+      s = '{"n_beads": '//itoa(int(n, i8))//', "closures": '//itoa(int(st%closures, i8))// &
+        ', "seed": '//itoa(st%seed)//', "kf": '//rtoa(st%kf)//', "spectrum": {'
+      do k = 1, n_knot_types
+        s = s//'"'//trim(knot_type_names(k))//'": '//rtoa(st%spectrum(k))
+        if (k < n_knot_types) s = s//', '
+      end do
+      s = s//'}, "dominant": "'//trim(knot_type_names(st%dominant))//'"'
+      if (opt%per_closure) then
+        s = s//', "per_closure": ['
+        do k = 1, st%closures
+          s = s//'"'//trim(knot_type_names(st%per_closure(k)))//'"'
+          if (k < st%closures) s = s//', '
+        end do
+        s = s//']'
+      end if
+      if (opt%matrix) then
+        s = s//', "matrix": ['
+        do i = 1, n
+          s = s//'['
+          do j = 1, n
+            if (ieee_is_nan(kmat(i, j))) then
+              s = s//'null'
+            else
+              s = s//rtoa(kmat(i, j))
+            end if
+            if (j < n) s = s//', '
+          end do
+          s = s//']'
+          if (i < n) s = s//', '
+        end do
+        s = s//']'
+      end if
+      if (found) then
+        s = s//', "knot_core": ['//itoa(int(core(1), i8))//', '//itoa(int(core(2), i8))//']'
+      else
+        s = s//', "knot_core": null'
+      end if
+      s = s//', "slipknot": '//merge('true ', 'false', slip)
+      s = trim(s)//'}'
+      write (output_unit, '(a)') s
+  end subroutine print_json
+
+  !> Mode 2: HDF5 case files; writes /analysis of each (the trajectory is never touched).
+  subroutine analyse_case_files(opt, farm, error)
+    type(options_t), intent(in) :: opt
+    type(analysis_farm_t), intent(in) :: farm
+    type(error_t), allocatable, intent(out) :: error
+    integer :: ifile
+    call h5_initialize(error)
+    if (allocated(error)) return
+    do ifile = 1, opt%nfiles
+      call analyse_case(trim(opt%files(ifile)), opt, farm, error)
+      if (farm_any(farm, allocated(error))) then
+        if (.not. allocated(error)) call fatal_error(error, 'case file '//trim(opt%files(ifile))// &
+          ': failed on another rank')
+        return
+      end if
+    end do
+    call h5_finalize(error)
+  end subroutine analyse_case_files
+
+  !> Analyse one case file.
+  subroutine analyse_case(path, opt, farm, error)
+    character(len=*), intent(in) :: path
+    type(options_t), intent(in) :: opt
+    type(analysis_farm_t), intent(in) :: farm
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: t(:), r(:, :, :), flat(:), ev_time(:)
+    integer(i8), allocatable :: todo(:), need(:), mframes(:), ev_frame(:)
+    integer, allocatable :: ev_kind(:), ev_pos(:), pos_of(:)
+    type(frame_knots_t) :: prev, fresh, all
+    type(shape_analysis_t) :: shapes
+    type(stored_matrix_t), allocatable :: mats(:)
+    logical :: found
+    integer :: nframes, n, k, m, nneed
+    call read_frames(path, t, r, error)
+    if (allocated(error)) return
+    nframes = size(t)
+    n = size(r, 2)
+    if (nframes < 1) then
+      call fatal_error(error, 'case file '//path//': /frames is empty (nothing to analyse)')
+      return
+    end if
+    call matrix_frame_list(opt%matrix_frames, nframes, path, mframes, error)
+    if (allocated(error)) return
+    todo = select_frames(nframes, opt%stride)
+    if (opt%force) then
+      allocate (prev%frame_index(0))
+    else
+      call read_previous_knots(path, opt%closures, opt%seed, prev, error)
+      if (allocated(error)) return
+    end if
+    ! frames still to do; pos_of(k) = position of todo(k) in prev (0 if absent)
+    allocate (pos_of(size(todo)))
+    do k = 1, size(todo)
+      pos_of(k) = 0
+      do m = 1, size(prev%frame_index)
+        if (prev%frame_index(m) == todo(k)) pos_of(k) = m
+      end do
+    end do
+    nneed = count(pos_of == 0)
+    need = pack(todo, pos_of == 0)
+    call analyse_frame_knots(r, t, need, opt%closures, opt%seed, fresh, error, part=farm%rank, nparts=farm%size)
+    if (farm_any(farm, allocated(error))) then
+      if (.not. allocated(error)) call fatal_error(error, 'case file '//path//': failed on another rank')
+      return
+    end if
+    call farm_sum(farm, fresh%kf)
+    flat = reshape(fresh%spectrum, [size(fresh%spectrum)])
+    call farm_sum(farm, flat)
+    fresh%spectrum = reshape(flat, shape(fresh%spectrum))
+    ! merge previous and fresh results in the order of todo
+    allocate (all%frame_index(size(todo)), all%time(size(todo)), all%kf(size(todo)), &
+              all%spectrum(n_knot_types, size(todo)), all%dominant(size(todo)))
+    m = 0
+    do k = 1, size(todo)
+      all%frame_index(k) = todo(k)
+      all%time(k) = t(todo(k) + 1)
+      if (pos_of(k) > 0) then
+        all%kf(k) = prev%kf(pos_of(k))
+        all%spectrum(:, k) = prev%spectrum(:, pos_of(k))
+      else
+        m = m + 1
+        all%kf(k) = fresh%kf(m)
+        all%spectrum(:, k) = fresh%spectrum(:, m)
+      end if
+      all%dominant(k) = maxloc(all%spectrum(:, k), 1)
+    end do
+    call detect_transitions(all%kf, default_low, default_high, ev_kind, ev_pos)
+    ev_frame = all%frame_index(ev_pos)
+    ev_time = all%time(ev_pos)
+    ! knot matrices
+    allocate (mats(size(mframes)))
+    do k = 1, size(mframes)
+      found = .false.
+      if (.not. opt%force) then
+        call read_previous_matrix(path, mframes(k), opt%matrix_closures, opt%min_length, mats(k), found, error)
+        if (allocated(error)) return
+      end if
+      if (found) cycle
+      mats(k)%frame = mframes(k)
+      mats(k)%time = t(mframes(k) + 1)
+      allocate (mats(k)%k(n, n))
+      call knot_matrix(r(:, :, mframes(k) + 1), opt%matrix_closures, opt%seed, opt%min_length, mats(k)%k, &
+                       error, part=farm%rank, nparts=farm%size)
+      if (farm_any(farm, allocated(error))) then
+        if (.not. allocated(error)) call fatal_error(error, 'case file '//path//': failed on another rank')
+        return
+      end if
+      flat = reshape(mats(k)%k, [n*n])
+      where (ieee_is_nan(flat)) flat = -huge(1.0_wp)
+      call farm_max(farm, flat)
+      where (flat < -1.0_wp) flat = ieee_nan()
+      mats(k)%k = reshape(flat, [n, n])
+    end do
+    if (farm%rank == 0) then
+      call analyse_shapes(r, t, shapes, error)
+      if (.not. allocated(error)) &
+        call write_analysis(path, all, opt%closures, opt%seed, ev_kind, ev_frame, ev_time, default_low, &
+                            default_high, mats, opt%matrix_closures, opt%min_length, shapes, error)
+      if (.not. allocated(error)) write (output_unit, '(a,i0,a,i0,a,i0,a)') trim(path)//': ', size(todo), &
+        ' frames (', nneed, ' new), ', size(ev_kind), ' events written to /analysis'
+    end if
+    call farm_barrier(farm)
+  end subroutine analyse_case
+
+  !> The frames of --matrix-frames ('' none, 'last', or a comma-separated list), checked.
+  subroutine matrix_frame_list(spec, nframes, path, frames, error)
+    character(len=*), intent(in) :: spec, path
+    integer, intent(in) :: nframes
+    integer(i8), allocatable, intent(out) :: frames(:)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: i, j, k, stat
+    integer(i8) :: v
+    character(len=24) :: buf
+    allocate (frames(0))
+    if (len_trim(spec) == 0) return
+    i = 1
+    do while (i <= len_trim(spec))
+      j = index(spec(i:), ',')
+      k = merge(len_trim(spec), i + j - 2, j == 0)
+      write (buf, '(i0)') nframes - 1
+      if (k >= i .and. spec(i:max(i, k)) == 'last') then
+        frames = [frames, int(nframes - 1, i8)]
+        i = k + 2
+        cycle
+      end if
+      read (spec(i:max(i, k)), *, iostat=stat) v
+      if (stat /= 0 .or. k < i) then
+        call fatal_error(error, 'option --matrix-frames: invalid value "'//trim(spec)// &
+          '" (allowed: "last" or frame numbers 0..'//trim(buf)//')')
+        return
+      end if
+      if (v < 0 .or. v >= nframes) then
+        call fatal_error(error, 'option --matrix-frames: frame '//spec(i:k)//' is not in '//path// &
+          ' (allowed: 0..'//trim(buf)//')')
+        return
+      end if
+      frames = [frames, v]
+      i = k + 2
+    end do
+  end subroutine matrix_frame_list
+
+  function itoa(v) result(s)
+    integer(i8), intent(in) :: v
+    character(len=:), allocatable :: s
+    character(len=24) :: buf
+    write (buf, '(i0)') v
+    s = trim(buf)
+  end function itoa
+
+  function rtoa(v) result(s)
+    real(wp), intent(in) :: v
+    character(len=:), allocatable :: s
+    character(len=32) :: buf
+    write (buf, '(es23.16e2)') v
+    s = trim(adjustl(buf))
+  end function rtoa
+
+  real(wp) function ieee_nan()
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
+    ieee_nan = ieee_value(0.0_wp, ieee_quiet_nan)
+  end function ieee_nan
+
+end program knotflow_analyze

@@ -1,0 +1,560 @@
+!> The HDF5 case file of one simulation case: the contract between the simulation and the
+!> analysis tools (schema in the README and in the comments below).
+!>
+!> Layout (shapes as seen from h5py; Fortran writes the transposes):
+!> - root attributes: status, knotflow_version, git_hash, compiler, compiler_flags, case_name,
+!>   n_beads, scene (namelist text), every effective scene variable as '<group>.<variable>',
+!>   chain.rotation (3x3).
+!> - /frames/time (nframes,), /frames/positions (nframes, N, 3),
+!>   /frames/observables/{rg,a,b,c,theta,phi} (nframes,) float64, .../close_pairs int32,
+!>   /frames/integrator/{steps,rejected} int64, /frames/integrator/dt float64: all chunked and
+!>   extendible along the frame axis.
+!> - /checkpoint/{time, positions (N, 3), dt, steps, rejected, nframes}: the state of the last
+!>   frame, rewritten with every frame.
+!>
+!> Choices made here:
+!> - The file is created under its final name (no '<path>.tmp' and rename): the very first
+!>   thing written is the root attribute status = 'running', so a file left half-initialised by
+!>   a kill says 'running'. Such a file has no /checkpoint yet, `open_resume` then fails and the
+!>   caller recreates the case from scratch. A file whose HDF5 structure was damaged by a kill
+!>   reports 'corrupt: ...' from `case_file_status` and is recreated as well.
+!> - `append_frame` appends to every /frames dataset, then rewrites /checkpoint (nframes = the
+!>   new frame count), then flushes (H5Fflush). If the run is killed in between, /frames may hold
+!>   entries beyond the checkpoint (or some datasets one entry more than others): `open_resume`
+!>   truncates all of /frames to the checkpoint's nframes, so no frame is lost or duplicated.
+!> - `open_resume` sets the status back to 'running'.
+!> - Frame times must increase strictly; `append_frame` rejects a time not after the last one.
+!> - Logical scene variables are stored as int32 attributes (1 true, 0 false): HDF5 has no
+!>   boolean type (h5py's is an enum), and an integer reads naturally in every tool.
+module kf_case_file
+  use kf_kinds, only: wp, i4, i8
+  use kf_error, only: error_t, fatal_error
+  use kf_shape, only: shape_t
+  use kf_build_info, only: knotflow_version, knotflow_git_hash, knotflow_compiler, knotflow_flags
+  use kf_h5, only: h5_file_t, h5_create_file, h5_open_file, h5_close_file, h5_flush, &
+    h5_create_group, h5_exists, h5_attr_exists, h5_write_attr, h5_read_attr, h5_write, h5_read, &
+    h5_create_extendible, h5_append, h5_set_length, h5_length, h5_real, h5_int32, h5_int64
+  implicit none
+  private
+
+  public :: case_file_status, read_frames
+
+  integer, parameter :: kind_str = 1, kind_i4 = 2, kind_i8 = 3, kind_real = 4, kind_real1 = 5, &
+    kind_real2 = 6
+
+  !> One named attribute value of any of the supported kinds.
+  type :: attribute_t
+    character(len=:), allocatable :: name
+    integer :: kind = 0
+    character(len=:), allocatable :: str
+    integer(i4) :: ival = 0
+    integer(i8) :: lval = 0
+    real(wp) :: rval = 0.0_wp
+    real(wp), allocatable :: r1(:), r2(:, :)
+  end type attribute_t
+
+  !> A list of named values (e.g. every effective scene variable as '<group>.<variable>')
+  !> collected by the caller and written as root attributes by `case_file_t%create`.
+  type, public :: attribute_list_t
+    private
+    type(attribute_t), allocatable :: items(:)
+    integer :: n = 0
+  contains
+    !> Add (name, value): character string, int32, int64, real(wp), logical (stored as int32
+    !> 1/0), 1-D or 2-D real(wp) array.
+    generic :: add => add_str, add_i4, add_i8, add_real, add_logical, add_real1, add_real2
+    procedure :: count => list_count
+    procedure, private :: add_str, add_i4, add_i8, add_real, add_logical, add_real1, add_real2
+    procedure, private :: push
+  end type attribute_list_t
+
+  !> An open case file being written by the simulation.
+  type, public :: case_file_t
+    private
+    type(h5_file_t) :: file
+    integer :: n_beads = 0
+    integer(i8) :: nframes = 0
+    real(wp) :: last_time = 0.0_wp
+  contains
+    !> create(path, case_name, n_beads, scene_text, [scene_attrs,] rotation, error): the
+    !> scene attributes can also be written afterwards with `write_attribute`.
+    generic :: create => create_with_attrs, create_plain
+    procedure, private :: create_with_attrs, create_plain
+    procedure :: scene_text => file_scene_text
+    procedure :: open_resume
+    procedure :: append_frame
+    procedure :: set_status
+    procedure :: close => close_case
+    procedure :: is_open => case_is_open
+    procedure :: frame_count
+    !> Write one more root attribute (same kinds as `attribute_list_t%add`).
+    generic :: write_attribute => write_attr_str, write_attr_i4, write_attr_i8, write_attr_real, &
+      write_attr_logical, write_attr_real1, write_attr_real2
+    procedure, private :: write_attr_str, write_attr_i4, write_attr_i8, write_attr_real, &
+      write_attr_logical, write_attr_real1, write_attr_real2
+  end type case_file_t
+
+  !> The /frames datasets of one-value-per-frame kind real.
+  character(len=*), parameter :: frame_real_sets(8) = [character(len=32) :: '/frames/time', &
+    '/frames/observables/rg', '/frames/observables/a', '/frames/observables/b', &
+    '/frames/observables/c', '/frames/observables/theta', '/frames/observables/phi', &
+    '/frames/integrator/dt']
+
+contains
+
+  ! ---------------------------------------------------------------- attribute list
+
+  subroutine push(this, item)
+    class(attribute_list_t), intent(inout) :: this
+    type(attribute_t), intent(in) :: item
+    type(attribute_t), allocatable :: tmp(:)
+    if (.not. allocated(this%items)) allocate (this%items(16))
+    if (this%n == size(this%items)) then
+      allocate (tmp(2*this%n))
+      tmp(1:this%n) = this%items(1:this%n)
+      call move_alloc(tmp, this%items)
+    end if
+    this%n = this%n + 1
+    this%items(this%n) = item
+  end subroutine push
+
+  subroutine add_str(this, name, value)
+    class(attribute_list_t), intent(inout) :: this
+    character(len=*), intent(in) :: name, value
+    type(attribute_t) :: item
+    item%name = name
+    item%kind = kind_str
+    item%str = value
+    call this%push(item)
+  end subroutine add_str
+
+  subroutine add_i4(this, name, value)
+    class(attribute_list_t), intent(inout) :: this
+    character(len=*), intent(in) :: name
+    integer(i4), intent(in) :: value
+    type(attribute_t) :: item
+    item%name = name
+    item%kind = kind_i4
+    item%ival = value
+    call this%push(item)
+  end subroutine add_i4
+
+  subroutine add_i8(this, name, value)
+    class(attribute_list_t), intent(inout) :: this
+    character(len=*), intent(in) :: name
+    integer(i8), intent(in) :: value
+    type(attribute_t) :: item
+    item%name = name
+    item%kind = kind_i8
+    item%lval = value
+    call this%push(item)
+  end subroutine add_i8
+
+  subroutine add_real(this, name, value)
+    class(attribute_list_t), intent(inout) :: this
+    character(len=*), intent(in) :: name
+    real(wp), intent(in) :: value
+    type(attribute_t) :: item
+    item%name = name
+    item%kind = kind_real
+    item%rval = value
+    call this%push(item)
+  end subroutine add_real
+
+  subroutine add_logical(this, name, value)
+    class(attribute_list_t), intent(inout) :: this
+    character(len=*), intent(in) :: name
+    logical, intent(in) :: value
+    call this%add_i4(name, merge(1_i4, 0_i4, value))
+  end subroutine add_logical
+
+  subroutine add_real1(this, name, value)
+    class(attribute_list_t), intent(inout) :: this
+    character(len=*), intent(in) :: name
+    real(wp), intent(in) :: value(:)
+    type(attribute_t) :: item
+    item%name = name
+    item%kind = kind_real1
+    item%r1 = value
+    call this%push(item)
+  end subroutine add_real1
+
+  subroutine add_real2(this, name, value)
+    class(attribute_list_t), intent(inout) :: this
+    character(len=*), intent(in) :: name
+    real(wp), intent(in) :: value(:, :)
+    type(attribute_t) :: item
+    item%name = name
+    item%kind = kind_real2
+    item%r2 = value
+    call this%push(item)
+  end subroutine add_real2
+
+  !> Number of entries in the list.
+  pure integer function list_count(this)
+    class(attribute_list_t), intent(in) :: this
+    list_count = this%n
+  end function list_count
+
+  ! ---------------------------------------------------------------- creating and writing
+
+  !> Create the case file `path` (replacing any old file) for a chain of `n_beads` beads:
+  !> status 'running' first, then build information, case name, the scene as namelist text,
+  !> every entry of `scene_attrs`, the initial random rotation (identity if none) and the
+  !> empty extendible /frames datasets. The file is flushed before returning.
+  subroutine create_with_attrs(this, path, case_name, n_beads, scene_text, scene_attrs, rotation, error)
+    class(case_file_t), intent(inout) :: this
+    character(len=*), intent(in) :: path, case_name, scene_text
+    integer, intent(in) :: n_beads
+    type(attribute_list_t), intent(in) :: scene_attrs
+    real(wp), intent(in) :: rotation(3, 3)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: i
+    call this%close()
+    if (n_beads < 1) then
+      call fatal_error(error, "case file '"//path//"': n_beads must be >= 1")
+      return
+    end if
+    call h5_create_file(this%file, path, error)
+    if (allocated(error)) return
+    this%n_beads = n_beads
+    this%nframes = 0
+    call h5_write_attr(this%file, '/', 'status', 'running', error)
+    if (allocated(error)) return
+    call h5_write_attr(this%file, '/', 'knotflow_version', knotflow_version, error)
+    if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'git_hash', knotflow_git_hash, error)
+    if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'compiler', knotflow_compiler, error)
+    if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'compiler_flags', knotflow_flags, error)
+    if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'case_name', case_name, error)
+    if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'n_beads', int(n_beads, i4), error)
+    if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'scene', scene_text, error)
+    if (allocated(error)) return
+    do i = 1, scene_attrs%n
+      call write_item(this%file, scene_attrs%items(i), error)
+      if (allocated(error)) return
+    end do
+    call h5_write_attr(this%file, '/', 'chain.rotation', rotation, error)
+    if (allocated(error)) return
+
+    call h5_create_extendible(this%file, '/frames/positions', h5_real, [3, n_beads], error, chunk=16)
+    if (allocated(error)) return
+    do i = 1, size(frame_real_sets)
+      call h5_create_extendible(this%file, trim(frame_real_sets(i)), h5_real, [integer ::], error)
+      if (allocated(error)) return
+    end do
+    call h5_create_extendible(this%file, '/frames/observables/close_pairs', h5_int32, [integer ::], error)
+    if (.not. allocated(error)) &
+      call h5_create_extendible(this%file, '/frames/integrator/steps', h5_int64, [integer ::], error)
+    if (.not. allocated(error)) &
+      call h5_create_extendible(this%file, '/frames/integrator/rejected', h5_int64, [integer ::], error)
+    if (allocated(error)) return
+    call h5_flush(this%file, error)
+  end subroutine create_with_attrs
+
+  !> `create` without an attribute list (the caller writes them with `write_attribute`).
+  subroutine create_plain(this, path, case_name, n_beads, scene_text, rotation, error)
+    class(case_file_t), intent(inout) :: this
+    character(len=*), intent(in) :: path, case_name, scene_text
+    integer, intent(in) :: n_beads
+    real(wp), intent(in) :: rotation(3, 3)
+    type(error_t), allocatable, intent(out) :: error
+    type(attribute_list_t) :: none
+    call this%create_with_attrs(path, case_name, n_beads, scene_text, none, rotation, error)
+  end subroutine create_plain
+
+  !> The scene text stored in the open file ('' when it cannot be read).
+  function file_scene_text(this) result(text)
+    class(case_file_t), intent(in) :: this
+    character(len=:), allocatable :: text
+    type(error_t), allocatable :: error
+    call h5_read_attr(this%file, '/', 'scene', text, error)
+    if (allocated(error)) text = ''
+  end function file_scene_text
+
+  !> Append frame (t, r(3, N)) with its shape observables and cumulative integrator counts,
+  !> rewrite /checkpoint with this state and flush the file.
+  subroutine append_frame(this, t, r, shape, steps, rejected, dt, error)
+    class(case_file_t), intent(inout) :: this
+    real(wp), intent(in) :: t
+    real(wp), intent(in) :: r(:, :)
+    type(shape_t), intent(in) :: shape
+    integer(i8), intent(in) :: steps, rejected
+    real(wp), intent(in) :: dt
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: rc(:, :)
+    if (.not. this%file%is_open()) then
+      call fatal_error(error, 'case file: append_frame on a file that is not open')
+      return
+    end if
+    if (size(r, 1) /= 3 .or. size(r, 2) /= this%n_beads) then
+      call fatal_error(error, "case file '"//this%file%name()//"': frame positions do not have shape (3, n_beads)")
+      return
+    end if
+    if (this%nframes > 0 .and. .not. t > this%last_time) then
+      call fatal_error(error, "case file '"//this%file%name()//"': frame time does not increase")
+      return
+    end if
+    rc = r
+    call h5_append(this%file, '/frames/time', t, error)
+    if (.not. allocated(error)) call h5_append(this%file, '/frames/positions', rc, error)
+    if (.not. allocated(error)) call h5_append(this%file, '/frames/observables/rg', shape%rg, error)
+    if (.not. allocated(error)) call h5_append(this%file, '/frames/observables/a', shape%a, error)
+    if (.not. allocated(error)) call h5_append(this%file, '/frames/observables/b', shape%b, error)
+    if (.not. allocated(error)) call h5_append(this%file, '/frames/observables/c', shape%c, error)
+    if (.not. allocated(error)) call h5_append(this%file, '/frames/observables/theta', shape%theta, error)
+    if (.not. allocated(error)) call h5_append(this%file, '/frames/observables/phi', shape%phi, error)
+    if (.not. allocated(error)) call h5_append(this%file, '/frames/observables/close_pairs', &
+      int(shape%close_pairs, i4), error)
+    if (.not. allocated(error)) call h5_append(this%file, '/frames/integrator/steps', steps, error)
+    if (.not. allocated(error)) call h5_append(this%file, '/frames/integrator/rejected', rejected, error)
+    if (.not. allocated(error)) call h5_append(this%file, '/frames/integrator/dt', dt, error)
+    if (allocated(error)) return
+    this%nframes = this%nframes + 1
+    this%last_time = t
+    call h5_write(this%file, '/checkpoint/time', t, error)
+    if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/positions', rc, error)
+    if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/dt', dt, error)
+    if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/steps', steps, error)
+    if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/rejected', rejected, error)
+    ! nframes last: a checkpoint is only trusted up to the frame count written with it.
+    if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/nframes', this%nframes, error)
+    if (allocated(error)) return
+    call h5_flush(this%file, error)
+  end subroutine append_frame
+
+  !> Open an existing case file to continue it: read /checkpoint, truncate every /frames
+  !> dataset to the checkpoint's nframes, set status 'running' and return the state.
+  !> On error the file is closed again.
+  subroutine open_resume(this, path, r, t, dt, steps, rejected, nframes, error)
+    class(case_file_t), intent(inout) :: this
+    character(len=*), intent(in) :: path
+    real(wp), allocatable, intent(out) :: r(:, :)
+    real(wp), intent(out) :: t, dt
+    integer(i8), intent(out) :: steps, rejected, nframes
+    type(error_t), allocatable, intent(out) :: error
+    call resume(this, path, r, t, dt, steps, rejected, nframes, error)
+    if (allocated(error)) call this%close()
+  end subroutine open_resume
+
+  subroutine resume(this, path, r, t, dt, steps, rejected, nframes, error)
+    class(case_file_t), intent(inout) :: this
+    character(len=*), intent(in) :: path
+    real(wp), allocatable, intent(out) :: r(:, :)
+    real(wp), intent(out) :: t, dt
+    integer(i8), intent(out) :: steps, rejected, nframes
+    type(error_t), allocatable, intent(out) :: error
+    integer(i4) :: n_beads
+    integer(i8) :: length
+    integer :: i
+    character(len=32), parameter :: other_sets(4) = [character(len=32) :: '/frames/positions', &
+      '/frames/observables/close_pairs', '/frames/integrator/steps', '/frames/integrator/rejected']
+    character(len=32) :: all_sets(size(frame_real_sets) + size(other_sets))
+    call this%close()
+    t = 0.0_wp
+    dt = 0.0_wp
+    steps = 0
+    rejected = 0
+    nframes = 0
+    call h5_open_file(this%file, path, .true., error)
+    if (allocated(error)) return
+    call h5_read_attr(this%file, '/', 'n_beads', n_beads, error)
+    if (allocated(error)) return
+    if (.not. h5_exists(this%file, '/checkpoint/nframes')) then
+      call fatal_error(error, "case file '"//path//"' has no checkpoint (created but never written)")
+      return
+    end if
+    call h5_read(this%file, '/checkpoint/nframes', nframes, error)
+    if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/time', t, error)
+    if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/dt', dt, error)
+    if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/steps', steps, error)
+    if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/rejected', rejected, error)
+    if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/positions', r, error)
+    if (allocated(error)) return
+    if (size(r, 1) /= 3 .or. size(r, 2) /= n_beads) then
+      call fatal_error(error, "case file '"//path//"': checkpoint positions do not have shape (3, n_beads)")
+      return
+    end if
+    if (nframes < 1) then
+      call fatal_error(error, "case file '"//path//"': checkpoint has no frames")
+      return
+    end if
+    all_sets(1:size(frame_real_sets)) = frame_real_sets
+    all_sets(size(frame_real_sets) + 1:) = other_sets
+    do i = 1, size(all_sets)
+      call h5_length(this%file, trim(all_sets(i)), length, error)
+      if (allocated(error)) return
+      if (length < nframes) then
+        call fatal_error(error, "case file '"//path//"': dataset '"//trim(all_sets(i))// &
+          "' is shorter than the checkpoint's frame count")
+        return
+      end if
+      if (length > nframes) call h5_set_length(this%file, trim(all_sets(i)), nframes, error)
+      if (allocated(error)) return
+    end do
+    call h5_write_attr(this%file, '/', 'status', 'running', error)
+    if (.not. allocated(error)) call h5_flush(this%file, error)
+    if (allocated(error)) return
+    this%n_beads = n_beads
+    this%nframes = nframes
+    this%last_time = t
+  end subroutine resume
+
+  !> Set the status attribute ('running', 'finished', 'failed: <reason>') and flush.
+  subroutine set_status(this, text, error)
+    class(case_file_t), intent(inout) :: this
+    character(len=*), intent(in) :: text
+    type(error_t), allocatable, intent(out) :: error
+    call h5_write_attr(this%file, '/', 'status', text, error)
+    if (.not. allocated(error)) call h5_flush(this%file, error)
+  end subroutine set_status
+
+  !> Close the file (a closed case file is left alone).
+  subroutine close_case(this)
+    class(case_file_t), intent(inout) :: this
+    call h5_close_file(this%file)
+  end subroutine close_case
+
+  pure logical function case_is_open(this)
+    class(case_file_t), intent(in) :: this
+    case_is_open = this%file%is_open()
+  end function case_is_open
+
+  !> Number of frames in the file.
+  pure integer(i8) function frame_count(this)
+    class(case_file_t), intent(in) :: this
+    frame_count = this%nframes
+  end function frame_count
+
+  subroutine write_item(file, item, error)
+    type(h5_file_t), intent(in) :: file
+    type(attribute_t), intent(in) :: item
+    type(error_t), allocatable, intent(out) :: error
+    select case (item%kind)
+    case (kind_str)
+      call h5_write_attr(file, '/', item%name, item%str, error)
+    case (kind_i4)
+      call h5_write_attr(file, '/', item%name, item%ival, error)
+    case (kind_i8)
+      call h5_write_attr(file, '/', item%name, item%lval, error)
+    case (kind_real)
+      call h5_write_attr(file, '/', item%name, item%rval, error)
+    case (kind_real1)
+      call h5_write_attr(file, '/', item%name, item%r1, error)
+    case (kind_real2)
+      call h5_write_attr(file, '/', item%name, item%r2, error)
+    case default
+      call fatal_error(error, "case file: attribute '"//item%name//"' has no value")
+    end select
+  end subroutine write_item
+
+  subroutine write_attr_str(this, name, value, error)
+    class(case_file_t), intent(inout) :: this
+    character(len=*), intent(in) :: name, value
+    type(error_t), allocatable, intent(out) :: error
+    call h5_write_attr(this%file, '/', name, value, error)
+  end subroutine write_attr_str
+
+  subroutine write_attr_i4(this, name, value, error)
+    class(case_file_t), intent(inout) :: this
+    character(len=*), intent(in) :: name
+    integer(i4), intent(in) :: value
+    type(error_t), allocatable, intent(out) :: error
+    call h5_write_attr(this%file, '/', name, value, error)
+  end subroutine write_attr_i4
+
+  subroutine write_attr_i8(this, name, value, error)
+    class(case_file_t), intent(inout) :: this
+    character(len=*), intent(in) :: name
+    integer(i8), intent(in) :: value
+    type(error_t), allocatable, intent(out) :: error
+    call h5_write_attr(this%file, '/', name, value, error)
+  end subroutine write_attr_i8
+
+  subroutine write_attr_real(this, name, value, error)
+    class(case_file_t), intent(inout) :: this
+    character(len=*), intent(in) :: name
+    real(wp), intent(in) :: value
+    type(error_t), allocatable, intent(out) :: error
+    call h5_write_attr(this%file, '/', name, value, error)
+  end subroutine write_attr_real
+
+  subroutine write_attr_logical(this, name, value, error)
+    class(case_file_t), intent(inout) :: this
+    character(len=*), intent(in) :: name
+    logical, intent(in) :: value
+    type(error_t), allocatable, intent(out) :: error
+    call h5_write_attr(this%file, '/', name, merge(1_i4, 0_i4, value), error)
+  end subroutine write_attr_logical
+
+  subroutine write_attr_real1(this, name, value, error)
+    class(case_file_t), intent(inout) :: this
+    character(len=*), intent(in) :: name
+    real(wp), intent(in) :: value(:)
+    type(error_t), allocatable, intent(out) :: error
+    call h5_write_attr(this%file, '/', name, value, error)
+  end subroutine write_attr_real1
+
+  subroutine write_attr_real2(this, name, value, error)
+    class(case_file_t), intent(inout) :: this
+    character(len=*), intent(in) :: name
+    real(wp), intent(in) :: value(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    call h5_write_attr(this%file, '/', name, value, error)
+  end subroutine write_attr_real2
+
+  ! ---------------------------------------------------------------- inspecting files
+
+  !> Status of the case file `path`: 'missing' (no file), the status attribute ('running',
+  !> 'finished', 'failed: <reason>'), or 'corrupt: <reason>' when the file exists but cannot be
+  !> opened as HDF5 or has no status attribute (the caller reports it and recreates the case).
+  !> `error` is set only for an invalid request (an empty path), not for a bad file.
+  subroutine case_file_status(path, status, error)
+    character(len=*), intent(in) :: path
+    character(len=:), allocatable, intent(out) :: status
+    type(error_t), allocatable, intent(out) :: error
+    type(h5_file_t) :: file
+    type(error_t), allocatable :: err
+    logical :: exists
+    if (len_trim(path) == 0) then
+      call fatal_error(error, 'case_file_status: empty path')
+      status = 'missing'
+      return
+    end if
+    inquire (file=path, exist=exists)
+    if (.not. exists) then
+      status = 'missing'
+      return
+    end if
+    call h5_open_file(file, path, .false., err)
+    if (allocated(err)) then
+      status = 'corrupt: '//err%message
+      return
+    end if
+    if (.not. h5_attr_exists(file, '/', 'status')) then
+      status = 'corrupt: no status attribute'
+    else
+      call h5_read_attr(file, '/', 'status', status, err)
+      if (allocated(err)) status = 'corrupt: '//err%message
+    end if
+    call h5_close_file(file)
+  end subroutine case_file_status
+
+  !> Read all frame times t(nframes) and positions r(3, N, nframes) of a case file.
+  subroutine read_frames(path, t, r, error)
+    character(len=*), intent(in) :: path
+    real(wp), allocatable, intent(out) :: t(:)
+    real(wp), allocatable, intent(out) :: r(:, :, :)
+    type(error_t), allocatable, intent(out) :: error
+    type(h5_file_t) :: file
+    call h5_open_file(file, path, .false., error)
+    if (allocated(error)) return
+    call h5_read(file, '/frames/time', t, error)
+    if (.not. allocated(error)) call h5_read(file, '/frames/positions', r, error)
+    if (.not. allocated(error)) then
+      if (size(r, 3) /= size(t)) call fatal_error(error, "case file '"//path// &
+        "': /frames/time and /frames/positions have different lengths")
+    end if
+    call h5_close_file(file)
+  end subroutine read_frames
+
+end module kf_case_file

@@ -1,0 +1,108 @@
+"""Regression checks of the knotflow-analyze command line (coordinate-file mode).
+
+usage: check_knotflow_analyze_cli.py <knotflow-analyze executable> <work dir>
+"""
+import json
+import math
+import os
+import subprocess
+import sys
+
+
+def run(exe, *args):
+    return subprocess.run([exe, *args], capture_output=True, text=True, timeout=120)
+
+
+def main():
+    exe, work = sys.argv[1], sys.argv[2]
+    os.makedirs(work, exist_ok=True)
+    chain = os.path.join(work, 'trefoil.xyz')
+    pts = os.path.join(work, 'points.xyz')
+    # an open torus trefoil, opened at its outermost point (t = 0)
+    with open(chain, 'w') as f:
+        f.write('# open torus trefoil\n\n')
+        for i in range(1, 120):
+            t = 2 * math.pi * i / 120
+            f.write('%r %r %r\n' % ((2 + math.cos(3 * t)) * math.cos(2 * t),
+                                    (2 + math.cos(3 * t)) * math.sin(2 * t), math.sin(3 * t)))
+    # closure points far out in +x: the closure triangle meets no strand, so each is a trefoil
+    with open(pts, 'w') as f:
+        for k in range(5):
+            f.write('%r %r %r\n' % (30.0, -3.0 + 1.5 * k, 0.5 * k - 1.0))
+    p = run(exe, chain, '--closure-points', pts, '--json', '--per-closure')
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    assert d['n_beads'] == 119 and d['closures'] == 5, d
+    assert d['per_closure'] == ['3_1'] * 5, d['per_closure']
+    assert d['kf'] == 1.0 and d['dominant'] == '3_1' and d['knot_core'] is None
+    p = run(exe, chain, '--closures', '300', '--seed', '5', '--json')
+    d = json.loads(p.stdout)
+    assert abs(sum(d['spectrum'].values()) - 1) < 1e-12 and d['seed'] == 5 and d['closures'] == 300
+    assert abs(d['kf'] - (1 - d['spectrum']['0_1'])) < 1e-12
+    assert run(exe, chain, '--closures', '300', '--seed', '5', '--json').stdout == p.stdout
+    # bad input: one error line, non-zero exit
+    for args, word in [(['--closures', 'x'], '--closures'), (['--min-length', '1'], '--min-length'),
+                       (['--bogus'], '--bogus'), (['--seed'], '--seed'), (['--stride', '2'], '--stride')]:
+        p = run(exe, chain, *args)
+        lines = p.stderr.strip().splitlines()
+        assert p.returncode != 0 and len(lines) == 1 and word in lines[0], (args, p.stderr)
+    p = run(exe, os.path.join(work, 'missing.xyz'))
+    assert p.returncode != 0 and 'missing.xyz' in p.stderr
+    check_case_file(exe, work)
+    print('knotflow-analyze CLI checks passed')
+
+
+def check_case_file(exe, work):
+    """A case file written with h5py: /analysis follows the schema, the trajectory is untouched,
+    a rerun resumes, bad input leaves /analysis as it was."""
+    try:
+        import h5py
+        import numpy as np
+    except ImportError:
+        print('h5py not available: case-file checks skipped')
+        return
+    path = os.path.join(work, 'case.h5')
+    nf, n = 6, 59
+    pos = np.zeros((nf, n, 3))
+    for k in range(nf):
+        for i in range(n):
+            t = 2 * math.pi * (i + 1) / 60
+            c, s = math.cos(0.3 * k), math.sin(0.3 * k)
+            x, y, z = (2 + math.cos(3 * t)) * math.cos(2 * t), (2 + math.cos(3 * t)) * math.sin(2 * t), math.sin(3 * t)
+            pos[k, i] = (c * x - s * y, s * x + c * y, z)
+    pos[3] = [[1.02 * i, 0.1 * math.sin(i), 0.0] for i in range(n)]   # an unknotted frame
+    with h5py.File(path, 'w') as f:
+        f.attrs['status'] = 'finished'
+        f.create_dataset('frames/time', data=np.arange(nf) * 0.5, maxshape=(None,), chunks=True)
+        f.create_dataset('frames/positions', data=pos, maxshape=(None, n, 3), chunks=True)
+    args = ['--closures', '60', '--matrix-frames', 'last', '--matrix-closures', '5', '--min-length', '20']
+    p = run(exe, path, *args)
+    assert p.returncode == 0, p.stderr
+    assert '6 new' in p.stdout, p.stdout
+    with h5py.File(path) as f:
+        assert np.array_equal(f['frames/positions'][:], pos)
+        kn = f['analysis/knots']
+        assert list(kn['frame_index'][:]) == list(range(nf)) and kn.attrs['closures'] == 60
+        assert kn['spectrum'].shape == (nf, 10)
+        assert [x.decode() for x in kn['spectrum'].attrs['types']] == \
+            '0_1 3_1 4_1 5_1 5_2 6_1 6_2 6_3 7_1 other'.split()
+        kf = kn['kf'][:]
+        assert kf[3] == 0.0 and min(kf[[0, 1, 2, 4, 5]]) > 0.8, kf
+        assert [x.decode() for x in f['analysis/events/kind'][:]] == ['unknot', 'knot']
+        assert list(f['analysis/events/frame_index'][:]) == [3, 4]
+        km = f['analysis/knot_matrix/frame_5']
+        assert km.shape == (n, n) and km.attrs['min_length'] == 20
+        assert np.isnan(km[5, 0]) and np.isnan(km[0, 10]) and not np.isnan(km[0, 58])
+        assert f['analysis/shape/mode'].shape == (nf,)
+    p = run(exe, path, *args)
+    assert p.returncode == 0 and '0 new' in p.stdout, p.stdout
+    p = run(exe, path, '--json')
+    assert p.returncode != 0 and '--json' in p.stderr
+    p = run(exe, path, '--matrix-frames', '99')
+    assert p.returncode != 0 and '--matrix-frames' in p.stderr and len(p.stderr.strip().splitlines()) == 1
+    with h5py.File(path) as f:
+        assert 'analysis/knots/kf' in f and 'analysis/knot_matrix/frame_5' in f
+
+
+if __name__ == '__main__':
+    main()
