@@ -334,17 +334,32 @@ def odd_part(v: int) -> int:
     return v
 
 
+def _dedupe(p: np.ndarray) -> np.ndarray:
+    """Remove vertices equal to their (cyclic) predecessor."""
+    if len(p) < 2:
+        return p
+    same = np.all(p == np.roll(p, 1, axis=0), axis=1)
+    if same.all():
+        return p[:1]
+    return p[~same]
+
+
 def alexander_invariants(polygon: np.ndarray, rng: np.random.Generator,
                          reduce: bool = True) -> tuple[int, int]:
     """(|Delta(-1)|, odd part of |Delta(-2)|) of the closed polygon (M, 3)."""
-    p = np.asarray(polygon, dtype=float)
+    p = _dedupe(np.asarray(polygon, dtype=float))
     if reduce:
         p = reduce_polygon(p)
     if len(p) <= 3:
         return 1, 1
     centre = p.mean(axis=0)
+    size = max(float(np.abs(p - centre).max()), 1e-300)
     res = None
-    for _ in range(_MAX_PROJECTION_TRIES):
+    for attempt in range(_MAX_PROJECTION_TRIES):
+        if attempt >= _MAX_PROJECTION_TRIES // 2:
+            # the polygon itself is singular (e.g. a closure point on the chain): perturb it
+            # by a tiny seeded random displacement
+            p = p + 1e-7 * size * rng.normal(size=p.shape)
         q = (p - centre) @ _random_rotation(rng).T
         res = diagram_crossings(q)
         if res is not None:
