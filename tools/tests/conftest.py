@@ -9,14 +9,14 @@ import pytest
 
 sys.path.insert(0, os.path.dirname(__file__))
 
-from helpers import open_trefoil  # noqa: E402
+from helpers import tailed_trefoil  # noqa: E402
 
 TYPES = ("0_1", "3_1", "4_1", "5_1", "5_2", "6_1", "6_2", "6_3", "7_1", "other")
 
 
 def unknotting_trefoil_frames(nframes):
-    """Frames going from the open trefoil to a straightened chain (linear interpolation)."""
-    r0 = open_trefoil()
+    """Frames going from a tailed open trefoil to a straight chain (linear interpolation)."""
+    r0 = tailed_trefoil()
     n = len(r0)
     straight = np.zeros((n, 3))
     straight[:, 0] = 1.02 * np.arange(n)

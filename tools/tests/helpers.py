@@ -61,3 +61,19 @@ def random_walk(n, seed, step=1.0):
     v = rng.normal(size=(n - 1, 3))
     v *= step / np.linalg.norm(v, axis=1)[:, None]
     return np.vstack([np.zeros(3), np.cumsum(v, axis=0)])
+
+
+def tailed_trefoil(ntail=10):
+    """Trefoil opened at the tip of a lobe (the point of largest distance from the z axis,
+    s = pi/3) with straight tails of ntail beads running radially outwards from both ends:
+    the knot is deep inside the chain, so nearly every closure is a trefoil."""
+    full = open_trefoil(99)      # used as a closed polygon (one bond slightly longer)
+    rad = np.hypot(full[:, 0], full[:, 1])
+    tip = int(np.argmax(rad))
+    chain = np.roll(full, -(tip + 1), axis=0)[:-1]       # tip removed, starts after it
+    out = np.array([full[tip, 0], full[tip, 1], 0.0])
+    out /= np.linalg.norm(out)
+    steps = 1.02 * np.arange(1, ntail + 1)[:, None] * out[None, :]
+    tail0 = (chain[0] + steps)[::-1]
+    tail1 = chain[-1] + steps
+    return np.vstack([tail0, chain, tail1])

@@ -84,15 +84,36 @@ def plot_shape(case: Case, ana: CaseAnalysis, path) -> str:
 
 
 def plot_knot_matrix(mat: np.ndarray, path, title: str = "") -> str:
-    """Heat map of K(i, j) (upper triangle; NaN blank)."""
-    fig, ax = plt.subplots(figsize=(5, 4.4), constrained_layout=True)
-    m = np.ma.masked_invalid(np.asarray(mat, dtype=float))
-    cmap = plt.get_cmap("Greys").copy()
-    cmap.set_bad("white")
-    im = ax.imshow(m, origin="upper", cmap=cmap, vmin=0, vmax=1, interpolation="nearest")
+    """Heat map of K(i, j) (dark = knotted).  When only a grid of subchains was computed
+    (stride > 1), each computed value fills its grid cell; pale blue = not computed."""
+    mat = np.asarray(mat, dtype=float)
+    n = len(mat)
+    fin = np.isfinite(mat)
+    rows = np.nonzero(fin.any(axis=1))[0]
+    cols = np.nonzero(fin.any(axis=0))[0]
+    fig, ax = plt.subplots(figsize=(5.4, 4.6), constrained_layout=True)
+    cmap = plt.get_cmap("Greys").with_extremes(bad="#dde8f4")
+    if len(rows) and len(cols):
+        sub = np.ma.masked_invalid(mat[np.ix_(rows, cols)])
+
+        def edges(idx):
+            mid = 0.5 * (idx[1:] + idx[:-1]) if len(idx) > 1 else np.zeros(0)
+            lo = idx[0] - (mid[0] - idx[0] if len(mid) else 0.5)
+            hi = idx[-1] + (idx[-1] - mid[-1] if len(mid) else 0.5)
+            return np.concatenate([[lo], mid, [hi]])
+
+        im = ax.pcolormesh(edges(cols.astype(float)), edges(rows.astype(float)), sub,
+                           cmap=cmap, vmin=0, vmax=1, shading="flat")
+    else:
+        im = ax.imshow(np.ma.masked_invalid(mat), cmap=cmap, vmin=0, vmax=1)
+    ax.plot([0, n - 1], [0, n - 1], color="0.5", lw=0.8)
+    ax.set_xlim(-0.5, n - 0.5)
+    ax.set_ylim(n - 0.5, -0.5)
+    ax.set_aspect("equal")
+    ax.set_facecolor("#dde8f4")
     ax.set_xlabel("end bead j")
     ax.set_ylabel("start bead i")
-    ax.set_title(title, fontsize=10)
+    ax.set_title(title + "\n(pale blue: not computed)", fontsize=9)
     fig.colorbar(im, ax=ax, label="$k_f$ of subchain i..j")
     fig.savefig(path, dpi=110)
     plt.close(fig)
