@@ -13,12 +13,14 @@ OBSERVABLES = ("rg", "a", "b", "c", "theta", "phi", "close_pairs")
 
 
 def _attr(value):
-    """h5py attribute value as a plain Python value (bytes -> str, 0-d arrays -> scalars)."""
+    """h5py attribute value as a plain Python value (bytes -> str, 0-d arrays -> scalars,
+    one-element string arrays -> str; Fortran blank padding stripped)."""
     if isinstance(value, bytes):
-        return value.decode("utf-8", errors="replace")
+        return value.decode("utf-8", errors="replace").rstrip(" \x00")
     if isinstance(value, np.ndarray):
-        if value.dtype.kind in ("S", "O"):
-            return [v.decode() if isinstance(v, bytes) else v for v in value.ravel()]
+        if value.dtype.kind in ("S", "O", "U"):
+            items = [v.decode() if isinstance(v, bytes) else str(v) for v in value.ravel()]
+            return items[0].strip() if value.size == 1 and value.ndim <= 1 else items
         if value.ndim == 0:
             return value.item()
         return value
@@ -28,7 +30,7 @@ def _attr(value):
 
 
 def _strings(ds) -> list:
-    return [v.decode() if isinstance(v, bytes) else str(v) for v in ds[()]]
+    return [(v.decode() if isinstance(v, bytes) else str(v)).rstrip(" \x00") for v in ds[()]]
 
 
 @dataclass

@@ -88,12 +88,12 @@ def shape_series(positions: np.ndarray) -> dict:
 
 def classify_frame(a, b, c, theta, phi, close_pairs) -> int:
     """1 = mode I, 2 = mode II, 0 = unclassified (thresholds in the module docstring)."""
-    if b <= 0.0 or a / b < ELONGATION:
+    if a <= 0.0 or a < ELONGATION * b:
         return 0
     ct = abs(np.cos(theta))
     if ct >= COS_THETA_ALIGNED and close_pairs >= MANY_CLOSE_PAIRS:
         return 1
-    flat = c <= 0.0 or b / c >= FLATNESS
+    flat = b >= FLATNESS * c
     if (flat and ct <= COS_THETA_PLANAR and abs(np.sin(phi)) >= SIN_PHI_FLOW
             and close_pairs < MANY_CLOSE_PAIRS):
         return 2
