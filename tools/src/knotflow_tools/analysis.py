@@ -10,6 +10,9 @@ from . import knots, shape, transitions
 from .io import Case
 
 
+AUTO_MAX_FRAMES = 100   #: stride <= 0: analyse at most about this many frames
+
+
 @dataclass
 class CaseAnalysis:
     """Results of analysing one case (computed or taken from /analysis)."""
@@ -60,7 +63,7 @@ def observables_of(case: Case) -> dict:
     return shape.shape_series(case.positions)
 
 
-def analyze_case(case: Case, closures: int = 200, stride: int = 1, seed: int = 1,
+def analyze_case(case: Case, closures: int = 200, stride: int = 0, seed: int = 1,
                  matrix_frames=(), matrix_closures: int = 50, matrix_stride: int = 4,
                  min_length: int = 10, use_stored: bool = True) -> CaseAnalysis:
     """Analyse a case; stored /analysis results are used when present (unless use_stored)."""
@@ -72,7 +75,9 @@ def analyze_case(case: Case, closures: int = 200, stride: int = 1, seed: int = 1
         dom = case.knots["dominant"] or [""] * len(kf)
         source = "stored"
     else:
-        frames = np.arange(0, case.nframes, max(1, stride), dtype=np.int64)
+        if stride <= 0:
+            stride = max(1, -(-case.nframes // AUTO_MAX_FRAMES))
+        frames = np.arange(0, case.nframes, stride, dtype=np.int64)
         if case.nframes and frames[-1] != case.nframes - 1:
             frames = np.append(frames, case.nframes - 1)
         kf, _, dom = knot_series(case.positions, frames, closures, seed)

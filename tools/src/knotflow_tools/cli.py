@@ -100,7 +100,8 @@ def main_plot(argv=None) -> int:
     p.add_argument("--out", default=None, help="output directory (default: <case>_plots)")
     p.add_argument("--closures", type=int, default=200,
                    help="closures per frame when k_f is computed (no /analysis)")
-    p.add_argument("--stride", type=int, default=1, help="analyse every stride-th frame")
+    p.add_argument("--stride", type=int, default=0,
+                   help="analyse every stride-th frame (0: automatic, at most 100 frames)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--matrix-frames", type=int, nargs="*", default=[],
                    help="frames whose knot matrix is computed (if not stored)")
@@ -160,7 +161,8 @@ def main_report(argv=None) -> int:
                                 description="Report (markdown + html) of a sweep directory.")
     p.add_argument("sweep_dir")
     p.add_argument("--closures", type=int, default=200)
-    p.add_argument("--stride", type=int, default=1)
+    p.add_argument("--stride", type=int, default=0,
+                   help="analyse every stride-th frame (0: automatic, at most 100 frames)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--movie", action="store_true")
     args = p.parse_args(argv)

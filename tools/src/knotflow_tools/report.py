@@ -38,7 +38,7 @@ def _state_name(state) -> str:
     return {"knotted": "knotted", "unknotted": "unknotted"}.get(state, "undecided")
 
 
-def build_report(sweep_dir, closures: int = 200, stride: int = 1, seed: int = 1,
+def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
                  movie: bool = False) -> dict:
     """Analyse every case of sweep_dir and write report/report.md and report/report.html."""
     outdir = os.path.join(sweep_dir, "report")
