@@ -189,3 +189,17 @@ def test_slipknot_found_by_knot_matrix():
     assert K.is_slipknot(mat, whole.kf)
     # the open trefoil alone is a knot, not a slipknot
     assert not K.is_slipknot(mat, 0.95)
+
+
+def test_reduction_and_projection_do_not_change_invariants_random_polygons():
+    """Random polygons (mostly knotted): reduced and unreduced polygons, seen along different
+    random directions, give identical invariant pairs."""
+    nontrivial = 0
+    for seed in range(10):
+        rng = np.random.default_rng(100 + seed)
+        poly = rng.normal(size=(30, 3))
+        a = K.alexander_invariants(poly, np.random.default_rng(1))
+        b = K.alexander_invariants(poly, np.random.default_rng(2), reduce=False)
+        assert a == b
+        nontrivial += a != (1, 1)
+    assert nontrivial >= 3
