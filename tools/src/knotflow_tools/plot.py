@@ -38,12 +38,14 @@ def plot_kf(case: Case, ana: CaseAnalysis, path) -> str:
         col = "tab:red" if ev.kind == "unknot" else "tab:green"
         ax.axvline(ev.time, color=col, ls="--", lw=1.2)
         ax.annotate(ev.kind, (ev.time, 1.02), color=col, ha="center", va="bottom",
-                    fontsize=8, annotation_clip=False)
+                    fontsize=8, annotation_clip=False,
+                    bbox={"fc": "white", "ec": "none", "pad": 0.8})
     ax.set_ylim(-0.03, 1.08)
     ax.set_xlabel(r"time $\dot\gamma t$")
     ax.set_ylabel("knotted fraction $k_f$")
-    ax.set_title(f"{_title(case)}   ({ana.kf_source}, {len(ana.events)} events)", pad=14,
-                 fontsize=10)
+    nev = len(ana.events)
+    ax.set_title(f"{_title(case)}   ({ana.kf_source} k_f, {nev} event{'s' if nev != 1 else ''})",
+                 pad=14, fontsize=10)
     ax.legend(loc="lower left", fontsize=8)
     fig.savefig(path, dpi=110)
     plt.close(fig)
