@@ -1,0 +1,117 @@
+"""Whole-case analysis: k_f(t), events, shape observables, modes and spectra."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import knots, shape, transitions
+from .io import Case
+
+
+AUTO_MAX_FRAMES = 100   #: stride <= 0: analyse at most about this many frames
+
+
+@dataclass
+class CaseAnalysis:
+    """Results of analysing one case (computed or taken from /analysis)."""
+
+    frame_index: np.ndarray
+    time: np.ndarray
+    kf: np.ndarray
+    dominant: list
+    events: list
+    low: float
+    high: float
+    observables: dict
+    modes: np.ndarray
+    case_mode: int
+    spectra: dict
+    knot_matrices: dict = field(default_factory=dict)
+    kf_source: str = "computed"
+
+    @property
+    def final_kf(self) -> float:
+        return float(self.kf[-1]) if len(self.kf) else float("nan")
+
+    @property
+    def final_state(self):
+        return transitions.final_state(self.kf, self.low, self.high)
+
+    @property
+    def has_transitions(self) -> bool:
+        return len(self.events) > 0
+
+
+def knot_series(positions, frames, closures=200, seed=1):
+    """k_f, spectrum rows and dominant types for the given frame indices."""
+    kf, spec, dom = [], [], []
+    for k, fi in enumerate(frames):
+        res = knots.analyze_chain(positions[fi], closures=closures, seed=seed + k)
+        kf.append(res.kf)
+        spec.append([res.spectrum[t] for t in knots.KNOT_TYPES])
+        dom.append(res.dominant)
+    return np.array(kf), np.array(spec).reshape(len(frames), len(knots.KNOT_TYPES)), dom
+
+
+def observables_of(case: Case) -> dict:
+    """Observables from /frames/observables, computed from positions where missing."""
+    needed = ("rg", "a", "b", "c", "theta", "phi", "close_pairs")
+    if all(k in case.observables and len(case.observables[k]) == case.nframes for k in needed):
+        return {k: np.asarray(case.observables[k]) for k in needed}
+    return shape.shape_series(case.positions)
+
+
+def analyze_case(case: Case, closures: int = 200, stride: int = 0, seed: int = 1,
+                 matrix_frames=(), matrix_closures: int = 50, matrix_stride: int = 4,
+                 min_length: int = 10, use_stored: bool = True) -> CaseAnalysis:
+    """Analyse a case; stored /analysis results are used when present (unless use_stored)."""
+    low, high = transitions.LOW, transitions.HIGH
+    if use_stored and case.knots is not None:
+        frames = case.knots["frame_index"]
+        kf = case.knots["kf"]
+        tk = case.knots["time"]
+        dom = case.knots["dominant"] or [""] * len(kf)
+        source = "stored"
+    else:
+        if stride <= 0:
+            stride = max(1, -(-case.nframes // AUTO_MAX_FRAMES))
+        frames = np.arange(0, case.nframes, stride, dtype=np.int64)
+        if case.nframes and frames[-1] != case.nframes - 1:
+            frames = np.append(frames, case.nframes - 1)
+        kf, _, dom = knot_series(case.positions, frames, closures, seed)
+        tk = case.time[frames]
+        source = "computed"
+    if use_stored and case.events is not None:
+        ea = case.events["attrs"]
+        low = float(ea.get("low", low))
+        high = float(ea.get("high", high))
+        times = case.events["time"] if case.events["time"] is not None else []
+        idx = case.events["frame_index"] if case.events["frame_index"] is not None else []
+        events = [transitions.Event(k, int(i), float(t))
+                  for k, i, t in zip(case.events["kind"], idx, times)]
+    else:
+        events = transitions.detect_events(kf, tk, low, high)
+        # index into the frame list -> frame index
+        events = [transitions.Event(e.kind, int(frames[e.index]), e.time) for e in events]
+    obs = observables_of(case)
+    if use_stored and case.modes is not None and len(case.modes) == case.nframes:
+        modes = case.modes
+        cmode = case.case_mode if case.case_mode is not None else shape.case_mode(modes,
+                                                                                  obs["phi"])
+    else:
+        modes = shape.classify_modes(obs)
+        cmode = shape.case_mode(modes, obs["phi"])
+    spec = shape.spectra(case.time, case.positions, obs)
+    mats = dict(case.knot_matrices) if use_stored else {}
+    for fi in matrix_frames:
+        fi = int(fi) % case.nframes
+        if fi not in mats:
+            mats[fi] = knots.knot_matrix(case.positions[fi], closures=matrix_closures,
+                                         seed=seed, min_length=min_length,
+                                         stride=matrix_stride)
+    return CaseAnalysis(frame_index=np.asarray(frames), time=np.asarray(tk), kf=np.asarray(kf),
+                        dominant=list(dom), events=events, low=low, high=high,
+                        observables=obs, modes=modes, case_mode=int(cmode), spectra=spec,
+                        knot_matrices=mats, kf_source=source)

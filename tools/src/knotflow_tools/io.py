@@ -1,0 +1,216 @@
+"""Reading knotflow case files (HDF5) and text coordinate files; writing /analysis groups."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import h5py
+import numpy as np
+
+from .knots import KNOT_TYPES
+
+OBSERVABLES = ("rg", "a", "b", "c", "theta", "phi", "close_pairs")
+
+
+def _attr(value):
+    """h5py attribute value as a plain Python value (bytes -> str, 0-d arrays -> scalars,
+    one-element string arrays -> str; Fortran blank padding stripped)."""
+    if isinstance(value, bytes):
+        return value.decode("utf-8", errors="replace").rstrip(" \x00")
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind in ("S", "O", "U"):
+            items = [v.decode() if isinstance(v, bytes) else str(v) for v in value.ravel()]
+            return items[0].strip() if value.size == 1 and value.ndim <= 1 else items
+        if value.ndim == 0:
+            return value.item()
+        return value
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _strings(ds) -> list:
+    return [(v.decode() if isinstance(v, bytes) else str(v)).rstrip(" \x00") for v in ds[()]]
+
+
+@dataclass
+class Case:
+    """Contents of one case file (only what the tools use)."""
+
+    path: str
+    attrs: dict
+    time: np.ndarray
+    positions: np.ndarray                      # (nframes, N, 3)
+    observables: dict = field(default_factory=dict)
+    knots: dict | None = None                  # /analysis/knots
+    events: dict | None = None                 # /analysis/events
+    knot_matrices: dict = field(default_factory=dict)   # frame index -> (N, N)
+    modes: np.ndarray | None = None
+    case_mode: int | None = None
+
+    @property
+    def name(self) -> str:
+        return str(self.attrs.get("case_name", self.path))
+
+    @property
+    def status(self) -> str:
+        return str(self.attrs.get("status", "unknown"))
+
+    @property
+    def bending_a(self):
+        return self.attrs.get("forces.bending_a")
+
+    @property
+    def orientation(self):
+        return self.attrs.get("chain.orientation")
+
+    @property
+    def nframes(self) -> int:
+        return len(self.time)
+
+
+def read_case(path) -> Case:
+    """Read a case file; missing optional parts are left empty."""
+    with h5py.File(path, "r") as f:
+        attrs = {k: _attr(v) for k, v in f.attrs.items()}
+        fr = f["frames"]
+        time = np.asarray(fr["time"][()], dtype=float)
+        pos = np.asarray(fr["positions"][()], dtype=float)
+        n = min(len(time), len(pos))
+        if "checkpoint" in f and "nframes" in f["checkpoint"]:
+            n = min(n, int(f["checkpoint"]["nframes"][()]))
+        time, pos = time[:n], pos[:n]
+        obs = {}
+        if "observables" in fr:
+            for k in OBSERVABLES:
+                if k in fr["observables"]:
+                    obs[k] = np.asarray(fr["observables"][k][()])[:n]
+        case = Case(path=str(path), attrs=attrs, time=time, positions=pos, observables=obs)
+        an = f.get("analysis")
+        if an is not None:
+            if "knots" in an:
+                g = an["knots"]
+                case.knots = {
+                    "frame_index": np.asarray(g["frame_index"][()], dtype=np.int64),
+                    "time": np.asarray(g["time"][()], dtype=float),
+                    "kf": np.asarray(g["kf"][()], dtype=float),
+                    "spectrum": np.asarray(g["spectrum"][()], dtype=float)
+                    if "spectrum" in g else None,
+                    "types": _attr(g["spectrum"].attrs["types"])
+                    if "spectrum" in g and "types" in g["spectrum"].attrs else list(KNOT_TYPES),
+                    "dominant": _strings(g["dominant"]) if "dominant" in g else None,
+                    "attrs": {k: _attr(v) for k, v in g.attrs.items()},
+                }
+            if "events" in an:
+                g = an["events"]
+                case.events = {
+                    "kind": _strings(g["kind"]) if "kind" in g else [],
+                    "time": np.asarray(g["time"][()], dtype=float) if "time" in g else None,
+                    "frame_index": np.asarray(g["frame_index"][()], dtype=np.int64)
+                    if "frame_index" in g else None,
+                    "attrs": {k: _attr(v) for k, v in g.attrs.items()},
+                }
+            if "knot_matrix" in an:
+                for name, ds in an["knot_matrix"].items():
+                    if name.startswith("frame_"):
+                        case.knot_matrices[int(name[6:])] = np.asarray(ds[()], dtype=float)
+            if "shape" in an and "mode" in an["shape"]:
+                case.modes = np.asarray(an["shape"]["mode"][()], dtype=np.int32)
+                for holder in (an["shape"]["mode"], an["shape"]):
+                    if "case_mode" in holder.attrs:
+                        case.case_mode = int(_attr(holder.attrs["case_mode"]))
+                        break
+    return case
+
+
+def read_frame(path, frame: int = -1) -> np.ndarray:
+    """Positions (N, 3) of one frame of a case file (negative = from the end)."""
+    case = read_case(path)
+    return case.positions[frame]
+
+
+def read_xyz(path) -> np.ndarray:
+    """Points (n, 3) of a text coordinate file (blank lines and '#' lines ignored)."""
+    pts = []
+    with open(path, encoding="utf-8") as fh:
+        for lineno, line in enumerate(fh, 1):
+            s = line.strip()
+            if not s or s.startswith("#"):
+                continue
+            parts = s.split()
+            if len(parts) != 3:
+                raise ValueError(f"{path}:{lineno}: expected 3 numbers, got {len(parts)}")
+            pts.append([float(x) for x in parts])
+    return np.array(pts, dtype=float).reshape(-1, 3)
+
+
+def write_xyz(path, r, comment: str | None = None) -> None:
+    """Write points (n, 3) as a text coordinate file."""
+    with open(path, "w", encoding="utf-8") as fh:
+        if comment:
+            for line in comment.splitlines():
+                fh.write(f"# {line}\n")
+        for p in np.asarray(r, dtype=float):
+            fh.write(f"{p[0]:.17g} {p[1]:.17g} {p[2]:.17g}\n")
+
+
+def _replace(group, name, data, **kw):
+    if name in group:
+        del group[name]
+    return group.create_dataset(name, data=data, **kw)
+
+
+def write_knots(path, frame_index, time, kf, spectrum, dominant, closures, seed,
+                tool="knotflow_tools (python)") -> None:
+    """Write /analysis/knots (replacing an existing one)."""
+    with h5py.File(path, "a") as f:
+        g = f.require_group("analysis").require_group("knots")
+        _replace(g, "frame_index", np.asarray(frame_index, dtype=np.int64))
+        _replace(g, "time", np.asarray(time, dtype=float))
+        _replace(g, "kf", np.asarray(kf, dtype=float))
+        ds = _replace(g, "spectrum", np.asarray(spectrum, dtype=float).reshape(len(kf), -1))
+        ds.attrs["types"] = np.array(KNOT_TYPES, dtype=h5py.string_dtype())
+        _replace(g, "dominant", np.array(dominant, dtype=h5py.string_dtype()))
+        g.attrs["closures"] = int(closures)
+        g.attrs["seed"] = int(seed)
+        g.attrs["tool"] = tool
+
+
+def write_events(path, events, low, high) -> None:
+    """Write /analysis/events from a list of transitions.Event."""
+    with h5py.File(path, "a") as f:
+        g = f.require_group("analysis").require_group("events")
+        _replace(g, "kind", np.array([e.kind for e in events], dtype=h5py.string_dtype()))
+        _replace(g, "time", np.array([e.time for e in events], dtype=float))
+        _replace(g, "frame_index", np.array([e.index for e in events], dtype=np.int64))
+        g.attrs["low"] = float(low)
+        g.attrs["high"] = float(high)
+
+
+def write_knot_matrix(path, frame, mat, closures, min_length, time) -> None:
+    """Write /analysis/knot_matrix/frame_<frame>."""
+    with h5py.File(path, "a") as f:
+        g = f.require_group("analysis").require_group("knot_matrix")
+        ds = _replace(g, f"frame_{int(frame)}", np.asarray(mat, dtype=float))
+        ds.attrs["closures"] = int(closures)
+        ds.attrs["min_length"] = int(min_length)
+        ds.attrs["time"] = float(time)
+
+
+def write_modes(path, modes, case_mode) -> None:
+    """Write /analysis/shape/mode and its case_mode attribute."""
+    with h5py.File(path, "a") as f:
+        g = f.require_group("analysis").require_group("shape")
+        ds = _replace(g, "mode", np.asarray(modes, dtype=np.int32))
+        ds.attrs["case_mode"] = int(case_mode)
+        g.attrs["case_mode"] = int(case_mode)
+
+
+def write_spectra(path, spec: dict) -> None:
+    """Write /analysis/spectra."""
+    with h5py.File(path, "a") as f:
+        g = f.require_group("analysis").require_group("spectra")
+        for k in ("frequency", "power_rg", "power_phi", "power_end_to_end"):
+            _replace(g, k, np.asarray(spec[k], dtype=float))
+        g.attrs["dominant_period_rg"] = float(spec["dominant_period_rg"])
+        g.attrs["dominant_period_phi"] = float(spec["dominant_period_phi"])

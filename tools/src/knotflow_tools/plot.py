@@ -1,0 +1,205 @@
+"""Figures of one case: k_f(t) with events, shape panels, knot matrices, 3D snapshots, movie."""
+
+from __future__ import annotations
+
+import os
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from .analysis import CaseAnalysis  # noqa: E402
+from .io import Case  # noqa: E402
+
+MODE_NAMES = {0: "-", 1: "I", 2: "II"}
+_COL_FIRST = "tab:blue"
+_COL_SECOND = "tab:orange"
+
+
+def _title(case: Case) -> str:
+    a = case.bending_a
+    o = case.orientation
+    parts = [case.name]
+    if a is not None:
+        parts.append(f"A = {a:g}")
+    if o is not None:
+        parts.append(f"orientation {o}")
+    return ", ".join(parts)
+
+
+def plot_kf(case: Case, ana: CaseAnalysis, path) -> str:
+    """k_f versus time with the hysteresis band and the events marked."""
+    fig, ax = plt.subplots(figsize=(8, 3.5), constrained_layout=True)
+    ax.axhspan(ana.low, ana.high, color="0.92", zorder=0, label="hysteresis band")
+    ax.plot(ana.time, ana.kf, "-o", ms=2.5, lw=1.2, color="k", label="$k_f$")
+    for ev in ana.events:
+        col = "tab:red" if ev.kind == "unknot" else "tab:green"
+        ax.axvline(ev.time, color=col, ls="--", lw=1.2)
+        ax.annotate(ev.kind, (ev.time, 1.02), color=col, ha="center", va="bottom",
+                    fontsize=8, annotation_clip=False,
+                    bbox={"fc": "white", "ec": "none", "pad": 0.8})
+    ax.set_ylim(-0.03, 1.08)
+    ax.set_xlabel(r"time $\dot\gamma t$")
+    ax.set_ylabel("knotted fraction $k_f$")
+    nev = len(ana.events)
+    ax.set_title(f"{_title(case)}   ({ana.kf_source} k_f, {nev} event{'s' if nev != 1 else ''})",
+                 pad=14, fontsize=10)
+    ax.legend(loc="lower left", fontsize=8)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return str(path)
+
+
+def plot_shape(case: Case, ana: CaseAnalysis, path) -> str:
+    """Panels like Fig. 2b of the reference study: R_g, a, b, c, theta, phi, close pairs."""
+    t = case.time
+    o = ana.observables
+    fig, axes = plt.subplots(5, 1, figsize=(8, 9), sharex=True, constrained_layout=True)
+    axes[0].plot(t, o["rg"], color="k")
+    axes[0].set_ylabel("$R_g$")
+    for key, col in (("a", "tab:blue"), ("b", "tab:orange"), ("c", "tab:green")):
+        axes[1].plot(t, o[key], color=col, label=key)
+    axes[1].set_ylabel("semi-axes")
+    axes[1].legend(loc="upper right", fontsize=8, ncol=3)
+    axes[2].plot(t, o["theta"], color="tab:purple")
+    axes[2].set_ylabel(r"$\theta$")
+    axes[2].set_ylim(0, np.pi)
+    axes[2].set_yticks([0, np.pi / 2, np.pi], ["0", r"$\pi/2$", r"$\pi$"])
+    axes[3].plot(t, o["phi"], ".", ms=2.5, color="tab:brown")
+    axes[3].set_ylabel(r"$\phi$")
+    axes[3].set_ylim(-np.pi, np.pi)
+    axes[3].set_yticks([-np.pi, -np.pi / 2, 0, np.pi / 2, np.pi],
+                       [r"$-\pi$", r"$-\pi/2$", "0", r"$\pi/2$", r"$\pi$"])
+    axes[4].step(t, o["close_pairs"], where="post", color="tab:red")
+    axes[4].set_ylabel("close pairs")
+    axes[4].set_xlabel(r"time $\dot\gamma t$")
+    for ev in ana.events:
+        for ax in axes:
+            ax.axvline(ev.time, color="0.6", ls=":", lw=1)
+    axes[0].set_title(f"{_title(case)}   case mode: {MODE_NAMES.get(ana.case_mode, '?')}",
+                      fontsize=10)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return str(path)
+
+
+def plot_knot_matrix(mat: np.ndarray, path, title: str = "") -> str:
+    """Heat map of K(i, j) (dark = knotted).  When only a grid of subchains was computed
+    (stride > 1), each computed value fills its grid cell; pale blue = not computed."""
+    mat = np.asarray(mat, dtype=float)
+    n = len(mat)
+    fin = np.isfinite(mat)
+    rows = np.nonzero(fin.any(axis=1))[0]
+    cols = np.nonzero(fin.any(axis=0))[0]
+    fig, ax = plt.subplots(figsize=(5.4, 4.6), constrained_layout=True)
+    cmap = plt.get_cmap("Greys").with_extremes(bad="#dde8f4")
+    if len(rows) and len(cols):
+        sub = np.ma.masked_invalid(mat[np.ix_(rows, cols)])
+
+        def edges(idx):
+            mid = 0.5 * (idx[1:] + idx[:-1]) if len(idx) > 1 else np.zeros(0)
+            lo = idx[0] - (mid[0] - idx[0] if len(mid) else 0.5)
+            hi = idx[-1] + (idx[-1] - mid[-1] if len(mid) else 0.5)
+            return np.concatenate([[lo], mid, [hi]])
+
+        im = ax.pcolormesh(edges(cols.astype(float)), edges(rows.astype(float)), sub,
+                           cmap=cmap, vmin=0, vmax=1, shading="flat")
+    else:
+        im = ax.imshow(np.ma.masked_invalid(mat), cmap=cmap, vmin=0, vmax=1)
+    ax.plot([0, n - 1], [0, n - 1], color="0.5", lw=0.8)
+    ax.set_xlim(-0.5, n - 0.5)
+    ax.set_ylim(n - 0.5, -0.5)
+    ax.set_aspect("equal")
+    ax.set_facecolor("#dde8f4")
+    ax.set_xlabel("end bead j")
+    ax.set_ylabel("start bead i")
+    ax.set_title(title + "\n(pale blue: not computed)", fontsize=9)
+    fig.colorbar(im, ax=ax, label="$k_f$ of subchain i..j")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return str(path)
+
+
+def _draw_chain(ax, r):
+    n = len(r)
+    h = n // 2
+    ax.plot(r[:h + 1, 0], r[:h + 1, 1], r[:h + 1, 2], "-o", ms=2.5, lw=1.5, color=_COL_FIRST)
+    ax.plot(r[h:, 0], r[h:, 1], r[h:, 2], "-o", ms=2.5, lw=1.5, color=_COL_SECOND)
+    ax.scatter(*r[0], color="k", s=25, marker="s")
+    ctr = r.mean(axis=0)
+    half = max(np.ptp(r, axis=0).max() / 2, 1.0)
+    ax.set_xlim(ctr[0] - half, ctr[0] + half)
+    ax.set_ylim(ctr[1] - half, ctr[1] + half)
+    ax.set_zlim(ctr[2] - half, ctr[2] + half)
+    ax.set_xlabel("x (flow)")
+    ax.set_ylabel("y (vorticity)")
+    ax.set_zlabel("z (gradient)")
+
+
+def plot_snapshots(case: Case, path, frames=None) -> str:
+    """3D snapshots (first half blue, second half orange, first bead a black square)."""
+    n = case.nframes
+    if frames is None:
+        frames = sorted(set([0, n // 3, (2 * n) // 3, n - 1]))
+    frames = [int(f) % n for f in frames]
+    fig = plt.figure(figsize=(3.6 * len(frames), 3.8), constrained_layout=True)
+    for k, fi in enumerate(frames):
+        ax = fig.add_subplot(1, len(frames), k + 1, projection="3d")
+        _draw_chain(ax, case.positions[fi])
+        ax.set_title(f"frame {fi}, t = {case.time[fi]:.4g}", fontsize=9)
+    fig.suptitle(_title(case), fontsize=10)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return str(path)
+
+
+def make_movie(case: Case, out_base, stride: int = 1, fps: int = 10) -> str:
+    """Animation of the case: ``out_base``.gif with pillow, else a directory of PNG frames."""
+    from matplotlib import animation
+    frames = list(range(0, case.nframes, max(1, stride)))
+    try:
+        import PIL  # noqa: F401
+        have_pillow = True
+    except ImportError:
+        have_pillow = False
+    fig = plt.figure(figsize=(5, 5))
+    ax = fig.add_subplot(projection="3d")
+
+    def draw(fi):
+        ax.cla()
+        _draw_chain(ax, case.positions[fi])
+        ax.set_title(f"{case.name}: t = {case.time[fi]:.4g}", fontsize=9)
+
+    if have_pillow:
+        path = f"{out_base}.gif"
+        anim = animation.FuncAnimation(fig, draw, frames=frames, interval=1000 // fps)
+        anim.save(path, writer=animation.PillowWriter(fps=fps))
+    else:
+        path = f"{out_base}_frames"
+        os.makedirs(path, exist_ok=True)
+        for k, fi in enumerate(frames):
+            draw(fi)
+            fig.savefig(os.path.join(path, f"frame_{k:05d}.png"), dpi=80)
+    plt.close(fig)
+    return path
+
+
+def plot_case(case: Case, ana: CaseAnalysis, outdir, movie: bool = False,
+              movie_stride: int = 1) -> list:
+    """All figures of a case into outdir; returns the written paths."""
+    os.makedirs(outdir, exist_ok=True)
+    base = os.path.join(outdir, _safe(case.name))
+    files = [plot_kf(case, ana, f"{base}_kf.png"), plot_shape(case, ana, f"{base}_shape.png"),
+             plot_snapshots(case, f"{base}_snapshots.png")]
+    for fi, mat in sorted(ana.knot_matrices.items()):
+        files.append(plot_knot_matrix(mat, f"{base}_knot_matrix_{fi}.png",
+                                      f"{case.name}: knot matrix, frame {fi}"))
+    if movie:
+        files.append(make_movie(case, f"{base}_movie", stride=movie_stride))
+    return files
+
+
+def _safe(name: str) -> str:
+    return "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in str(name)) or "case"

@@ -1,0 +1,184 @@
+"""Sweep report: per-case table, a Table-2-like grid A x orientation, figures (md + html)."""
+
+from __future__ import annotations
+
+import glob
+import html
+import json
+import os
+
+from .analysis import analyze_case
+from .io import read_case
+from .plot import MODE_NAMES, plot_case
+
+
+def find_case_files(sweep_dir) -> list:
+    """Case files (*.h5) in the sweep directory and its immediate subdirectories."""
+    files = glob.glob(os.path.join(sweep_dir, "*.h5")) + glob.glob(
+        os.path.join(sweep_dir, "*", "*.h5"))
+    return sorted(f for f in files if os.sep + "report" + os.sep not in f)
+
+
+def _read_summary(sweep_dir):
+    for name in ("summary.json", "summary.txt"):
+        p = os.path.join(sweep_dir, name)
+        if os.path.isfile(p):
+            with open(p, encoding="utf-8") as fh:
+                text = fh.read()
+            if name.endswith(".json"):
+                try:
+                    text = json.dumps(json.loads(text), indent=2)
+                except json.JSONDecodeError:
+                    pass
+            return name, text
+    return None, None
+
+
+def _state_name(state) -> str:
+    return {"knotted": "knotted", "unknotted": "unknotted"}.get(state, "undecided")
+
+
+def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
+                 movie: bool = False) -> dict:
+    """Analyse every case of sweep_dir and write report/report.md and report/report.html."""
+    outdir = os.path.join(sweep_dir, "report")
+    figdir = os.path.join(outdir, "figures")
+    os.makedirs(figdir, exist_ok=True)
+    rows = []
+    for path in find_case_files(sweep_dir):
+        try:
+            case = read_case(path)
+        except (OSError, KeyError, ValueError) as exc:
+            rows.append({"file": os.path.basename(path), "name": os.path.basename(path),
+                         "A": None, "orientation": None, "status": f"unreadable: {exc}",
+                         "final_kf": None, "final_state": "-", "transitions": "-",
+                         "events": 0, "unknot_then_knot": False, "mode": "-", "figures": []})
+            continue
+        if case.nframes == 0:
+            ana = None
+        else:
+            ana = analyze_case(case, closures=closures, stride=stride, seed=seed)
+        figs = plot_case(case, ana, figdir, movie=movie) if ana is not None else []
+        kinds = [e.kind for e in ana.events] if ana else []
+        utk = any(kinds[k] == "unknot" and "knot" in kinds[k + 1:] for k in range(len(kinds)))
+        rows.append({
+            "file": os.path.basename(path), "name": case.name, "A": case.bending_a,
+            "orientation": case.orientation, "status": case.status,
+            "final_kf": ana.final_kf if ana else None,
+            "final_state": _state_name(ana.final_state) if ana else "-",
+            "transitions": ("yes" if ana.has_transitions else "no") if ana else "-",
+            "events": len(ana.events) if ana else 0, "unknot_then_knot": utk,
+            "mode": MODE_NAMES.get(ana.case_mode, "?") if ana else "-",
+            "figures": [os.path.relpath(f, outdir) for f in figs],
+        })
+    summary_name, summary = _read_summary(sweep_dir)
+    md = _markdown(sweep_dir, rows, summary_name, summary)
+    with open(os.path.join(outdir, "report.md"), "w", encoding="utf-8") as fh:
+        fh.write(md)
+    with open(os.path.join(outdir, "report.html"), "w", encoding="utf-8") as fh:
+        fh.write(_html(sweep_dir, rows, summary_name, summary))
+    return {"rows": rows, "md": os.path.join(outdir, "report.md"),
+            "html": os.path.join(outdir, "report.html")}
+
+
+def _fmt(v, spec=".3f"):
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return format(v, spec)
+    return str(v)
+
+
+COLUMNS = ("case", "A", "orientation", "status", "final k_f", "final state", "transitions",
+           "events", "unknot then knot", "mode")
+
+
+def _row_cells(r):
+    return [r["name"], _fmt(r["A"], "g"), _fmt(r["orientation"]), r["status"],
+            _fmt(r["final_kf"]), r["final_state"], r["transitions"], str(r["events"]),
+            "yes" if r["unknot_then_knot"] else "no", r["mode"]]
+
+
+def _grid(rows):
+    a_vals = sorted({r["A"] for r in rows if r["A"] is not None})
+    o_vals = sorted({str(r["orientation"]) for r in rows if r["orientation"] is not None})
+    cells = {}
+    for r in rows:
+        if r["A"] is None or r["orientation"] is None:
+            continue
+        cells.setdefault((r["A"], str(r["orientation"])), []).append(
+            f"{r['transitions']} / {r['final_state']} / {r['mode']}")
+    return a_vals, o_vals, cells
+
+
+def _markdown(sweep_dir, rows, summary_name, summary) -> str:
+    out = [f"# knotflow sweep report: {sweep_dir}", "",
+           f"{len(rows)} case files. Transitions use the hysteresis thresholds 0.1 / 0.9 on k_f.",
+           "", "## Cases", "", "| " + " | ".join(COLUMNS) + " |",
+           "|" + "---|" * len(COLUMNS)]
+    for r in rows:
+        out.append("| " + " | ".join(c.replace("|", "/") for c in _row_cells(r)) + " |")
+    a_vals, o_vals, cells = _grid(rows)
+    out += ["", "## Grid A x orientation (transitions / final state / mode)", ""]
+    if a_vals and o_vals:
+        out.append("| A | " + " | ".join(o_vals) + " |")
+        out.append("|---|" + "---|" * len(o_vals))
+        for a in a_vals:
+            out.append(f"| {a:g} | " + " | ".join("; ".join(cells.get((a, o), ["-"]))
+                                                  for o in o_vals) + " |")
+    else:
+        out.append("(no cases with both forces.bending_a and chain.orientation)")
+    if summary is not None:
+        out += ["", f"## Sweep summary ({summary_name})", "", "```", summary.rstrip(), "```"]
+    out += ["", "## Figures", ""]
+    for r in rows:
+        if r["figures"]:
+            out.append(f"### {r['name']}")
+            out.append("")
+            for f in r["figures"]:
+                if f.endswith(".png") or f.endswith(".gif"):
+                    out.append(f"![{os.path.basename(f)}]({f})")
+                else:
+                    out.append(f"- [{os.path.basename(f)}]({f})")
+            out.append("")
+    return "\n".join(out) + "\n"
+
+
+def _html(sweep_dir, rows, summary_name, summary) -> str:
+    e = html.escape
+    out = ["<!DOCTYPE html><html><head><meta charset='utf-8'>",
+           f"<title>knotflow sweep report: {e(str(sweep_dir))}</title>",
+           "<style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}"
+           "td,th{border:1px solid #999;padding:3px 8px}img{max-width:900px;display:block;"
+           "margin:0.5em 0}</style></head><body>",
+           f"<h1>knotflow sweep report: {e(str(sweep_dir))}</h1>",
+           f"<p>{len(rows)} case files. Transitions use the hysteresis thresholds 0.1 / 0.9 on"
+           " k<sub>f</sub>.</p>", "<h2>Cases</h2><table><tr>"
+           + "".join(f"<th>{e(c)}</th>" for c in COLUMNS) + "</tr>"]
+    for r in rows:
+        out.append("<tr>" + "".join(f"<td>{e(c)}</td>" for c in _row_cells(r)) + "</tr>")
+    out.append("</table>")
+    a_vals, o_vals, cells = _grid(rows)
+    out.append("<h2>Grid A &times; orientation (transitions / final state / mode)</h2>")
+    if a_vals and o_vals:
+        out.append("<table><tr><th>A</th>" + "".join(f"<th>{e(o)}</th>" for o in o_vals)
+                   + "</tr>")
+        for a in a_vals:
+            out.append(f"<tr><th>{a:g}</th>" + "".join(
+                f"<td>{e('; '.join(cells.get((a, o), ['-'])))}</td>" for o in o_vals) + "</tr>")
+        out.append("</table>")
+    else:
+        out.append("<p>(no cases with both forces.bending_a and chain.orientation)</p>")
+    if summary is not None:
+        out.append(f"<h2>Sweep summary ({e(summary_name)})</h2><pre>{e(summary)}</pre>")
+    out.append("<h2>Figures</h2>")
+    for r in rows:
+        if r["figures"]:
+            out.append(f"<h3>{e(str(r['name']))}</h3>")
+            for f in r["figures"]:
+                if f.endswith(".png") or f.endswith(".gif"):
+                    out.append(f"<img src='{e(f)}' alt='{e(os.path.basename(f))}'>")
+                else:
+                    out.append(f"<p><a href='{e(f)}'>{e(os.path.basename(f))}</a></p>")
+    out.append("</body></html>")
+    return "\n".join(out) + "\n"

@@ -1,0 +1,162 @@
+"""Shape observables, mode classification and spectra (PHYSICS.md section 6).
+
+Mode thresholds (documented choices, see README):
+- elongated: a / b >= ``ELONGATION`` (3.0);
+- mode I (rolling about vorticity): elongated, |cos theta| >= ``COS_THETA_ALIGNED`` (0.7, i.e.
+  theta within about 45 degrees of 0 or pi), and close_pairs >= ``MANY_CLOSE_PAIRS`` (3);
+- mode II (tumbling in the shear plane): elongated, b / c >= ``FLATNESS`` (2.0),
+  |cos theta| <= ``COS_THETA_PLANAR`` (0.5, theta within 30 degrees of pi/2),
+  |sin phi| >= 0.7 (phi within 45 degrees of +-pi/2, the flow direction), and
+  close_pairs < ``MANY_CLOSE_PAIRS``;
+- otherwise 0 (unclassified).  The case mode is the majority of the classified frames of the
+  second half of the run (a class must cover at least half of them), else 0.  In addition a
+  case is mode I only if phi, unwrapped, increases over the second half (rolling).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+CLOSE_PAIR_DISTANCE = 1.05
+ELONGATION = 3.0
+FLATNESS = 2.0
+COS_THETA_ALIGNED = 0.7
+COS_THETA_PLANAR = 0.5
+SIN_PHI_FLOW = 0.7
+MANY_CLOSE_PAIRS = 3
+
+
+@dataclass
+class Shape:
+    """Shape observables of one configuration."""
+
+    rg: float
+    a: float
+    b: float
+    c: float
+    theta: float
+    phi: float
+    close_pairs: int
+
+
+def gyration_tensor(r: np.ndarray) -> np.ndarray:
+    """T_nm = (1/2N^2) sum_ij (r_i - r_j)_n (r_i - r_j)_m = centred second moment."""
+    d = np.asarray(r, dtype=float) - np.mean(r, axis=0)
+    return d.T @ d / len(d)
+
+
+def count_close_pairs(r: np.ndarray, cutoff: float = CLOSE_PAIR_DISTANCE) -> int:
+    """Pairs i < j with j - i > 1 and |r_i - r_j| < cutoff."""
+    r = np.asarray(r, dtype=float)
+    n = len(r)
+    if n < 3:
+        return 0
+    diff = r[:, None, :] - r[None, :, :]
+    d2 = (diff * diff).sum(axis=2)
+    ii, jj = np.triu_indices(n, k=2)
+    return int(np.count_nonzero(d2[ii, jj] < cutoff * cutoff))
+
+
+def compute_shape(r: np.ndarray) -> Shape:
+    """R_g, semi-axes, orientation (theta, phi) of the principal axis and close pairs.
+
+    The principal axis e1 is signed so that the end-to-end vector projects non-negatively;
+    theta = acos(e1_y) in [0, pi], phi = atan2(e1_x, e1_z).
+    """
+    r = np.asarray(r, dtype=float)
+    lam, vec = np.linalg.eigh(gyration_tensor(r))
+    lam = np.clip(lam, 0.0, None)
+    e1 = vec[:, 2]
+    if np.dot(e1, r[-1] - r[0]) < 0.0:
+        e1 = -e1
+    return Shape(rg=float(np.sqrt(lam.sum())), a=float(np.sqrt(3 * lam[2])),
+                 b=float(np.sqrt(3 * lam[1])), c=float(np.sqrt(3 * lam[0])),
+                 theta=float(np.arccos(np.clip(e1[1], -1.0, 1.0))),
+                 phi=float(np.arctan2(e1[0], e1[2])), close_pairs=count_close_pairs(r))
+
+
+def shape_series(positions: np.ndarray) -> dict:
+    """Observables for every frame of positions (nframes, N, 3) as arrays."""
+    shapes = [compute_shape(p) for p in positions]
+    out = {k: np.array([getattr(s, k) for s in shapes]) for k in
+           ("rg", "a", "b", "c", "theta", "phi")}
+    out["close_pairs"] = np.array([s.close_pairs for s in shapes], dtype=np.int32)
+    return out
+
+
+def classify_frame(a, b, c, theta, phi, close_pairs) -> int:
+    """1 = mode I, 2 = mode II, 0 = unclassified (thresholds in the module docstring)."""
+    if a <= 0.0 or a < ELONGATION * b:
+        return 0
+    ct = abs(np.cos(theta))
+    if ct >= COS_THETA_ALIGNED and close_pairs >= MANY_CLOSE_PAIRS:
+        return 1
+    flat = b >= FLATNESS * c
+    if (flat and ct <= COS_THETA_PLANAR and abs(np.sin(phi)) >= SIN_PHI_FLOW
+            and close_pairs < MANY_CLOSE_PAIRS):
+        return 2
+    return 0
+
+
+def classify_modes(obs: dict) -> np.ndarray:
+    """Per-frame modes (int32) from an observables dict (rg, a, b, c, theta, phi, close_pairs)."""
+    return np.array([classify_frame(obs["a"][k], obs["b"][k], obs["c"][k], obs["theta"][k],
+                                    obs["phi"][k], obs["close_pairs"][k])
+                     for k in range(len(obs["a"]))], dtype=np.int32)
+
+
+def case_mode(modes: np.ndarray, phi: np.ndarray | None = None) -> int:
+    """Mode of a whole case: majority over the classified frames of the second half."""
+    modes = np.asarray(modes)
+    half = modes[len(modes) // 2:]
+    classified = half[half > 0]
+    if len(half) == 0 or len(classified) < max(1, len(half) // 2):
+        return 0
+    counts = np.bincount(classified, minlength=3)
+    mode = int(np.argmax(counts))
+    if counts[mode] * 2 < len(classified):
+        return 0
+    if mode == 1 and phi is not None and len(phi) >= 4:
+        ph = np.unwrap(np.asarray(phi)[len(phi) // 2:])
+        if ph[-1] <= ph[0]:
+            return 0
+    return mode
+
+
+def dominant_period(time: np.ndarray, signal: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """(frequency, power, dominant period) of a signal sampled at (nearly) uniform times.
+
+    The mean is removed; the signal is resampled onto a uniform grid if needed.  The period is
+    1 / f of the largest non-zero-frequency peak (inf if the series is too short or constant).
+    """
+    t = np.asarray(time, dtype=float)
+    y = np.asarray(signal, dtype=float)
+    if y.ndim == 1:
+        y = y[:, None]
+    n = len(t)
+    if n < 4:
+        return np.zeros(0), np.zeros(0), float("inf")
+    tu = np.linspace(t[0], t[-1], n)
+    if not np.allclose(np.diff(t), np.diff(tu), rtol=1e-6, atol=1e-12):
+        y = np.stack([np.interp(tu, t, y[:, k]) for k in range(y.shape[1])], axis=1)
+    dt = tu[1] - tu[0]
+    y = y - y.mean(axis=0)
+    power = (np.abs(np.fft.rfft(y, axis=0)) ** 2).sum(axis=1)
+    freq = np.fft.rfftfreq(n, d=dt)
+    if len(power) < 2 or power[1:].max() <= 0.0:
+        return freq, power, float("inf")
+    k = 1 + int(np.argmax(power[1:]))
+    return freq, power, float(1.0 / freq[k])
+
+
+def spectra(time: np.ndarray, positions: np.ndarray, obs: dict) -> dict:
+    """Power spectra of R_g(t), unwrapped phi(t) and the end-to-end vector; dominant periods."""
+    f, p_rg, per_rg = dominant_period(time, obs["rg"])
+    _, p_phi, per_phi = dominant_period(time, np.unwrap(obs["phi"]))
+    ree = positions[:, -1, :] - positions[:, 0, :]
+    _, p_ee, per_ee = dominant_period(time, ree)
+    return {"frequency": f, "power_rg": p_rg, "power_phi": p_phi, "power_end_to_end": p_ee,
+            "dominant_period_rg": per_rg, "dominant_period_phi": per_phi,
+            "dominant_period_end_to_end": per_ee}

@@ -1,0 +1,97 @@
+"""Console commands on coordinate files and synthetic case files."""
+
+import json
+import os
+
+import numpy as np
+
+from conftest import unknotting_trefoil_frames, write_case
+from helpers import open_from_closed, open_trefoil, torus_knot
+from knotflow_tools import cli, io, knots
+
+
+def test_kf_json_on_xyz(tmp_path, capsys):
+    p = tmp_path / "chain.xyz"
+    io.write_xyz(p, open_trefoil())
+    assert cli.main_kf([str(p), "--closures", "30", "--seed", "4", "--json",
+                        "--per-closure"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["n_beads"] == 99 and out["closures"] == 30 and out["seed"] == 4
+    assert out["dominant"] == "3_1"
+    assert set(out["spectrum"]) == set(knots.KNOT_TYPES)
+    assert abs(sum(out["spectrum"].values()) - 1.0) < 1e-12
+    assert len(out["per_closure"]) == 30
+    assert out["kf"] == 1.0 - out["per_closure"].count("0_1") / 30
+    assert "matrix" not in out and out["knot_core"] is None and out["slipknot"] is False
+    # same as the library with the same seed
+    assert out["per_closure"] == knots.analyze_chain(open_trefoil(), 30, seed=4).per_closure
+
+
+def test_kf_closure_points_and_matrix(tmp_path, capsys):
+    r = open_from_closed(torus_knot(2, 3, 24, R=2.0, r=0.8), 1)
+    p = tmp_path / "chain.xyz"
+    io.write_xyz(p, r)
+    gap = 0.5 * (r[0] + r[-1])
+    com = r.mean(axis=0)
+    pts = tmp_path / "points.txt"
+    io.write_xyz(pts, [com + 40 * (gap - com), com + 50 * (gap - com)])
+    assert cli.main_kf([str(p), "--closure-points", str(pts), "--json", "--per-closure",
+                        "--matrix", "--min-length", "20", "--closures", "5"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["closures"] == 2 and out["per_closure"] == ["3_1", "3_1"] and out["kf"] == 1.0
+    mat = out["matrix"]
+    assert len(mat) == len(r) and mat[0][1] is None and mat[1][0] is None
+    assert mat[0][len(r) - 1] is not None
+    assert out["knot_core"] is not None and out["slipknot"] is False
+
+
+def test_kf_text_output_and_h5_frame(tmp_path, capsys):
+    path = write_case(tmp_path / "c.h5", unknotting_trefoil_frames(4))
+    assert cli.main_kf([str(path), "--frame", "0", "--closures", "20"]) == 0
+    text = capsys.readouterr().out
+    assert "dominant 3_1" in text and "kf " in text
+    assert cli.main_kf([str(path), "--closures", "20"]) == 0      # last frame: straight
+    assert "kf 0.000000" in capsys.readouterr().out
+    assert cli.main_kf([str(tmp_path / "missing.xyz")]) == 2
+
+
+def test_plot_command_writes_files(tmp_path, trefoil_case):
+    out = tmp_path / "plots"
+    assert cli.main_plot([trefoil_case, "--out", str(out), "--closures", "20",
+                          "--matrix-frames", "0", "--matrix-closures", "4",
+                          "--matrix-stride", "12", "--movie", "--save-analysis"]) == 0
+    names = sorted(os.listdir(out))
+    assert "case_A1_a_kf.png" in names and "case_A1_a_shape.png" in names
+    assert "case_A1_a_snapshots.png" in names and "case_A1_a_knot_matrix_0.png" in names
+    assert any(n.startswith("case_A1_a_movie") for n in names)
+    for n in names:
+        if n.endswith(".png"):
+            assert (out / n).stat().st_size > 5000
+    case = io.read_case(trefoil_case)
+    # saved analysis: knotted at the start, unknotted at the end, one 'unknot' event
+    assert case.knots["kf"][0] > 0.5 and case.knots["kf"][-1] == 0.0
+    assert case.events["kind"] == ["unknot"]
+    assert 0 in case.knot_matrices
+
+
+def test_report_on_sweep(tmp_path):
+    sweep = tmp_path / "sweep"
+    sweep.mkdir()
+    frames = unknotting_trefoil_frames(6)
+    knotted = np.stack([open_from_closed(torus_knot(2, 3, 60, R=6, r=2.5), 1)] * 6)
+    write_case(sweep / "A1_a.h5", frames, attrs={"forces.bending_a": 1.0,
+                                                 "chain.orientation": "a"})
+    write_case(sweep / "A2_b.h5", knotted, attrs={"forces.bending_a": 2.0,
+                                                  "chain.orientation": "b"},
+               status="failed: step size underflow")
+    (sweep / "summary.txt").write_text("case A1_a finished\ncase A2_b failed\n")
+    assert cli.main_report([str(sweep), "--closures", "20"]) == 0
+    md = (sweep / "report" / "report.md").read_text()
+    html = (sweep / "report" / "report.html").read_text()
+    assert "| A1_a | 1 | a | finished |" in md
+    assert "failed: step size underflow" in md
+    assert "## Grid A x orientation" in md and "| 2 | - | no / knotted" in md
+    assert "yes / unknotted" in md
+    assert "case A1_a finished" in md and "<table>" in html
+    figs = os.listdir(sweep / "report" / "figures")
+    assert "A1_a_kf.png" in figs and "A2_b_shape.png" in figs

@@ -1,0 +1,81 @@
+"""Shape observables on configurations with exact values; modes; spectra."""
+
+import numpy as np
+import pytest
+
+from knotflow_tools import shape as S
+
+
+def rod(n, direction, spacing=1.02):
+    d = np.asarray(direction, dtype=float)
+    d /= np.linalg.norm(d)
+    return np.arange(n)[:, None] * spacing * d[None, :]
+
+
+def test_straight_chain_exact_values():
+    n, l0 = 11, 1.02
+    s = S.compute_shape(rod(n, [1, 0, 0], l0))
+    # R_g^2 of N equally spaced points: l0^2 (N^2 - 1) / 12
+    assert s.rg == pytest.approx(l0 * np.sqrt((n * n - 1) / 12.0), rel=1e-12)
+    assert s.a == pytest.approx(np.sqrt(3.0) * s.rg, rel=1e-12)
+    assert s.b == pytest.approx(0.0, abs=1e-7) and s.c == pytest.approx(0.0, abs=1e-7)
+    assert s.close_pairs == 0
+
+
+@pytest.mark.parametrize("direction,theta,phi", [
+    ([0, 1, 0], 0.0, None), ([0, -1, 0], np.pi, None), ([0, 0, 1], np.pi / 2, 0.0),
+    ([1, 0, 0], np.pi / 2, np.pi / 2), ([-1, 0, 0], np.pi / 2, -np.pi / 2),
+    ([0, 0, -1], np.pi / 2, np.pi), ([1, 0, 1], np.pi / 2, np.pi / 4),
+    ([0, 1, 1], np.pi / 4, 0.0)])
+def test_axis_aligned_rod_angles(direction, theta, phi):
+    s = S.compute_shape(rod(8, direction))
+    assert s.theta == pytest.approx(theta, abs=1e-9)
+    if phi is not None:
+        # phi = pi and -pi are the same direction
+        assert np.cos(s.phi) == pytest.approx(np.cos(phi), abs=1e-9)
+        assert np.sin(s.phi) == pytest.approx(np.sin(phi), abs=1e-9)
+
+
+def test_planar_rectangle_semi_axes_and_close_pairs():
+    # 4 corners of a 2 x 1 rectangle in the xz-plane: lambda = (1, 1/4, 0)
+    r = np.array([[-1.0, 0, -0.5], [1.0, 0, -0.5], [1.0, 0, 0.5], [-1.0, 0, 0.5]])
+    s = S.compute_shape(r)
+    assert s.a == pytest.approx(np.sqrt(3.0), rel=1e-12)
+    assert s.b == pytest.approx(np.sqrt(0.75), rel=1e-12)
+    assert s.c == pytest.approx(0.0, abs=1e-7)
+    assert s.rg == pytest.approx(np.sqrt(1.25), rel=1e-12)
+    # pair (0, 3) at distance 1 < 1.05 and |i - j| = 3: one close pair; (0, 2) too far
+    assert s.close_pairs == 1
+    assert S.count_close_pairs(r, cutoff=2.5) == 3
+
+
+def test_gyration_tensor_is_pair_formula():
+    rng = np.random.default_rng(2)
+    r = rng.normal(size=(9, 3))
+    diff = r[:, None, :] - r[None, :, :]
+    t = np.einsum("ijn,ijm->nm", diff, diff) / (2 * len(r) ** 2)
+    assert np.allclose(S.gyration_tensor(r), t, atol=1e-14)
+
+
+def test_mode_classification():
+    assert S.classify_frame(10, 1.0, 0.8, 0.1, 0.3, 6) == 1
+    assert S.classify_frame(10, 2.0, 0.5, np.pi / 2, np.pi / 2, 0) == 2
+    assert S.classify_frame(10, 2.0, 0.5, np.pi / 2, -np.pi / 2, 1) == 2
+    assert S.classify_frame(2, 1.0, 0.5, np.pi / 2, np.pi / 2, 0) == 0      # not elongated
+    assert S.classify_frame(10, 2.0, 0.5, np.pi / 2, 0.0, 0) == 0           # phi along z
+    modes = np.array([0, 0, 2, 2, 2, 2, 2, 0])
+    assert S.case_mode(modes) == 2
+    assert S.case_mode(np.zeros(8, dtype=int)) == 0
+    phi_up = np.linspace(0, 8 * np.pi, 40)     # rolling: phi increases (wrapped to (-pi, pi])
+    assert S.case_mode(np.ones(40, dtype=int), phi=np.angle(np.exp(1j * phi_up))) == 1
+    assert S.case_mode(np.ones(40, dtype=int), phi=np.angle(np.exp(-1j * phi_up))) == 0
+
+
+def test_dominant_period_of_sines():
+    t = np.linspace(0.0, 200.0, 2001)
+    f, p, per = S.dominant_period(t, 3 + np.sin(2 * np.pi * t / 25.0))
+    assert per == pytest.approx(25.0, rel=0.01)
+    # 2-D signal (end-to-end vector rotating with period 40)
+    v = np.stack([np.cos(2 * np.pi * t / 40), np.sin(2 * np.pi * t / 40), 0 * t], axis=1)
+    assert S.dominant_period(t, v)[2] == pytest.approx(40.0, rel=0.01)
+    assert S.dominant_period(t[:3], t[:3])[2] == float("inf")
