@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # Shared helpers of scripts/test.sh and scripts/run.sh (sourced, not run).
 # Everything is idempotent: packages are installed only when missing, builds are incremental.
 #

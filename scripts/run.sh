@@ -31,7 +31,9 @@ exe="$KF_ROOT/build/knotflow"
 if [ ! -x "$exe" ]; then
   exe="$(find "$KF_ROOT/build" -name knotflow -type f -perm -u+x 2>/dev/null | head -n 1 || true)"
 fi
-[ -n "$exe" ] && [ -x "$exe" ] || kf_die "the knotflow executable was not built"
+if [ -z "$exe" ] || [ ! -x "$exe" ]; then
+  kf_die "the knotflow executable was not built"
+fi
 
 kf_mpirun_flags
 kf_log "mpirun -n $np ${KF_MPIRUN_FLAGS[*]} $exe $sweep"
