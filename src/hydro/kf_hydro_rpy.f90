@@ -95,8 +95,7 @@ contains
     real(wp), intent(in) :: x(n), y(n), z(n)
     real(wp), intent(out) :: dx(n*(n-1)/2), dy(n*(n-1)/2), dz(n*(n-1)/2), a(n*(n-1)/2), bb(n*(n-1)/2), c1(n*(n-1)/2), c2(n*(n-1)/2)
     integer :: i, j, off
-    real(wp) :: xi, yi, zi, r2, r2s, rinv, rf, rf2, rf5
-    logical :: far
+    real(wp) :: xi, yi, zi, r2, r2s, rinv, rf, rf2, rf5, wf, wn
     do i = 1, n - 1
       off = pair_offset(i, n)
       xi = x(i)
@@ -107,18 +106,20 @@ contains
         dy(off + j) = yi - y(j)
         dz(off + j) = zi - z(j)
         r2 = dx(off + j)**2 + dy(off + j)**2 + dz(off + j)**2
-        far = r2 >= 1.0_wp
-        r2s = merge(r2, 1.0e-200_wp, r2 > 1.0e-200_wp)
+        ! Branch-free blend: wf = 1 for r >= 1, 0 otherwise; both forms are finite everywhere.
+        wf = 0.5_wp + sign(0.5_wp, r2 - 1.0_wp)
+        wn = 1.0_wp - wf
+        r2s = r2 + 1.0e-200_wp
         rinv = 1.0_wp/sqrt(r2s)
-        rf = merge(rinv, 1.0_wp, far)   ! 1/r where r >= 1, harmless elsewhere
+        rf = wf*rinv + wn                ! 1/r where r >= 1, 1 elsewhere
         rf2 = rf*rf
         rf5 = rf2*rf2*rf
-        a(off + j) = merge(0.125_wp*rf*(1.0_wp + rf2*(1.0_wp/6.0_wp)), &
-                                third*(1.0_wp - 0.5625_wp*r2s*rinv), far)
-        bb(off + j) = merge(0.125_wp*rf*rf2*(1.0_wp - 0.5_wp*rf2), 0.0625_wp*rinv, far)
-        c1(off + j) = merge(-rf5*(1.0_wp/12.0_wp), (5.0_wp/12.0_wp)*r2s*rinv - 0.5_wp, far)
-        c2(off + j) = merge(-(5.0_wp/16.0_wp)*rf5*(1.0_wp - (2.0_wp/3.0_wp)*rf2), &
-                                 -(5.0_wp/48.0_wp)*rinv, far)
+        a(off + j) = wf*(0.125_wp*rf*(1.0_wp + rf2*(1.0_wp/6.0_wp))) &
+                     + wn*(third*(1.0_wp - 0.5625_wp*r2s*rinv))
+        bb(off + j) = wf*(0.125_wp*rf*rf2*(1.0_wp - 0.5_wp*rf2)) + wn*(0.0625_wp*rinv)
+        c1(off + j) = wf*(-rf5*(1.0_wp/12.0_wp)) + wn*((5.0_wp/12.0_wp)*r2s*rinv - 0.5_wp)
+        c2(off + j) = wf*(-(5.0_wp/16.0_wp)*rf5*(1.0_wp - (2.0_wp/3.0_wp)*rf2)) &
+                      + wn*(-(5.0_wp/48.0_wp)*rinv)
       end do
     end do
   end subroutine tabulate_pairs
@@ -178,6 +179,7 @@ contains
       uxi = 0.0_wp
       uyi = 0.0_wp
       uzi = 0.0_wp
+      !$omp simd reduction(+:uxi, uyi, uzi)
       do j = i + 1, n
         dx = pdx(off + j)
         dy = pdy(off + j)
@@ -241,6 +243,7 @@ contains
       uxi = 0.0_wp
       uyi = 0.0_wp
       uzi = 0.0_wp
+      !$omp simd reduction(+:uxi, uyi, uzi)
       do j = i + 1, n
         dx = pdx(off + j)
         dy = pdy(off + j)
