@@ -242,7 +242,7 @@ contains
     logical :: last, finite
     character(len=24) :: b1, b2
 
-    ! FSAL: k1 is reusable if y and t are those of the last accepted step.
+    ! FSAL: k1 is reusable if y and t are those it was evaluated at (the caller may change y).
     if (this%fsal_valid) then
       if (t /= this%t_fsal .or. any(y /= this%y_fsal)) this%fsal_valid = .false.
     end if
@@ -261,6 +261,8 @@ contains
           return
         end if
         this%fsal_valid = .true.
+        this%t_fsal = t
+        this%y_fsal = y
       end if
       dt_proposed = min(this%dt, this%dt_max)
       h = dt_proposed
@@ -317,6 +319,8 @@ contains
         end if
         call record_step(this, h)
         this%k1 = this%k7
+        this%t_fsal = t
+        this%y_fsal = y
         fac = this%safety*max(err, 1.0e-10_wp)**(-this%alpha)*this%err_prev**this%beta
         fac = min(this%fac_max, max(this%fac_min, fac))
         this%err_prev = max(err, 1.0e-4_wp)
@@ -344,8 +348,6 @@ contains
         return
       end if
     end do
-    this%t_fsal = t
-    this%y_fsal = y
   end subroutine step_dopri
 
 end module kf_integrator
