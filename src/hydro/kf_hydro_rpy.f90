@@ -16,7 +16,7 @@ module kf_hydro_rpy
   implicit none
   private
 
-  public :: rpy_pair_coefficients, rpy_strain_coefficients
+  public :: rpy_pair_coefficients
 
   !> RPY model; holds the bead positions of the last prepare.
   type, extends(hydro_model_t), public :: rpy_model_t
@@ -52,24 +52,6 @@ contains
       bb = rinv/16.0_wp
     end if
   end subroutine rpy_pair_coefficients
-
-  !> For a separation vector d with |d|^2 = r2 > 0: C_ij:E = c1 E d + c2 (d.E.d) d.
-  elemental subroutine rpy_strain_coefficients(r2, c1, c2)
-    real(wp), intent(in) :: r2
-    real(wp), intent(out) :: c1, c2
-    real(wp) :: rinv, rinv2, rinv5, r
-    rinv = 1.0_wp/sqrt(r2)
-    rinv2 = rinv*rinv
-    if (r2 >= 1.0_wp) then
-      rinv5 = rinv2*rinv2*rinv
-      c1 = -rinv5/12.0_wp
-      c2 = -(5.0_wp/16.0_wp)*rinv5*(1.0_wp - (2.0_wp/3.0_wp)*rinv2)
-    else
-      r = r2*rinv
-      c1 = (5.0_wp/12.0_wp)*r - 0.5_wp
-      c2 = -(5.0_wp/48.0_wp)*rinv
-    end if
-  end subroutine rpy_strain_coefficients
 
   !> Copy the positions and tabulate, for every pair i < j (packed index), the separation
   !> d = r_i - r_j and the coefficients mu_ij = a I + bb d d^T, C_ij:E = c1 E d + c2 (d.E.d) d.
