@@ -117,7 +117,7 @@ macro(_knotflow_add_fallback_pf_test)
   set(_driver ${_gen_dir}/${KPF_NAME}_driver.F90)
   set(_mpi_flag "")
   if(KPF_MPI_PES)
-    set(_mpi_flag --mpi)
+    set(_mpi_flag --mpi --np ${KPF_MPI_PES})
   endif()
   add_custom_command(OUTPUT ${_driver}
     COMMAND ${KNOTFLOW_PYTHON3} ${KNOTFLOW_FUNITPROC} driver ${_mpi_flag} --name ${KPF_NAME}

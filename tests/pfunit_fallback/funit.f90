@@ -116,7 +116,7 @@ contains
   subroutine throw(message, location)
     character(len=*), intent(in) :: message
     type(SourceLocation), optional, intent(in) :: location
-    call record_failure('throw', message, location=location)
+    call record_failure('', message, location=location)
   end subroutine throw
 
   !> Forget the failures of the previous test.
@@ -196,7 +196,8 @@ contains
     failed = n_failed
   end subroutine funit_counts
 
-  !> Append one failure: "<file>:<line>: <what>: <detail> | message: <message>".
+  !> Append one failure: "<file>:<line>: <what> failed: <detail> | message: <message>"
+  !> (just "<file>:<line>: <detail>" when what is empty, as for throw).
   subroutine record_failure(what, detail, message, location)
     character(len=*), intent(in) :: what
     character(len=*), intent(in) :: detail
@@ -212,7 +213,11 @@ contains
     else
       text = '<unknown location>: '
     end if
-    text = text // what // ' failed: ' // detail
+    if (len(what) > 0) then
+      text = text // what // ' failed: ' // detail
+    else
+      text = text // detail
+    end if
     if (present(message)) then
       if (len(message) > 0) text = text // ' | message: ' // message
     end if

@@ -10,7 +10,7 @@ Two sub-commands:
       (on the assertion's last line, so that line numbers stay those of the .pf file; a
       ``# 1 "file.pf"`` marker makes compiler messages point at the .pf file).
 
-  funitproc.py driver [--mpi] --name <exe> -o <driver.F90> <file.pf>...
+  funitproc.py driver [--mpi [--np <n>]] --name <exe> -o <driver.F90> <file.pf>...
       Write the program that runs every test of the given files (one PASS/FAIL line per test,
       failures with file:line, expected and actual values, then ``N passed, N failed``; it
       stops with code 2 when anything failed).
@@ -238,10 +238,12 @@ class PfFile:
 
 
 def write_if_changed(path, text):
-    """Write text unless the file already holds it (avoids needless recompilation)."""
+    """Write text unless the file already holds it; then only refresh its time stamp, so
+    that the build tool sees the output as up to date."""
     if os.path.exists(path):
         with open(path, encoding="utf-8") as handle:
             if handle.read() == text:
+                os.utime(path, None)
                 return
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     with open(path, "w", encoding="utf-8") as handle:
@@ -262,7 +264,7 @@ def fstr(text):
     return "'" + text.replace("'", "''") + "'"
 
 
-def cmd_driver(name, out_path, pf_paths, mpi):
+def cmd_driver(name, out_path, pf_paths, mpi, np_max=None):
     pfs = [PfFile(p) for p in pf_paths]
     modules = [pf.module.lower() for pf in pfs]
     if len(set(modules)) != len(modules):
@@ -280,6 +282,10 @@ def cmd_driver(name, out_path, pf_paths, mpi):
         for t, test in enumerate(pf.tests, start=1):
             alias = f"pf{k}_t{t}"
             aliases.append(f"{alias} => {test['name']}")
+            if np_max and any(n > np_max for n in test["npes"]):
+                raise PfError(f"{pf.path}:{test['line']}: {test['name']} asks for npes="
+                              f"{test['npes']} but the test runs on {np_max} processes "
+                              "(raise MPI_PES)")
             if test["kind"] == "mpitest" and not mpi:
                 raise PfError(f"{pf.path}:{test['line']}: @mpitest needs an MPI test "
                               "(register it with MPI_PES <n>)")
@@ -353,6 +359,8 @@ def main(argv=None):
     drv = sub.add_parser("driver", help="write the driver program for a set of .pf files")
     drv.add_argument("--mpi", action="store_true", help="MPI driver (uses module pfunit)")
     drv.add_argument("--name", required=True, help="test (executable) name")
+    drv.add_argument("--np", type=int, default=None,
+                     help="number of MPI processes the test is run with (checks npes)")
     drv.add_argument("-o", "--output", required=True)
     drv.add_argument("pf", nargs="+")
     args = parser.parse_args(argv)
@@ -360,7 +368,7 @@ def main(argv=None):
         if args.command == "preprocess":
             cmd_preprocess(args.pf, args.out)
         else:
-            cmd_driver(args.name, args.output, args.pf, args.mpi)
+            cmd_driver(args.name, args.output, args.pf, args.mpi, args.np)
     except PfError as exc:
         print(f"funitproc: error: {exc}", file=sys.stderr)
         return 1

@@ -1,0 +1,143 @@
+# shellcheck shell=bash
+# Shared helpers of scripts/test.sh and scripts/run.sh (sourced, not run).
+# Everything is idempotent: packages are installed only when missing, builds are incremental.
+#
+# Environment:
+#   KNOTFLOW_JOBS      parallel build/test jobs (default 2)
+#   KNOTFLOW_PYTHON    Python interpreter to use (default: python3 on PATH)
+#   KNOTFLOW_NO_INSTALL=1  never install anything (only check and report what is missing)
+
+KF_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+KF_JOBS="${KNOTFLOW_JOBS:-2}"
+export DEBIAN_FRONTEND=noninteractive
+
+kf_log() { printf '==> %s\n' "$*"; }
+kf_die() { printf 'ERROR: %s\n' "$*" >&2; exit 1; }
+
+# Run a command as root (directly, or through non-interactive sudo).
+kf_as_root() {
+  if [ "$(id -u)" -eq 0 ]; then
+    "$@"
+  elif command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then
+    sudo -n "$@"
+  else
+    return 1
+  fi
+}
+
+# System packages (Debian 12 names).  Installed with apt-get only when dpkg says missing.
+KF_APT_PACKAGES=(gcc gfortran cmake make git pkg-config openssh-client libopenmpi-dev openmpi-bin libhdf5-dev
+                 libopenblas-dev liblapack-dev libfftw3-dev python3 python3-pip python3-venv)
+
+kf_ensure_system_packages() {
+  if ! command -v dpkg >/dev/null 2>&1; then
+    kf_log "no dpkg (not Debian-like): skipping system packages; checking the tools instead"
+    local tool
+    for tool in gfortran cmake make mpirun pkg-config python3; do
+      command -v "$tool" >/dev/null 2>&1 || kf_die "'$tool' not found; install it first"
+    done
+    return 0
+  fi
+  local missing=() pkg
+  for pkg in "${KF_APT_PACKAGES[@]}"; do
+    dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
+  done
+  if [ "${#missing[@]}" -eq 0 ]; then
+    kf_log "system packages: all present"
+    return 0
+  fi
+  [ "${KNOTFLOW_NO_INSTALL:-0}" = 1 ] && kf_die "missing system packages: ${missing[*]}"
+  kf_log "installing system packages: ${missing[*]}"
+  kf_as_root apt-get update -q </dev/null \
+    || kf_die "apt-get update failed (need root or passwordless sudo); missing: ${missing[*]}"
+  kf_as_root apt-get install -y -q --no-install-recommends "${missing[@]}" </dev/null \
+    || kf_die "apt-get install failed for: ${missing[*]}"
+}
+
+# Python: the tools package (tools/pyproject.toml, editable, with its [test] extra) or, before
+# it exists, numpy h5py matplotlib pytest.  Installs go into a virtual environment of this
+# checkout, build/venv, created with --system-site-packages so that packages the base Python
+# already has are reused: nothing is installed into the base Python (which may be shared with
+# other checkouts, or refuse pip installs under PEP 668 as Debian's /usr/bin/python3 does).
+# An interpreter that already runs inside a virtual environment is used as it is.
+# Sets KF_PY to the interpreter to use and puts its bin/ first on PATH.
+kf_ensure_python() {
+  local py="${KNOTFLOW_PYTHON:-python3}"
+  command -v "$py" >/dev/null 2>&1 || kf_die "python interpreter '$py' not found"
+  py="$(command -v "$py")"
+  local in_venv
+  in_venv="$("$py" -c 'import sys; print(int(sys.prefix != sys.base_prefix))')" \
+    || kf_die "cannot run $py"
+  if [ "$in_venv" = 0 ]; then
+    local venv="$KF_ROOT/build/venv"
+    if [ ! -x "$venv/bin/python" ]; then
+      kf_log "creating the virtual environment $venv (sees $py's packages)"
+      mkdir -p "$KF_ROOT/build"
+      "$py" -m venv --system-site-packages "$venv" </dev/null \
+        || kf_die "$py -m venv failed (Debian: apt-get install python3-venv)"
+    fi
+    py="$venv/bin/python"
+  fi
+  KF_PY="$py"
+  PATH="$(dirname "$KF_PY"):$PATH"
+  export PATH
+
+  if [ -f "$KF_ROOT/tools/pyproject.toml" ]; then
+    local name location
+    name="$("$KF_PY" -c 'import sys, tomllib; print(tomllib.load(open(sys.argv[1], "rb"))["project"]["name"])' \
+            "$KF_ROOT/tools/pyproject.toml" 2>/dev/null || true)"
+    location=""
+    if [ -n "$name" ]; then
+      location="$("$KF_PY" -m pip show "$name" 2>/dev/null \
+                  | sed -n 's/^Editable project location: //p' || true)"
+    fi
+    if [ -n "$location" ] && [ "$(cd "$location" 2>/dev/null && pwd)" = "$KF_ROOT/tools" ] \
+       && "$KF_PY" -c 'import pytest' 2>/dev/null; then
+      kf_log "python: $name already installed (editable) from tools/"
+    else
+      [ "${KNOTFLOW_NO_INSTALL:-0}" = 1 ] && kf_die "python package in tools/ not installed"
+      kf_log "python: pip install -e tools[test]"
+      "$KF_PY" -m pip install -q --disable-pip-version-check -e "$KF_ROOT/tools[test]" </dev/null \
+        || kf_die "pip install -e tools[test] failed"
+    fi
+  else
+    local missing=() mod
+    for mod in numpy h5py matplotlib pytest; do
+      "$KF_PY" -c "import $mod" 2>/dev/null || missing+=("$mod")
+    done
+    if [ "${#missing[@]}" -eq 0 ]; then
+      kf_log "python: numpy h5py matplotlib pytest present"
+    else
+      [ "${KNOTFLOW_NO_INSTALL:-0}" = 1 ] && kf_die "missing python packages: ${missing[*]}"
+      kf_log "python: pip install ${missing[*]}"
+      "$KF_PY" -m pip install -q --disable-pip-version-check "${missing[@]}" </dev/null \
+        || kf_die "pip install ${missing[*]} failed"
+    fi
+  fi
+}
+
+# kf_build <build dir> <build type> [targets...]: configure (if needed) and build.
+kf_build() {
+  local dir="$1" type="$2"
+  shift 2
+  kf_log "configuring $type build in $dir"
+  mkdir -p "$dir"
+  cmake -S "$KF_ROOT" -B "$dir" -DCMAKE_BUILD_TYPE="$type" -DKNOTFLOW_PYTHON3="$KF_PY" \
+        >"$dir/configure.log" 2>&1 \
+    || { cat "$dir/configure.log"; kf_die "CMake configuration ($type) failed"; }
+  grep -E '^-- Tests:' "$dir/configure.log" || true
+  local target_args=() t
+  for t in "$@"; do target_args+=(--target "$t"); done
+  kf_log "building $type (-j$KF_JOBS) ${*:-all}"
+  cmake --build "$dir" -j "$KF_JOBS" "${target_args[@]}" || kf_die "$type build failed"
+}
+
+# mpirun flags: --oversubscribe for Open MPI, plus --allow-run-as-root when root.
+kf_mpirun_flags() {
+  KF_MPIRUN_FLAGS=()
+  if mpirun --version 2>/dev/null | grep -qE 'Open MPI|OpenRTE'; then
+    KF_MPIRUN_FLAGS+=(--oversubscribe)
+    [ "$(id -u)" -eq 0 ] && KF_MPIRUN_FLAGS+=(--allow-run-as-root)
+  fi
+  return 0
+}

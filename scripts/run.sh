@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# Build knotflow (Release) and run a parameter sweep under MPI, then the report tool.
+#   scripts/run.sh [sweep.nml]      (default: inputs/sweep.nml)
+# Works from any directory (a relative sweep path is taken relative to the current
+# directory); the program runs in the repository root.  Re-running resumes the sweep
+# (the program skips finished cases).
+#
+# Environment: KNOTFLOW_NP (MPI ranks, default 2), KNOTFLOW_JOBS (build jobs, default 2),
+#              KNOTFLOW_OUTPUT_DIR (sweep output directory for the report, if the namelist
+#              does not name it), KNOTFLOW_PYTHON, KNOTFLOW_NO_INSTALL=1.
+set -euo pipefail
+caller_dir="$(pwd)"
+# shellcheck source=scripts/lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
+
+sweep="${1:-$KF_ROOT/inputs/sweep.nml}"
+case "$sweep" in
+  /*) ;;
+  *) sweep="$caller_dir/$sweep" ;;
+esac
+[ -f "$sweep" ] || kf_die "sweep file not found: $sweep"
+np="${KNOTFLOW_NP:-2}"
+[[ "$np" =~ ^[1-9][0-9]*$ ]] || kf_die "KNOTFLOW_NP must be a positive integer (got '$np')"
+
+cd "$KF_ROOT"
+kf_ensure_system_packages
+kf_ensure_python
+kf_build "$KF_ROOT/build" Release
+
+exe="$KF_ROOT/build/knotflow"
+if [ ! -x "$exe" ]; then
+  exe="$(find "$KF_ROOT/build" -name knotflow -type f -perm -u+x 2>/dev/null | head -n 1 || true)"
+fi
+if [ -z "$exe" ] || [ ! -x "$exe" ]; then
+  kf_die "the knotflow executable was not built"
+fi
+
+kf_mpirun_flags
+kf_log "mpirun -n $np ${KF_MPIRUN_FLAGS[*]} $exe $sweep"
+mpirun -n "$np" "${KF_MPIRUN_FLAGS[@]}" "$exe" "$sweep"
+
+# Where the sweep wrote its cases: KNOTFLOW_OUTPUT_DIR, else the directory the namelist names.
+outdir="${KNOTFLOW_OUTPUT_DIR:-}"
+if [ -z "$outdir" ]; then
+  outdir="$(sed -n -E "s/^[[:space:]]*(output_dir|out_dir|outdir|output_directory|results_dir|directory)[[:space:]]*=[[:space:]]*['\"]([^'\"]+)['\"].*/\2/Ip" \
+            "$sweep" | head -n 1)"
+fi
+if [ -z "$outdir" ]; then
+  kf_log "no output directory known (set KNOTFLOW_OUTPUT_DIR): report skipped"
+  exit 0
+fi
+case "$outdir" in
+  /*) ;;
+  *) outdir="$KF_ROOT/$outdir" ;;
+esac
+if command -v knotflow-report >/dev/null 2>&1; then
+  kf_log "knotflow-report $outdir"
+  knotflow-report "$outdir"
+else
+  kf_log "knotflow-report not installed: report skipped (results in $outdir)"
+fi
