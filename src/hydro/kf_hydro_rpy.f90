@@ -5,10 +5,10 @@
 !>   r <  1: mu_ij = 1/3 [ (1 - 9r/16) I + (3r/16) r_hat r_hat ]
 !>   r >= 1: C_ij:E = -1/(12 r^4) E r_hat - 5/(16 r^2) (1 - 2/(3r^2)) (r_hat.E.r_hat) r_hat
 !>   r <  1: C_ij:E = (5r^2/12 - r/2) E r_hat - (5r^2/48) (r_hat.E.r_hat) r_hat
-!> prepare() only copies the positions (structure of arrays); apply_mobility and
-!> add_strain_disturbance are single pair loops over i < j that use the symmetry of the pair
-!> (mu_ji = mu_ij, C_ji:E = -C_ij:E) and allocate nothing. This is faster than assembling the
-!> 3N x 3N matrix and applying it with DSYMV (measured with knotflow-bench, see the README).
+!> prepare() tabulates per pair i < j the separation and the scalar coefficients (one sqrt
+!> per pair, branch-free, vectorised); apply_mobility and add_strain_disturbance are then
+!> single pair loops that use the symmetry of the pair (mu_ji = mu_ij, C_ji:E = -C_ij:E) and
+!> allocate nothing (work arrays are allocated when N changes).
 module kf_hydro_rpy
   use kf_kinds, only: wp
   use kf_error, only: error_t
@@ -16,11 +16,14 @@ module kf_hydro_rpy
   implicit none
   private
 
-  public :: rpy_pair_coefficients, rpy_strain_coefficients
+  public :: rpy_pair_coefficients
 
   !> RPY model; holds the bead positions of the last prepare.
   type, extends(hydro_model_t), public :: rpy_model_t
-    real(wp), allocatable :: x(:), y(:), z(:)
+    real(wp), allocatable :: x(:), y(:), z(:)                 !< positions (structure of arrays)
+    real(wp), allocatable :: dx(:), dy(:), dz(:)              !< pair separations r_i - r_j, i < j
+    real(wp), allocatable :: a(:), bb(:), c1(:), c2(:)        !< pair coefficients (see prepare)
+    real(wp), allocatable :: ux(:), uy(:), uz(:), fx(:), fy(:), fz(:)   !< work
   contains
     procedure :: prepare => rpy_prepare
     procedure :: apply_mobility => rpy_apply
@@ -50,104 +53,141 @@ contains
     end if
   end subroutine rpy_pair_coefficients
 
-  !> For a separation vector d with |d|^2 = r2 > 0: C_ij:E = c1 E d + c2 (d.E.d) d.
-  elemental subroutine rpy_strain_coefficients(r2, c1, c2)
-    real(wp), intent(in) :: r2
-    real(wp), intent(out) :: c1, c2
-    real(wp) :: rinv, rinv2, rinv5, r
-    rinv = 1.0_wp/sqrt(r2)
-    rinv2 = rinv*rinv
-    if (r2 >= 1.0_wp) then
-      rinv5 = rinv2*rinv2*rinv
-      c1 = -rinv5/12.0_wp
-      c2 = -(5.0_wp/16.0_wp)*rinv5*(1.0_wp - (2.0_wp/3.0_wp)*rinv2)
-    else
-      r = r2*rinv
-      c1 = (5.0_wp/12.0_wp)*r - 0.5_wp
-      c2 = -(5.0_wp/48.0_wp)*rinv
-    end if
-  end subroutine rpy_strain_coefficients
-
+  !> Copy the positions and tabulate, for every pair i < j (packed index), the separation
+  !> d = r_i - r_j and the coefficients mu_ij = a I + bb d d^T, C_ij:E = c1 E d + c2 (d.E.d) d.
+  !> The loops are branch-free so that they vectorise; coincident beads (r = 0) get the limits
+  !> mu_ij = I/3 and C_ij:E = 0.
   subroutine rpy_prepare(this, r, error)
     class(rpy_model_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
     integer :: n
     n = size(r, 2)
-    if (.not. allocated(this%x)) then
-      allocate (this%x(n), this%y(n), this%z(n))
-    else if (size(this%x) /= n) then
-      deallocate (this%x, this%y, this%z)
-      allocate (this%x(n), this%y(n), this%z(n))
-    end if
-    this%n = n
+    if (n /= this%n .or. .not. allocated(this%x)) call allocate_work(this, n)
     this%x = r(1, :)
     this%y = r(2, :)
     this%z = r(3, :)
+    call tabulate_pairs(n, this%x, this%y, this%z, this%dx, this%dy, this%dz, this%a, this%bb, &
+                        this%c1, this%c2)
   end subroutine rpy_prepare
 
-  !> u = mu f. Coincident beads (r = 0) take the limit mu_ij = I/3.
+  !> The pair table of rpy_prepare (explicit-shape arrays: no aliasing, the j loop vectorises).
+  pure subroutine tabulate_pairs(n, x, y, z, dx, dy, dz, a, bb, c1, c2)
+    integer, intent(in) :: n
+    real(wp), intent(in) :: x(n), y(n), z(n)
+    real(wp), intent(out) :: dx(n*(n-1)/2), dy(n*(n-1)/2), dz(n*(n-1)/2), a(n*(n-1)/2), bb(n*(n-1)/2), c1(n*(n-1)/2), c2(n*(n-1)/2)
+    integer :: i, j, off
+    real(wp) :: xi, yi, zi, r2, r2s, rinv, rf, rf2, rf5, wf, wn
+    do i = 1, n - 1
+      off = pair_offset(i, n)
+      xi = x(i)
+      yi = y(i)
+      zi = z(i)
+      do j = i + 1, n
+        dx(off + j) = xi - x(j)
+        dy(off + j) = yi - y(j)
+        dz(off + j) = zi - z(j)
+        r2 = dx(off + j)**2 + dy(off + j)**2 + dz(off + j)**2
+        ! Branch-free blend: wf = 1 for r >= 1, 0 otherwise; both forms are finite everywhere.
+        wf = 0.5_wp + sign(0.5_wp, r2 - 1.0_wp)
+        wn = 1.0_wp - wf
+        r2s = r2 + 1.0e-200_wp
+        rinv = 1.0_wp/sqrt(r2s)
+        rf = wf*rinv + wn                ! 1/r where r >= 1, 1 elsewhere
+        rf2 = rf*rf
+        rf5 = rf2*rf2*rf
+        a(off + j) = wf*(0.125_wp*rf*(1.0_wp + rf2*(1.0_wp/6.0_wp))) &
+                     + wn*(third*(1.0_wp - 0.5625_wp*r2s*rinv))
+        bb(off + j) = wf*(0.125_wp*rf*rf2*(1.0_wp - 0.5_wp*rf2)) + wn*(0.0625_wp*rinv)
+        c1(off + j) = wf*(-rf5*(1.0_wp/12.0_wp)) + wn*((5.0_wp/12.0_wp)*r2s*rinv - 0.5_wp)
+        c2(off + j) = wf*(-(5.0_wp/16.0_wp)*rf5*(1.0_wp - (2.0_wp/3.0_wp)*rf2)) &
+                      + wn*(-(5.0_wp/48.0_wp)*rinv)
+      end do
+    end do
+  end subroutine tabulate_pairs
+
+  !> Packed index of pair (i, j), i < j, is pair_offset(i, n) + j.
+  pure integer function pair_offset(i, n)
+    integer, intent(in) :: i, n
+    pair_offset = (i - 1)*n - (i*(i - 1))/2 - i
+  end function pair_offset
+
+  subroutine allocate_work(this, n)
+    class(rpy_model_t), intent(inout) :: this
+    integer, intent(in) :: n
+    integer :: np
+    if (allocated(this%x)) deallocate (this%x, this%y, this%z, this%ux, this%uy, this%uz, &
+                                       this%fx, this%fy, this%fz, this%dx, this%dy, this%dz, &
+                                       this%a, this%bb, this%c1, this%c2)
+    np = max(1, (n*(n - 1))/2)
+    allocate (this%x(n), this%y(n), this%z(n), this%ux(n), this%uy(n), this%uz(n), &
+              this%fx(n), this%fy(n), this%fz(n))
+    allocate (this%dx(np), this%dy(np), this%dz(np), this%a(np), this%bb(np), this%c1(np), this%c2(np))
+    this%n = n
+  end subroutine allocate_work
+
+  !> u = mu f.
   subroutine rpy_apply(this, f, u)
     class(rpy_model_t), intent(inout) :: this
     real(wp), intent(in) :: f(:, :)
     real(wp), intent(out) :: u(:, :)
-    integer :: i, j, n
-    real(wp) :: xi, yi, zi, fxi, fyi, fzi, uxi, uyi, uzi, dx, dy, dz, r2, a, bb, rinv, rinv2, r
-    real(wp) :: df_j, df_i
+    integer :: n
     n = this%n
-    u = f*third
+    this%fx = f(1, :)
+    this%fy = f(2, :)
+    this%fz = f(3, :)
+    this%ux = third*this%fx
+    this%uy = third*this%fy
+    this%uz = third*this%fz
+    call mobility_pairs(n, this%dx, this%dy, this%dz, this%a, this%bb, this%fx, this%fy, this%fz, &
+                        this%ux, this%uy, this%uz)
+    u(1, :) = this%ux
+    u(2, :) = this%uy
+    u(3, :) = this%uz
+  end subroutine rpy_apply
+
+  !> Pair loop of rpy_apply: u += sum over pairs of mu_ij f_j and mu_ji f_i.
+  pure subroutine mobility_pairs(n, pdx, pdy, pdz, pa, pbb, fx, fy, fz, ux, uy, uz)
+    integer, intent(in) :: n
+    real(wp), intent(in) :: pdx(n*(n-1)/2), pdy(n*(n-1)/2), pdz(n*(n-1)/2), pa(n*(n-1)/2), pbb(n*(n-1)/2), fx(n), fy(n), fz(n)
+    real(wp), intent(inout) :: ux(n), uy(n), uz(n)
+    integer :: i, j, off
+    real(wp) :: fxi, fyi, fzi, uxi, uyi, uzi, df_j, df_i, a, dx, dy, dz
     do i = 1, n - 1
-      xi = this%x(i)
-      yi = this%y(i)
-      zi = this%z(i)
-      fxi = f(1, i)
-      fyi = f(2, i)
-      fzi = f(3, i)
+      off = pair_offset(i, n)
+      fxi = fx(i)
+      fyi = fy(i)
+      fzi = fz(i)
       uxi = 0.0_wp
       uyi = 0.0_wp
       uzi = 0.0_wp
+      !$omp simd reduction(+:uxi, uyi, uzi)
       do j = i + 1, n
-        dx = xi - this%x(j)
-        dy = yi - this%y(j)
-        dz = zi - this%z(j)
-        r2 = dx*dx + dy*dy + dz*dz
-        if (r2 >= 1.0_wp) then
-          rinv = 1.0_wp/sqrt(r2)
-          rinv2 = rinv*rinv
-          a = 0.125_wp*rinv*(1.0_wp + rinv2*(1.0_wp/6.0_wp))
-          bb = 0.125_wp*rinv*rinv2*(1.0_wp - 0.5_wp*rinv2)
-        else if (r2 > 0.0_wp) then
-          rinv = 1.0_wp/sqrt(r2)
-          r = r2*rinv
-          a = third*(1.0_wp - 0.5625_wp*r)
-          bb = 0.0625_wp*rinv
-        else
-          a = third
-          bb = 0.0_wp
-        end if
-        df_j = bb*(dx*f(1, j) + dy*f(2, j) + dz*f(3, j))
-        df_i = bb*(dx*fxi + dy*fyi + dz*fzi)
-        uxi = uxi + a*f(1, j) + df_j*dx
-        uyi = uyi + a*f(2, j) + df_j*dy
-        uzi = uzi + a*f(3, j) + df_j*dz
-        u(1, j) = u(1, j) + a*fxi + df_i*dx
-        u(2, j) = u(2, j) + a*fyi + df_i*dy
-        u(3, j) = u(3, j) + a*fzi + df_i*dz
+        dx = pdx(off + j)
+        dy = pdy(off + j)
+        dz = pdz(off + j)
+        a = pa(off + j)
+        df_j = pbb(off + j)*(dx*fx(j) + dy*fy(j) + dz*fz(j))
+        df_i = pbb(off + j)*(dx*fxi + dy*fyi + dz*fzi)
+        uxi = uxi + a*fx(j) + df_j*dx
+        uyi = uyi + a*fy(j) + df_j*dy
+        uzi = uzi + a*fz(j) + df_j*dz
+        ux(j) = ux(j) + a*fxi + df_i*dx
+        uy(j) = uy(j) + a*fyi + df_i*dy
+        uz(j) = uz(j) + a*fzi + df_i*dz
       end do
-      u(1, i) = u(1, i) + uxi
-      u(2, i) = u(2, i) + uyi
-      u(3, i) = u(3, i) + uzi
+      ux(i) = ux(i) + uxi
+      uy(i) = uy(i) + uyi
+      uz(i) = uz(i) + uzi
     end do
-  end subroutine rpy_apply
+  end subroutine mobility_pairs
 
-  !> u = u + C:E (coincident beads add nothing).
+  !> u = u + C:E.
   subroutine rpy_disturb(this, e, u)
     class(rpy_model_t), intent(inout) :: this
     real(wp), intent(in) :: e(3, 3)
     real(wp), intent(inout) :: u(:, :)
-    integer :: i, j, n
-    real(wp) :: xi, yi, zi, dx, dy, dz, r2, c1, c2, rinv, rinv2, rinv5, r
-    real(wp) :: ed(3), ded, w(3), uxi, uyi, uzi
+    integer :: n
     real(wp) :: e11, e12, e13, e22, e23, e33
     n = this%n
     e11 = e(1, 1)
@@ -156,52 +196,61 @@ contains
     e22 = e(2, 2)
     e23 = 0.5_wp*(e(2, 3) + e(3, 2))
     e33 = e(3, 3)
+    this%ux = 0.0_wp
+    this%uy = 0.0_wp
+    this%uz = 0.0_wp
+    call strain_pairs(n, this%dx, this%dy, this%dz, this%c1, this%c2, [e11, e12, e13, e22, e23, e33], &
+                      this%ux, this%uy, this%uz)
+    u(1, :) = u(1, :) + this%ux
+    u(2, :) = u(2, :) + this%uy
+    u(3, :) = u(3, :) + this%uz
+  end subroutine rpy_disturb
+
+  !> Pair loop of rpy_disturb; es = (E11, E12, E13, E22, E23, E33).
+  pure subroutine strain_pairs(n, pdx, pdy, pdz, pc1, pc2, es, ux, uy, uz)
+    integer, intent(in) :: n
+    real(wp), intent(in) :: pdx(n*(n-1)/2), pdy(n*(n-1)/2), pdz(n*(n-1)/2), pc1(n*(n-1)/2), pc2(n*(n-1)/2), es(6)
+    real(wp), intent(inout) :: ux(n), uy(n), uz(n)
+    integer :: i, j, off
+    real(wp) :: dx, dy, dz, edx, edy, edz, ded, c1, c2, wx, wy, wz, uxi, uyi, uzi
+    real(wp) :: e11, e12, e13, e22, e23, e33
+    e11 = es(1)
+    e12 = es(2)
+    e13 = es(3)
+    e22 = es(4)
+    e23 = es(5)
+    e33 = es(6)
     do i = 1, n - 1
-      xi = this%x(i)
-      yi = this%y(i)
-      zi = this%z(i)
+      off = pair_offset(i, n)
       uxi = 0.0_wp
       uyi = 0.0_wp
       uzi = 0.0_wp
+      !$omp simd reduction(+:uxi, uyi, uzi)
       do j = i + 1, n
-        dx = xi - this%x(j)
-        dy = yi - this%y(j)
-        dz = zi - this%z(j)
-        r2 = dx*dx + dy*dy + dz*dz
-        if (r2 >= 1.0_wp) then
-          rinv = 1.0_wp/sqrt(r2)
-          rinv2 = rinv*rinv
-          rinv5 = rinv2*rinv2*rinv
-          c1 = -rinv5*(1.0_wp/12.0_wp)
-          c2 = -(5.0_wp/16.0_wp)*rinv5*(1.0_wp - (2.0_wp/3.0_wp)*rinv2)
-        else if (r2 > 0.0_wp) then
-          rinv = 1.0_wp/sqrt(r2)
-          r = r2*rinv
-          c1 = (5.0_wp/12.0_wp)*r - 0.5_wp
-          c2 = -(5.0_wp/48.0_wp)*rinv
-        else
-          c1 = 0.0_wp
-          c2 = 0.0_wp
-        end if
-        ed(1) = e11*dx + e12*dy + e13*dz
-        ed(2) = e12*dx + e22*dy + e23*dz
-        ed(3) = e13*dx + e23*dy + e33*dz
-        ded = dx*ed(1) + dy*ed(2) + dz*ed(3)
-        w(1) = c1*ed(1) + c2*ded*dx
-        w(2) = c1*ed(2) + c2*ded*dy
-        w(3) = c1*ed(3) + c2*ded*dz
-        uxi = uxi + w(1)
-        uyi = uyi + w(2)
-        uzi = uzi + w(3)
-        u(1, j) = u(1, j) - w(1)
-        u(2, j) = u(2, j) - w(2)
-        u(3, j) = u(3, j) - w(3)
+        dx = pdx(off + j)
+        dy = pdy(off + j)
+        dz = pdz(off + j)
+        c1 = pc1(off + j)
+        c2 = pc2(off + j)
+        edx = e11*dx + e12*dy + e13*dz
+        edy = e12*dx + e22*dy + e23*dz
+        edz = e13*dx + e23*dy + e33*dz
+        ded = c2*(dx*edx + dy*edy + dz*edz)
+        wx = c1*edx + ded*dx
+        wy = c1*edy + ded*dy
+        wz = c1*edz + ded*dz
+        uxi = uxi + wx
+        uyi = uyi + wy
+        uzi = uzi + wz
+        ux(j) = ux(j) - wx
+        uy(j) = uy(j) - wy
+        uz(j) = uz(j) - wz
       end do
-      u(1, i) = u(1, i) + uxi
-      u(2, i) = u(2, i) + uyi
-      u(3, i) = u(3, i) + uzi
+      ux(i) = ux(i) + uxi
+      uy(i) = uy(i) + uyi
+      uz(i) = uz(i) + uzi
     end do
-  end subroutine rpy_disturb
+  end subroutine strain_pairs
 
   function rpy_name(this) result(label)
     class(rpy_model_t), intent(in) :: this

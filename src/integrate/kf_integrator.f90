@@ -8,6 +8,7 @@
 !>    step size from oscillating and the rejections few.
 !>  - `rk4`: classic fixed-step fourth-order Runge-Kutta with step dt_initial.
 module kf_integrator
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use kf_kinds, only: wp, i8
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: integrator_params_t
@@ -154,7 +155,7 @@ contains
 
   pure logical function all_finite(a)
     real(wp), intent(in) :: a(:, :)
-    all_finite = all(abs(a) <= huge(1.0_wp))
+    all_finite = all(ieee_is_finite(a))   ! no comparisons: quiet with FPE traps on
   end function all_finite
 
   subroutine nonfinite_error(error, t)
@@ -238,10 +239,10 @@ contains
     type(error_t), allocatable, intent(out) :: error
     real(wp) :: h, err, fac, dt_proposed
     integer :: i, n_bad
-    logical :: last
+    logical :: last, finite
     character(len=24) :: b1, b2
 
-    ! FSAL: k1 is reusable if y and t are those of the last accepted step.
+    ! FSAL: k1 is reusable if y and t are those it was evaluated at (the caller may change y).
     if (this%fsal_valid) then
       if (t /= this%t_fsal .or. any(y /= this%y_fsal)) this%fsal_valid = .false.
     end if
@@ -260,6 +261,8 @@ contains
           return
         end if
         this%fsal_valid = .true.
+        this%t_fsal = t
+        this%y_fsal = y
       end if
       dt_proposed = min(this%dt, this%dt_max)
       h = dt_proposed
@@ -288,12 +291,16 @@ contains
 
       ! Error estimate (into ytmp): largest Euclidean norm over beads, relative to tolerance.
       this%ytmp = h*(e1*this%k1 + e3*this%k3 + e4*this%k4 + e5*this%k5 + e6*this%k6 + e7*this%k7)
+      finite = all_finite(this%ytmp) .and. all_finite(this%ynew) .and. all_finite(this%k7)
       err = 0.0_wp
-      do i = 1, size(y, 2)
-        err = max(err, norm2(this%ytmp(:, i)))
-      end do
-      err = err/this%tolerance
-      if (.not. (err <= huge(1.0_wp) .and. all_finite(this%k7))) then
+      if (finite) then
+        do i = 1, size(y, 2)
+          err = max(err, norm2(this%ytmp(:, i)))
+        end do
+        err = err/this%tolerance
+        finite = ieee_is_finite(err)
+      end if
+      if (.not. finite) then
         ! Non-finite trial step: shrink hard; give up after repeated failures.
         n_bad = n_bad + 1
         this%rejected = this%rejected + 1
@@ -312,6 +319,8 @@ contains
         end if
         call record_step(this, h)
         this%k1 = this%k7
+        this%t_fsal = t
+        this%y_fsal = y
         fac = this%safety*max(err, 1.0e-10_wp)**(-this%alpha)*this%err_prev**this%beta
         fac = min(this%fac_max, max(this%fac_min, fac))
         this%err_prev = max(err, 1.0e-4_wp)
@@ -339,8 +348,6 @@ contains
         return
       end if
     end do
-    this%t_fsal = t
-    this%y_fsal = y
   end subroutine step_dopri
 
 end module kf_integrator
