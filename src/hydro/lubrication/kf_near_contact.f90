@@ -4,13 +4,14 @@
 !> Near contact (xi = gap/radius = 2 (r/d - 1)), MULTIPOLE.md 13.1:
 !>   f = g1/xi + g2 ln(1/xi) + A + g3 xi ln(1/xi) + c1 xi + c2 xi^2 ln(1/xi) + c3 xi^2,
 !> g1..g3 exact (Jeffrey-Onishi 1984, Jeffrey 1992, Townsend 2023 at lambda = 1), A and c1..c3
-!> fitted to converged multipole values (MULTIPOLE.md table 13.1; X^C constants 7 zeta(3)/8 and
-!> -zeta(3)/8 in closed form). Exact functions: this form for xi <= xi_lo, the multipole with
+!> fitted to converged multipole values: near_coeff holds MULTIPOLE.md table 13.1 (X^C constants
+!> 7 zeta(3)/8 and -zeta(3)/8 in closed form); the forms use the generator's re-fit by default. Exact functions: this form for xi <= xi_lo, the multipole with
 !> L = max(24, ceil(20/sqrt(xi))) for xi >= xi_hi, and a C2 blend in between (no jump).
 module kf_near_contact
   use kf_kinds, only: wp
   use kf_error, only: error_t
   use kf_two_sphere, only: n_functions, two_sphere_resistance
+  use kf_lubrication_data, only: lub_near_fit
   implicit none
   private
 
@@ -60,14 +61,22 @@ contains
     smoothstep = v*v*v*(10.0_wp - 15.0_wp*v + 6.0_wp*v*v)
   end function smoothstep
 
-  !> The 7-term near-contact form of all 22 functions at gap xi > 0.
-  pure subroutine near_contact_form(xi, f)
+  !> The 7-term near-contact form of all 22 functions at gap xi > 0, with the constants A, c1..c3
+  !> re-fitted by knotflow-lubgen (kf_lubrication_data%lub_near_fit; they agree with MULTIPOLE.md
+  !> table 13.1 to 5e-6) or, when present, `fitted` (rows A, c1, c2, c3).
+  pure subroutine near_contact_form(xi, f, fitted)
     real(wp), intent(in) :: xi
     real(wp), intent(out) :: f(n_functions)
-    real(wp) :: lg
+    real(wp), intent(in), optional :: fitted(4, n_functions)
+    real(wp) :: lg, c(4, n_functions)
+    if (present(fitted)) then
+      c = fitted
+    else
+      c = lub_near_fit
+    end if
     lg = log(1.0_wp/xi)
-    f = near_coeff(1, :)/xi + near_coeff(2, :)*lg + near_coeff(4, :) + near_coeff(3, :)*xi*lg &
-        + near_coeff(5, :)*xi + near_coeff(6, :)*xi*xi*lg + near_coeff(7, :)*xi*xi
+    f = near_coeff(1, :)/xi + near_coeff(2, :)*lg + near_coeff(3, :)*xi*lg &
+        + c(1, :) + c(2, :)*xi + c(3, :)*xi*xi*lg + c(4, :)*xi*xi
   end subroutine near_contact_form
 
   !> Singular part g1/xi + g2 ln(1/xi) + g3 xi ln(1/xi) (the terms subtracted before tabulating).
@@ -105,15 +114,17 @@ contains
   end function exact_order
 
   !> Converged ("exact") two-sphere resistance functions at centre distance r (units of d, r > 1).
-  subroutine exact_resistance(r, f, error)
+  !> `fitted` as in near_contact_form.
+  subroutine exact_resistance(r, f, error, fitted)
     real(wp), intent(in) :: r
     real(wp), intent(out) :: f(n_functions)
     type(error_t), allocatable, intent(out) :: error
+    real(wp), intent(in), optional :: fitted(4, n_functions)
     real(wp) :: xi, w, fn(n_functions), fm(n_functions), rr
     xi = 2.0_wp*(r - 1.0_wp)
     f = 0.0_wp
     if (xi <= xi_join_lo) then
-      call near_contact_form(max(xi, tiny(1.0_wp)), f)
+      call near_contact_form(max(xi, tiny(1.0_wp)), f, fitted)
       return
     end if
     rr = r
@@ -121,7 +132,7 @@ contains
     call two_sphere_resistance(rr, exact_order(xi), fm, error)
     if (allocated(error)) return
     if (w < 1.0_wp) then
-      call near_contact_form(xi, fn)
+      call near_contact_form(xi, fn, fitted)
       f = w*fm + (1.0_wp - w)*fn
     else
       f = fm

@@ -9,11 +9,16 @@
 !> f_exact: kf_near_contact%exact_resistance (multipole at L ~ 20/sqrt(xi) joined to the
 !> near-contact forms); f_L: kf_two_sphere at order L; w: kf_near_contact%singular_weight.
 !> At u = 0 the remainder is the contact limit A_f - f_L(r = 1).
+!> Before tabulating, the constants A, c1..c3 of the near-contact forms are re-fitted (least
+!> squares, exact g1..g3 fixed) to converged multipole values at n_fit gaps xi in [0.0025, 0.02]
+!> (L = ceil(25/sqrt(xi)) <= 500); the fit, its residual and the change from MULTIPOLE.md's
+!> constants are printed, and the fitted constants are used for xi < 0.02.
 program knotflow_lubgen
   use kf_kinds, only: wp, i8
   use kf_error, only: error_t
   use kf_two_sphere, only: n_functions, two_sphere_resistance, function_names, has_strain
-  use kf_near_contact, only: exact_resistance, singular_part, singular_weight, near_coeff
+  use kf_near_contact, only: exact_resistance, singular_part, singular_weight, near_coeff, &
+    near_contact_form
   implicit none
 
   integer, parameter :: max_order = 6
@@ -31,6 +36,10 @@ program knotflow_lubgen
   integer :: ngrid(max_order)
   type(error_t), allocatable :: error
   character(len=40) :: buf
+  integer, parameter :: n_fit = 10
+  real(wp), parameter :: xi_fit(n_fit) = [0.0025_wp, 0.003_wp, 0.004_wp, 0.005_wp, 0.006_wp, &
+    0.008_wp, 0.01_wp, 0.0125_wp, 0.015_wp, 0.02_wp]
+  real(wp) :: fitted(4, n_functions), fit_resid, fit_change
 
   path = 'kf_lubrication_data.f90'
   if (command_argument_count() >= 1) call get_command_argument(1, path)
@@ -43,9 +52,13 @@ program knotflow_lubgen
     write (*, '(a)') 'ERROR: cannot open '//trim(path)
     error stop 1
   end if
+  call system_clock(t0, rate)
+  call fit_near_contact()
+  call system_clock(t1)
+  write (*, '(a,es9.2,a,es9.2,a,f8.1,a)') 'near-contact fit: max residual ', fit_resid, &
+    ', max change of A/c1..c3 vs MULTIPOLE.md ', fit_change, ' (', real(t1 - t0, wp)/real(rate, wp), ' s)'
   call header()
 
-  call system_clock(t0, rate)
   do order = 1, max_order
     n = ngrid(order)
     uc = sqrt(2.0_wp*(cutoff(order) - 1.0_wp))
@@ -59,9 +72,9 @@ program knotflow_lubgen
       call two_sphere_resistance(r, order, fl, error)
       call check()
       if (i == 1) then
-        tab(i, :) = near_coeff(4, :) - fl
+        tab(i, :) = fitted(1, :) - fl
       else
-        call exact_resistance(r, fe, error)
+        call exact_resistance(r, fe, error, fitted)
         call check()
         call singular_part(xi, sing)
         w = singular_weight(xi)
@@ -96,6 +109,59 @@ program knotflow_lubgen
   write (*, '(a)') 'wrote '//trim(path)
 
 contains
+
+  !> Least-squares fit of A, c1, c2, c3 for all functions (columns scaled, modified Gram-Schmidt
+  !> applied twice); fills fitted, fit_resid (max abs residual) and fit_change.
+  subroutine fit_near_contact()
+    real(wp) :: a(n_fit, 4), y(n_fit, n_functions), q(n_fit, 4), rr(4, 4), scl(4), proj, sol(4)
+    real(wp) :: fm(n_functions), sing(n_functions), fn(n_functions)
+    integer :: p, kk, jj, pass
+    do p = 1, n_fit
+      call two_sphere_resistance(1.0_wp + 0.5_wp*xi_fit(p), ceiling(25.0_wp/sqrt(xi_fit(p))), fm, error)
+      call check()
+      call singular_part(xi_fit(p), sing)
+      y(p, :) = fm - sing
+      a(p, :) = [1.0_wp, xi_fit(p), xi_fit(p)**2*log(1.0_wp/xi_fit(p)), xi_fit(p)**2]
+    end do
+    do kk = 1, 4
+      scl(kk) = maxval(abs(a(:, kk)))
+      a(:, kk) = a(:, kk)/scl(kk)
+    end do
+    q = a
+    rr = 0.0_wp
+    do kk = 1, 4
+      do pass = 1, 2
+        do jj = 1, kk - 1
+          proj = dot_product(q(:, jj), q(:, kk))
+          rr(jj, kk) = rr(jj, kk) + proj
+          q(:, kk) = q(:, kk) - proj*q(:, jj)
+        end do
+      end do
+      rr(kk, kk) = norm2(q(:, kk))
+      q(:, kk) = q(:, kk)/rr(kk, kk)
+    end do
+    fit_resid = 0.0_wp
+    do jj = 1, n_functions
+      do kk = 1, 4
+        sol(kk) = dot_product(q(:, kk), y(:, jj))
+      end do
+      do kk = 4, 1, -1
+        sol(kk) = (sol(kk) - dot_product(rr(kk, kk + 1:4), sol(kk + 1:4)))/rr(kk, kk)
+      end do
+      fitted(:, jj) = sol/scl
+    end do
+    do p = 1, n_fit
+      call two_sphere_resistance(1.0_wp + 0.5_wp*xi_fit(p), ceiling(25.0_wp/sqrt(xi_fit(p))), fm, error)
+      call check()
+      call near_contact_form(xi_fit(p), fn, fitted)
+      fit_resid = max(fit_resid, maxval(abs(fn - fm)))
+    end do
+    fit_change = maxval(abs(fitted - near_coeff(4:7, :)))
+    do jj = 1, n_functions
+      write (*, '(a,4f12.7,a,es9.2)') function_names(jj)//' A, c1..c3 = ', fitted(:, jj), &
+        '   dA = ', fitted(1, jj) - near_coeff(4, jj)
+    end do
+  end subroutine fit_near_contact
 
   subroutine check()
     if (allocated(error)) then
@@ -132,6 +198,17 @@ contains
       if (l < max_order) write (unit, '(a)', advance='no') ', '
     end do
     write (unit, '(a)') ']'
+    write (unit, '(a)') '  !> Near-contact constants (A, c1, c2, c3) re-fitted by the generator and used for xi < 0.02.'
+    write (unit, '(a)') '  real(wp), parameter, public :: lub_near_fit(4, 22) = reshape([ &'
+    do l = 1, n_functions
+      write (unit, '(a,4(es24.16e3,a))', advance='no') '    ', fitted(1, l), '_wp, ', fitted(2, l), &
+        '_wp, ', fitted(3, l), '_wp, ', fitted(4, l), '_wp'
+      if (l < n_functions) then
+        write (unit, '(a)') ', &'
+      else
+        write (unit, '(a)') '], [4, 22])'
+      end if
+    end do
     write (unit, '(a)') '  !> Number of grid points per order.'
     write (unit, '(a)', advance='no') '  integer, parameter, public :: lub_n_grid(lub_max_order) = ['
     do l = 1, max_order
