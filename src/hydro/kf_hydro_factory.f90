@@ -6,6 +6,7 @@ module kf_hydro_factory
   use kf_hydro_model, only: hydro_model_t
   use kf_hydro_none, only: none_model_t
   use kf_hydro_rpy, only: rpy_model_t
+  use kf_hydro_multipole, only: multipole_model_t
   implicit none
   private
 
@@ -31,7 +32,16 @@ contains
     case ('rpy')
       allocate (rpy_model_t :: model)
     case ('multipole')
-      call fatal_error(error, "hydro: model = 'multipole' is not available in this build")
+      block
+        type(multipole_model_t), allocatable :: mp
+        real(wp) :: eps_lub
+        allocate (mp)
+        eps_lub = params%eps_lub
+        if (eps_lub < 0.0_wp) eps_lub = tolerance
+        call mp%init(params%order, params%lubrication, eps_lub, error)
+        if (allocated(error)) return
+        call move_alloc(mp, model)
+      end block
     case default
       call fatal_error(error, "hydro: model = '"//trim(params%model)// &
         "' is unknown (allowed: none, rpy, multipole)")

@@ -1,0 +1,264 @@
+!> knotflow: run a scene or a sweep of scenes over MPI ranks.
+!>   mpirun -n P knotflow SCENE.nml [--dry-run]
+!> Every rank computes; cases are handed out dynamically. Finished cases are skipped and
+!> interrupted ones resume from their checkpoint when the same command is run again.
+!> Exit status: 0 all cases finished, 2 bad input (nothing written), 3 some cases failed.
+program knotflow
+  use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
+  use kf_kinds, only: wp
+  use kf_error, only: error_t
+  use kf_build_info, only: knotflow_version, knotflow_git_hash
+  use kf_scene, only: scene_t
+  use kf_sweep, only: sweep_t, read_sweep
+  use kf_fs, only: make_directory, check_writable_directory
+  use kf_h5, only: h5_initialize, h5_finalize
+  use kf_case_runner, only: run_case, case_path, case_ok, case_failed, case_skipped
+  use kf_comm, only: comm_t, comm_init, comm_finalize
+  use kf_task_farm, only: run_task_farm, task_result_t, task_ok, task_failed, task_skipped
+  implicit none
+
+  type(comm_t) :: comm
+  type(error_t), allocatable :: error
+  type(sweep_t) :: sw
+  type(task_result_t), allocatable :: results(:)
+  character(len=:), allocatable :: scene_file, directory
+  logical :: dry_run
+  integer :: me, nfailed
+
+  call comm_init(comm, error)
+  if (allocated(error)) call die(error%message, 2)
+  me = comm%rank()
+  call parse_arguments(scene_file, dry_run)
+  call h5_initialize(error)
+  if (allocated(error)) call die(error%message, 2)
+
+  ! Every rank reads and validates the same input; errors stop before anything is written.
+  call read_sweep(scene_file, sw, error)
+  if (allocated(error)) call die(error%message, 2)
+  directory = trim(sw%base%output%directory)
+  if (me == 0) then
+    call make_directory(directory, error)
+    if (.not. allocated(error)) call check_writable_directory(directory, error)
+  end if
+  call agree(error)
+  if (allocated(error)) call die(trim(scene_file)//': &output: directory = '''//directory// &
+                                 ''': '//error%message, 2)
+
+  if (me == 0) then
+    write (output_unit, '(a)') 'knotflow '//knotflow_version//' ('//knotflow_git_hash//'): '// &
+      itoa(sw%n_cases())//' case(s) from '//trim(scene_file)//' on '//itoa(comm%size())// &
+      ' rank(s), output in '//directory
+    call list_cases()
+    flush (output_unit)
+  end if
+  if (dry_run) then
+    call h5_finalize()
+    call comm_finalize(error)
+    stop
+  end if
+
+  call run_task_farm(comm, sw%n_cases(), run_one, results, error, progress)
+  if (allocated(error)) call die(error%message, 1)
+  nfailed = count(results%status /= task_ok .and. results%status /= task_skipped)
+  if (me == 0) call write_summary()
+  call h5_finalize()
+  call comm_finalize(error)
+  if (nfailed > 0) error stop 3
+
+contains
+
+  !> One case of the sweep (called by the task farm).
+  subroutine run_one(itask, status, message)
+    integer, intent(in) :: itask
+    integer, intent(out) :: status
+    character(len=256), intent(out) :: message
+    type(scene_t) :: sc
+    character(len=:), allocatable :: name, msg
+    call sw%case_scene(itask, sc, name)
+    call report('case '//name//': started ('//case_path(sc)//')')
+    call run_case(sc, report, status, msg)
+    select case (status)
+    case (case_ok)
+      status = task_ok
+    case (case_skipped)
+      status = task_skipped
+    case default
+      status = task_failed
+    end select
+    message = msg
+  end subroutine run_one
+
+  subroutine report(line)
+    character(len=*), intent(in) :: line
+    write (output_unit, '(a)') '[rank '//itoa(me)//'] '//line
+    flush (output_unit)
+  end subroutine report
+
+  subroutine progress(done, ntasks, itask, status, message)
+    integer, intent(in) :: done, ntasks, itask, status
+    character(len=256), intent(in) :: message
+    type(scene_t) :: sc
+    character(len=:), allocatable :: name
+    call sw%case_scene(itask, sc, name)
+    call report(itoa(done)//' of '//itoa(ntasks)//' cases done; case '//name//' '// &
+                status_word(status)//': '//trim(message))
+  end subroutine progress
+
+  pure function status_word(status) result(word)
+    integer, intent(in) :: status
+    character(len=:), allocatable :: word
+    select case (status)
+    case (task_ok)
+      word = 'finished'
+    case (task_skipped)
+      word = 'skipped'
+    case (task_failed)
+      word = 'FAILED'
+    case default
+      word = 'not run'
+    end select
+  end function status_word
+
+  subroutine list_cases()
+    type(scene_t) :: sc
+    character(len=:), allocatable :: name
+    integer :: k
+    do k = 1, sw%n_cases()
+      call sw%case_scene(k, sc, name)
+      write (output_unit, '(a)') '  case '//itoa(k)//': '//name//'  (A = '//rtoa(sc%forces%bending_a)// &
+        ', shape '//trim(sc%chain%shape)//', orientation '//sc%chain%orientation//', hydro '// &
+        trim(sc%hydro%model)//', t_end = '//rtoa(sc%integrator%t_end)//')'
+    end do
+  end subroutine list_cases
+
+  !> summary.txt (one line per case) and summary.json in the output directory.
+  subroutine write_summary()
+    type(scene_t) :: sc
+    character(len=:), allocatable :: name
+    integer :: k, ut, uj, ios
+    open (newunit=ut, file=directory//'/summary.txt', status='replace', action='write', iostat=ios)
+    if (ios /= 0) then
+      write (error_unit, '(a)') 'knotflow: warning: cannot write '//directory//'/summary.txt'
+      return
+    end if
+    open (newunit=uj, file=directory//'/summary.json', status='replace', action='write', iostat=ios)
+    write (ut, '(a)') '# case  bending_a  orientation  status  rank  file  message'
+    write (uj, '(a)') '{"scene": "'//json_escape(scene_file)//'", "cases": ['
+    do k = 1, size(results)
+      call sw%case_scene(k, sc, name)
+      write (ut, '(a)') name//'  '//rtoa(sc%forces%bending_a)//'  '//sc%chain%orientation//'  '// &
+        status_word(results(k)%status)//'  '//itoa(results(k)%rank)//'  '//case_path(sc)//'  '// &
+        trim(results(k)%message)
+      write (uj, '(a)') '  {"case": "'//name//'", "bending_a": '//rtoa(sc%forces%bending_a)// &
+        ', "orientation": "'//sc%chain%orientation//'", "status": "'//status_word(results(k)%status)// &
+        '", "rank": '//itoa(results(k)%rank)//', "file": "'//json_escape(case_path(sc))// &
+        '", "message": "'//json_escape(trim(results(k)%message))//'"}'//merge(',', ' ', k < size(results))
+    end do
+    write (uj, '(a)') ']}'
+    close (ut)
+    close (uj)
+    write (output_unit, '(a)') 'knotflow: '//itoa(count(results%status == task_ok))//' finished, '// &
+      itoa(count(results%status == task_skipped))//' skipped (already finished), '// &
+      itoa(nfailed)//' failed; summary in '//directory//'/summary.txt'
+    do k = 1, size(results)
+      if (results(k)%status == task_failed) then
+        call sw%case_scene(k, sc, name)
+        write (output_unit, '(a)') '  FAILED '//name//': '//trim(results(k)%message)
+      end if
+    end do
+  end subroutine write_summary
+
+  function json_escape(s) result(t)
+    character(len=*), intent(in) :: s
+    character(len=:), allocatable :: t
+    integer :: k
+    t = ''
+    do k = 1, len(s)
+      select case (s(k:k))
+      case ('"', '\')
+        t = t//'\'//s(k:k)
+      case default
+        if (iachar(s(k:k)) >= 32) t = t//s(k:k)
+      end select
+    end do
+  end function json_escape
+
+  !> Make an error on rank 0 known to every rank.
+  subroutine agree(err)
+    type(error_t), allocatable, intent(inout) :: err
+    character(len=:), allocatable :: msg
+    type(error_t), allocatable :: comm_error
+    msg = ''
+    if (allocated(err)) msg = err%message
+    call comm%bcast(msg, comm_error)
+    if (len(msg) > 0 .and. .not. allocated(err)) then
+      allocate (err)
+      err%message = msg
+    end if
+  end subroutine agree
+
+  subroutine parse_arguments(path, dry)
+    character(len=:), allocatable, intent(out) :: path
+    logical, intent(out) :: dry
+    integer :: k, n, length
+    character(len=:), allocatable :: arg
+    dry = .false.
+    path = ''
+    n = command_argument_count()
+    do k = 1, n
+      call get_command_argument(k, length=length)
+      allocate (character(len=length) :: arg)
+      call get_command_argument(k, arg)
+      select case (arg)
+      case ('-h', '--help')
+        if (me == 0) write (output_unit, '(a)') 'usage: mpirun -n P knotflow SCENE.nml [--dry-run]'// &
+          new_line('a')//'  Runs every case of the scene''s &sweep (or the single scene).'// &
+          new_line('a')//'  --dry-run  validate the input and list the cases without running them'// &
+          new_line('a')//'  --version  print the version'
+        call comm_finalize(error)
+        stop
+      case ('--version')
+        if (me == 0) write (output_unit, '(a)') 'knotflow '//knotflow_version//' ('//knotflow_git_hash//')'
+        call comm_finalize(error)
+        stop
+      case ('--dry-run')
+        dry = .true.
+      case default
+        if (arg(1:1) == '-') call die('unknown option '''//arg//''' (allowed: --dry-run, --help, --version)', 2)
+        if (len(path) > 0) call die('more than one scene file given ('''//path//''' and '''//arg//''')', 2)
+        path = arg
+      end select
+      deallocate (arg)
+    end do
+    if (len(path) == 0) call die('no scene file given (usage: knotflow SCENE.nml [--dry-run])', 2)
+  end subroutine parse_arguments
+
+  !> One error line on stderr (from rank 0), then a non-zero exit on every rank.
+  subroutine die(message, code)
+    character(len=*), intent(in) :: message
+    integer, intent(in) :: code
+    type(error_t), allocatable :: ignored
+    if (me == 0) write (error_unit, '(a)') 'knotflow: error: '//message
+    flush (error_unit)
+    call comm_finalize(ignored)
+    if (code == 2) error stop 2
+    error stop 1
+  end subroutine die
+
+  function itoa(i) result(s)
+    integer, intent(in) :: i
+    character(len=:), allocatable :: s
+    character(len=24) :: buf
+    write (buf, '(i0)') i
+    s = trim(buf)
+  end function itoa
+
+  function rtoa(x) result(s)
+    real(wp), intent(in) :: x
+    character(len=:), allocatable :: s
+    character(len=32) :: buf
+    write (buf, '(g0.6)') x
+    s = trim(adjustl(buf))
+  end function rtoa
+
+end program knotflow
