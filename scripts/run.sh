@@ -53,6 +53,16 @@ case "$outdir" in
   /*) ;;
   *) outdir="$KF_ROOT/$outdir" ;;
 esac
+# The Fortran analysis tool fills /analysis in every case file (knots, events, modes, spectra,
+# the knot matrix of the last frame); it resumes, so re-running is cheap.
+analyze="$KF_ROOT/build/src/app/knotflow-analyze"
+shopt -s nullglob
+cases=("$outdir"/*.h5)
+if [ -x "$analyze" ] && [ "${#cases[@]}" -gt 0 ]; then
+  kf_log "knotflow-analyze on ${#cases[@]} case file(s)"
+  mpirun -n "$np" "${KF_MPIRUN_FLAGS[@]}" "$analyze" "${cases[@]}" --stride 10 --matrix-frames last
+fi
+
 if command -v knotflow-report >/dev/null 2>&1; then
   kf_log "knotflow-report $outdir"
   knotflow-report "$outdir"
