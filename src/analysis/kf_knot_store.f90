@@ -5,6 +5,7 @@
 module kf_knot_store
   use hdf5, only: hid_t, h5fopen_f, h5fclose_f, h5lexists_f, h5ldelete_f, H5F_ACC_RDWR_F
   use kf_kinds, only: wp, i4, i8
+  use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_h5, only: h5_file_t, h5_open_file, h5_close_file, h5_create_group, h5_exists, &
     h5_attr_exists, h5_write_attr, h5_read_attr, h5_write, h5_read
@@ -74,7 +75,7 @@ contains
     real(wp), allocatable :: kt(:, :)
     character(len=:), allocatable :: name
     found = .false.
-    name = '/analysis/knot_matrix/frame_'//itoa(frame)
+    name = '/analysis/knot_matrix/frame_'//to_str(frame)
     call h5_open_file(file, path, .false., error)
     if (allocated(error)) return
     if (h5_exists(file, name)) then
@@ -189,7 +190,7 @@ contains
         if (allocated(error)) goto 100
       end if
       do k = 1, size(mats)
-        name = '/analysis/knot_matrix/frame_'//itoa(mats(k)%frame)
+        name = '/analysis/knot_matrix/frame_'//to_str(mats(k)%frame)
         call h5_write(file, name, transpose(mats(k)%k), error)
         if (allocated(error)) goto 100
         call h5_write_attr(file, name, 'closures', int(mat_closures, i8), error)
@@ -223,13 +224,5 @@ contains
     end subroutine write_all
 
   end subroutine write_analysis
-
-  function itoa(v) result(s)
-    integer(i8), intent(in) :: v
-    character(len=:), allocatable :: s
-    character(len=24) :: buf
-    write (buf, '(i0)') v
-    s = trim(buf)
-  end function itoa
 
 end module kf_knot_store

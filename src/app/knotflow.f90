@@ -6,6 +6,7 @@
 program knotflow
   use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
   use kf_kinds, only: wp
+  use kf_strings, only: to_str
   use kf_error, only: error_t
   use kf_build_info, only: knotflow_version, knotflow_git_hash
   use kf_scene, only: scene_t
@@ -46,7 +47,7 @@ program knotflow
 
   if (me == 0) then
     write (output_unit, '(a)') 'knotflow '//knotflow_version//' ('//knotflow_git_hash//'): '// &
-      itoa(sw%n_cases())//' case(s) from '//trim(scene_file)//' on '//itoa(comm%size())// &
+      to_str(sw%n_cases())//' case(s) from '//trim(scene_file)//' on '//to_str(comm%size())// &
       ' rank(s), output in '//directory
     call list_cases()
     flush (output_unit)
@@ -90,7 +91,7 @@ contains
 
   subroutine report(line)
     character(len=*), intent(in) :: line
-    write (output_unit, '(a)') '[rank '//itoa(me)//'] '//line
+    write (output_unit, '(a)') '[rank '//to_str(me)//'] '//line
     flush (output_unit)
   end subroutine report
 
@@ -100,7 +101,7 @@ contains
     type(scene_t) :: sc
     character(len=:), allocatable :: name
     call sw%case_scene(itask, sc, name)
-    call report(itoa(done)//' of '//itoa(ntasks)//' cases done; case '//name//' '// &
+    call report(to_str(done)//' of '//to_str(ntasks)//' cases done; case '//name//' '// &
                 status_word(status)//': '//trim(message))
   end subroutine progress
 
@@ -125,9 +126,9 @@ contains
     integer :: k
     do k = 1, sw%n_cases()
       call sw%case_scene(k, sc, name)
-      write (output_unit, '(a)') '  case '//itoa(k)//': '//name//'  (A = '//rtoa(sc%forces%bending_a)// &
+      write (output_unit, '(a)') '  case '//to_str(k)//': '//name//'  (A = '//to_str(sc%forces%bending_a, '(g0.6)')// &
         ', shape '//trim(sc%chain%shape)//', orientation '//sc%chain%orientation//', hydro '// &
-        trim(sc%hydro%model)//', t_end = '//rtoa(sc%integrator%t_end)//')'
+        trim(sc%hydro%model)//', t_end = '//to_str(sc%integrator%t_end, '(g0.6)')//')'
     end do
   end subroutine list_cases
 
@@ -146,20 +147,20 @@ contains
     write (uj, '(a)') '{"scene": "'//json_escape(scene_file)//'", "cases": ['
     do k = 1, size(results)
       call sw%case_scene(k, sc, name)
-      write (ut, '(a)') name//'  '//rtoa(sc%forces%bending_a)//'  '//sc%chain%orientation//'  '// &
-        status_word(results(k)%status)//'  '//itoa(results(k)%rank)//'  '//case_path(sc)//'  '// &
+      write (ut, '(a)') name//'  '//to_str(sc%forces%bending_a, '(g0.6)')//'  '//sc%chain%orientation//'  '// &
+        status_word(results(k)%status)//'  '//to_str(results(k)%rank)//'  '//case_path(sc)//'  '// &
         trim(results(k)%message)
-      write (uj, '(a)') '  {"case": "'//name//'", "bending_a": '//rtoa(sc%forces%bending_a)// &
+      write (uj, '(a)') '  {"case": "'//name//'", "bending_a": '//to_str(sc%forces%bending_a, '(g0.6)')// &
         ', "orientation": "'//sc%chain%orientation//'", "status": "'//status_word(results(k)%status)// &
-        '", "rank": '//itoa(results(k)%rank)//', "file": "'//json_escape(case_path(sc))// &
+        '", "rank": '//to_str(results(k)%rank)//', "file": "'//json_escape(case_path(sc))// &
         '", "message": "'//json_escape(trim(results(k)%message))//'"}'//merge(',', ' ', k < size(results))
     end do
     write (uj, '(a)') ']}'
     close (ut)
     close (uj)
-    write (output_unit, '(a)') 'knotflow: '//itoa(count(results%status == task_ok))//' finished, '// &
-      itoa(count(results%status == task_skipped))//' skipped (already finished), '// &
-      itoa(nfailed)//' failed; summary in '//directory//'/summary.txt'
+    write (output_unit, '(a)') 'knotflow: '//to_str(count(results%status == task_ok))//' finished, '// &
+      to_str(count(results%status == task_skipped))//' skipped (already finished), '// &
+      to_str(nfailed)//' failed; summary in '//directory//'/summary.txt'
     do k = 1, size(results)
       if (results(k)%status == task_failed) then
         call sw%case_scene(k, sc, name)
@@ -244,21 +245,5 @@ contains
     if (code == 2) error stop 2
     error stop 1
   end subroutine die
-
-  function itoa(i) result(s)
-    integer, intent(in) :: i
-    character(len=:), allocatable :: s
-    character(len=24) :: buf
-    write (buf, '(i0)') i
-    s = trim(buf)
-  end function itoa
-
-  function rtoa(x) result(s)
-    real(wp), intent(in) :: x
-    character(len=:), allocatable :: s
-    character(len=32) :: buf
-    write (buf, '(g0.6)') x
-    s = trim(adjustl(buf))
-  end function rtoa
 
 end program knotflow

@@ -5,6 +5,7 @@ program knotflow_analyze
   use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
   use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
   use kf_kinds, only: wp, i8
+  use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_knot_invariants, only: n_knot_types, knot_type_names
   use kf_knot_closure, only: knot_stats_t, analyse_closures, default_closures, default_knot_seed
@@ -287,10 +288,10 @@ contains
     logical, intent(in) :: found, slip
       character(len=:), allocatable :: s
       integer :: k, i, j
-      s = '{"n_beads": '//itoa(int(n, i8))//', "closures": '//itoa(int(st%closures, i8))// &
-        ', "seed": '//itoa(st%seed)//', "kf": '//rtoa(st%kf)//', "spectrum": {'
+      s = '{"n_beads": '//to_str(int(n, i8))//', "closures": '//to_str(int(st%closures, i8))// &
+        ', "seed": '//to_str(st%seed)//', "kf": '//to_str(st%kf, '(es23.16e2)')//', "spectrum": {'
       do k = 1, n_knot_types
-        s = s//'"'//trim(knot_type_names(k))//'": '//rtoa(st%spectrum(k))
+        s = s//'"'//trim(knot_type_names(k))//'": '//to_str(st%spectrum(k), '(es23.16e2)')
         if (k < n_knot_types) s = s//', '
       end do
       s = s//'}, "dominant": "'//trim(knot_type_names(st%dominant))//'"'
@@ -310,7 +311,7 @@ contains
             if (ieee_is_nan(kmat(i, j))) then
               s = s//'null'
             else
-              s = s//rtoa(kmat(i, j))
+              s = s//to_str(kmat(i, j), '(es23.16e2)')
             end if
             if (j < n) s = s//', '
           end do
@@ -320,7 +321,7 @@ contains
         s = s//']'
       end if
       if (found) then
-        s = s//', "knot_core": ['//itoa(int(core(1), i8))//', '//itoa(int(core(2), i8))//']'
+        s = s//', "knot_core": ['//to_str(int(core(1), i8))//', '//to_str(int(core(2), i8))//']'
       else
         s = s//', "knot_core": null'
       end if
@@ -489,22 +490,6 @@ contains
       i = k + 2
     end do
   end subroutine matrix_frame_list
-
-  function itoa(v) result(s)
-    integer(i8), intent(in) :: v
-    character(len=:), allocatable :: s
-    character(len=24) :: buf
-    write (buf, '(i0)') v
-    s = trim(buf)
-  end function itoa
-
-  function rtoa(v) result(s)
-    real(wp), intent(in) :: v
-    character(len=:), allocatable :: s
-    character(len=32) :: buf
-    write (buf, '(es23.16e2)') v
-    s = trim(adjustl(buf))
-  end function rtoa
 
   real(wp) function ieee_nan()
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan

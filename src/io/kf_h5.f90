@@ -16,6 +16,7 @@ module kf_h5
     c_associated, c_int, c_null_char
   use, intrinsic :: iso_fortran_env, only: int32, int64
   use kf_kinds, only: wp, i4, i8
+  use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5close_f, h5eset_auto_f, &
     h5fcreate_f, h5fopen_f, h5fclose_f, h5fflush_f, H5F_ACC_TRUNC_F, H5F_ACC_RDWR_F, &
@@ -541,7 +542,7 @@ contains
     else
       call space_dims(sid, rank, dims, stat)
       if (stat < 0) call fatal_error(error, "HDF5: attribute '"//obj//'@'//name//"' in '"// &
-        file%name()//"' does not have rank "//itoa(rank))
+        file%name()//"' does not have rank "//to_str(rank))
       call h5sclose_f(sid, ignore)
     end if
     call h5aclose_f(aid, ignore)
@@ -577,7 +578,7 @@ contains
       else if (rank > 0) then
         if (size(fdims) /= rank) then
           call fatal_error(error, "HDF5: attribute '"//obj//'@'//name//"' in '"//file%name()// &
-            "' does not have rank "//itoa(rank))
+            "' does not have rank "//to_str(rank))
         else if (any(fdims /= dims)) then
           call fatal_error(error, "HDF5: attribute '"//obj//'@'//name//"' in '"//file%name()// &
             "' changed shape while reading")
@@ -983,7 +984,7 @@ contains
           file%name()//"' is not a scalar")
       else if (rank > 0 .and. size(dims) /= rank) then
         call fatal_error(error, "HDF5: dataset '"//name//"' in '"//file%name()// &
-          "' has rank "//itoa(size(dims))//", expected "//itoa(rank))
+          "' has rank "//to_str(size(dims))//", expected "//to_str(rank))
       end if
       call h5sclose_f(sid, ignore)
     end if
@@ -1320,14 +1321,6 @@ contains
     type(c_ptr) :: p
     p = c_null_ptr
   end function c_null
-
-  pure function itoa(i) result(s)
-    integer, intent(in) :: i
-    character(len=:), allocatable :: s
-    character(len=16) :: buf
-    write (buf, '(i0)') i
-    s = trim(buf)
-  end function itoa
 
   !> Delete the object (group with everything below it, or dataset) `name`; a missing
   !> object is not an error. The file space is not reclaimed (HDF5 limitation).

@@ -4,6 +4,7 @@
 module kf_case_runner
   use, intrinsic :: iso_fortran_env, only: int64
   use kf_kinds, only: wp, i8
+  use kf_strings, only: to_str, to_str_short
   use kf_error, only: error_t
   use kf_scene, only: scene_t
   use kf_scene_items, only: scene_item_t, scene_items, scene_text, item_string, item_integer, &
@@ -111,8 +112,8 @@ contains
       integ%dt = dt
       integ%steps = steps
       integ%rejected = rejected
-      call report('case '//name//': resuming at t = '//fmt(t)//' from its checkpoint ('// &
-                  itoa(nframes)//' frames)')
+      call report('case '//name//': resuming at t = '//to_str_short(t)//' from its checkpoint ('// &
+                  to_str(nframes)//' frames)')
     else
       call file%create(path, name, size(r, 2), scene_text(sc), rotation, error)
       if (.not. allocated(error)) call write_scene_attributes(file, sc, error)
@@ -140,7 +141,7 @@ contains
       if (t_next <= t) t_next = min(sc%integrator%t_end, t + sc%output%frame_interval)
       call integ%advance(dyn, t, r, t_next, error)
       if (allocated(error)) then
-        call fail(error%message//' at t = '//fmt(t))
+        call fail(error%message//' at t = '//to_str_short(t))
         return
       end if
       call compute_shape(r, obs, error)
@@ -167,8 +168,8 @@ contains
     end if
     status = case_ok
     call system_clock(clock_now)
-    message = 'finished: '//itoa(integ%steps)//' steps ('//itoa(integ%rejected)//' rejected), '// &
-              fmt(real(clock_now - clock0, wp)/rate)//' s'
+    message = 'finished: '//to_str(integ%steps)//' steps ('//to_str(integ%rejected)//' rejected), '// &
+              to_str_short(real(clock_now - clock0, wp)/rate)//' s'
 
   contains
 
@@ -186,9 +187,9 @@ contains
       real(wp) :: elapsed, eta
       elapsed = real(clock_now - clock0, wp)/rate
       eta = elapsed*(sc%integrator%t_end - t)/max(t - t_start, tiny(1.0_wp))
-      line = 'case '//name//': t = '//fmt(t)//' / '//fmt(sc%integrator%t_end)//', dt = '// &
-             fmt(integ%dt)//', steps = '//itoa(integ%steps)//' ('//itoa(integ%rejected)// &
-             ' rejected), elapsed '//fmt(elapsed)//' s, ETA '//fmt(eta)//' s'
+      line = 'case '//name//': t = '//to_str_short(t)//' / '//to_str_short(sc%integrator%t_end)//', dt = '// &
+             to_str_short(integ%dt)//', steps = '//to_str(integ%steps)//' ('//to_str(integ%rejected)// &
+             ' rejected), elapsed '//to_str_short(elapsed)//' s, ETA '//to_str_short(eta)//' s'
     end function progress_line
 
   end subroutine run_case
@@ -221,26 +222,5 @@ contains
       if (allocated(error)) return
     end do
   end subroutine write_scene_attributes
-
-  function fmt(x) result(s)
-    real(wp), intent(in) :: x
-    character(len=:), allocatable :: s
-    character(len=32) :: buf
-    if (abs(x) >= 1.0e-3_wp .and. abs(x) < 1.0e6_wp) then
-      write (buf, '(f0.3)') x
-      if (buf(1:1) == '.') buf = '0'//buf
-    else
-      write (buf, '(es10.3)') x
-    end if
-    s = trim(adjustl(buf))
-  end function fmt
-
-  function itoa(i) result(s)
-    integer(i8), intent(in) :: i
-    character(len=:), allocatable :: s
-    character(len=24) :: buf
-    write (buf, '(i0)') i
-    s = trim(buf)
-  end function itoa
 
 end module kf_case_runner

@@ -3,6 +3,7 @@
 !> allowed variable names per group.
 module kf_scene_items
   use kf_kinds, only: wp, i8
+  use kf_strings, only: to_str
   use kf_scene, only: scene_t
   implicit none
   private
@@ -127,25 +128,17 @@ contains
       text = merge('.true. ', '.false.', it%i /= 0)
       text = trim(text)
     case (item_real)
-      text = real_text(it%r)
+      text = to_str(it%r)
     case (item_real_array)
       text = ''
       do k = 1, size(it%ra)
         if (k > 1) text = text//', '
-        text = text//real_text(it%ra(k))
+        text = text//to_str(it%ra(k))
       end do
     case default
       text = '?'
     end select
   end function item_value_text
-
-  function real_text(x) result(text)
-    real(wp), intent(in) :: x
-    character(len=:), allocatable :: text
-    character(len=40) :: buf
-    write (buf, '(g0)') x
-    text = trim(adjustl(buf))
-  end function real_text
 
   subroutine push(items, it)
     type(scene_item_t), allocatable, intent(inout) :: items(:)
