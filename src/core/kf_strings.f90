@@ -58,8 +58,11 @@ contains
     character(len=16) :: edit
     write (edit, '(a,i0,a)') '(f0.', decimals, ')'
     write (buf, edit) x
-    if (buf(1:1) == '.') buf = '0'//buf
-    s = trim(adjustl(buf))
+    if (buf(1:1) == '.') then
+      s = '0'//trim(buf)
+    else
+      s = trim(adjustl(buf))
+    end if
   end function to_str_fixed
 
   !> Short text for progress lines: three decimals when 1e-3 <= |x| < 1e6, otherwise `es10.3`.
