@@ -1,14 +1,12 @@
 !> The /analysis group of a case file (the schema of docs/analysis.md): reading what a previous
 !> run left (for resuming), removing it and writing the new one. Only /analysis is ever touched;
-!> /frames, /checkpoint and the root attributes are read-only here. HDF5 goes through kf_h5;
-!> only the removal of the /analysis group uses the HDF5 link API directly (kf_h5 has no delete).
+!> /frames, /checkpoint and the root attributes are read-only here. HDF5 goes through kf_h5.
 module kf_knot_store
-  use hdf5, only: hid_t, h5fopen_f, h5fclose_f, h5lexists_f, h5ldelete_f, H5F_ACC_RDWR_F
   use kf_kinds, only: wp, i4, i8
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_h5, only: h5_file_t, h5_open_file, h5_close_file, h5_create_group, h5_exists, &
-    h5_attr_exists, h5_write_attr, h5_read_attr, h5_write, h5_read
+    h5_attr_exists, h5_write_attr, h5_read_attr, h5_write, h5_read, h5_delete
   use kf_knot_invariants, only: n_knot_types, knot_type_names
   use kf_knot_case, only: frame_knots_t, shape_analysis_t
   use kf_transitions, only: event_names
@@ -98,18 +96,17 @@ contains
   subroutine remove_analysis(path, error)
     character(len=*), intent(in) :: path
     type(error_t), allocatable, intent(out) :: error
-    integer(hid_t) :: fid
-    integer :: stat, stat2
-    logical :: exists
-    call h5fopen_f(path, H5F_ACC_RDWR_F, fid, stat)
-    if (stat < 0) then
+    type(h5_file_t) :: file
+    type(error_t), allocatable :: h5_error, close_error
+    call h5_open_file(file, path, .true., h5_error)
+    if (allocated(h5_error)) then
       call fatal_error(error, "case file '"//path//"': cannot open for writing")
       return
     end if
-    call h5lexists_f(fid, 'analysis', exists, stat)
-    if (stat >= 0 .and. exists) call h5ldelete_f(fid, 'analysis', stat)
-    call h5fclose_f(fid, stat2)
-    if (stat < 0 .or. stat2 < 0) call fatal_error(error, "case file '"//path//"': cannot remove /analysis")
+    call h5_delete(file, '/analysis', h5_error)
+    call h5_close_file(file, close_error)
+    if (allocated(h5_error) .or. allocated(close_error)) &
+      call fatal_error(error, "case file '"//path//"': cannot remove /analysis")
   end subroutine remove_analysis
 
   !> Replace /analysis by the given results. On failure /analysis is removed again, so that no
