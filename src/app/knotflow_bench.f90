@@ -7,6 +7,7 @@
 program knotflow_bench
   use, intrinsic :: iso_fortran_env, only: int64, output_unit, error_unit
   use kf_kinds, only: wp
+  use kf_blas, only: dsymv
   use kf_error, only: error_t
   use kf_scene, only: scene_t
   use kf_chain_shapes, only: build_initial_chain
@@ -14,16 +15,6 @@ program knotflow_bench
   use kf_integrator, only: integrator_t
   use kf_hydro_rpy, only: rpy_model_t
   implicit none
-
-  interface
-    subroutine dsymv(uplo, n, alpha, a, lda, x, incx, beta, y, incy)
-      import :: wp
-      character(len=1), intent(in) :: uplo
-      integer, intent(in) :: n, lda, incx, incy
-      real(wp), intent(in) :: alpha, beta, a(lda, *), x(*)
-      real(wp), intent(inout) :: y(*)
-    end subroutine dsymv
-  end interface
 
   type(scene_t) :: scene
   type(error_t), allocatable :: error

@@ -1,44 +1,12 @@
 !> LAPACK wrapped once: assumed-shape wrappers that work out the sizes and turn `info` into errors.
 module kf_lapack
   use kf_kinds, only: wp
+  use kf_blas, only: dpotrf, dpotrs, dpotri, dsyev
   use kf_error, only: error_t, fatal_error
   implicit none
   private
 
   public :: cholesky_factor, cholesky_solve, cholesky_invert, symmetric_eigen
-
-  interface
-    subroutine dpotrf(uplo, n, a, lda, info)
-      import :: wp
-      character(len=1), intent(in) :: uplo
-      integer, intent(in) :: n, lda
-      real(wp), intent(inout) :: a(lda, *)
-      integer, intent(out) :: info
-    end subroutine dpotrf
-    subroutine dpotrs(uplo, n, nrhs, a, lda, b, ldb, info)
-      import :: wp
-      character(len=1), intent(in) :: uplo
-      integer, intent(in) :: n, nrhs, lda, ldb
-      real(wp), intent(in) :: a(lda, *)
-      real(wp), intent(inout) :: b(ldb, *)
-      integer, intent(out) :: info
-    end subroutine dpotrs
-    subroutine dpotri(uplo, n, a, lda, info)
-      import :: wp
-      character(len=1), intent(in) :: uplo
-      integer, intent(in) :: n, lda
-      real(wp), intent(inout) :: a(lda, *)
-      integer, intent(out) :: info
-    end subroutine dpotri
-    subroutine dsyev(jobz, uplo, n, a, lda, w, work, lwork, info)
-      import :: wp
-      character(len=1), intent(in) :: jobz, uplo
-      integer, intent(in) :: n, lda, lwork
-      real(wp), intent(inout) :: a(lda, *)
-      real(wp), intent(out) :: w(*), work(*)
-      integer, intent(out) :: info
-    end subroutine dsyev
-  end interface
 
 contains
 

@@ -7,6 +7,7 @@
 !> add_strain_disturbance are then matrix-vector products.
 module kf_hydro_multipole
   use kf_kinds, only: wp
+  use kf_blas, only: dgemv
   use kf_error, only: error_t, fatal_error
   use kf_hydro_model, only: hydro_model_t
   use kf_multipole_system, only: multipole_system_t, strain_coefficients, strain_basis
@@ -38,17 +39,6 @@ module kf_hydro_multipole
     procedure :: mobility_matrix => multipole_mobility_matrix
     procedure :: friction_matrix => multipole_friction_matrix
   end type multipole_model_t
-
-  interface
-    subroutine dgemv(trans, m, n, alpha, a, lda, x, incx, beta, y, incy)
-      import :: wp
-      character(len=1), intent(in) :: trans
-      integer, intent(in) :: m, n, lda, incx, incy
-      real(wp), intent(in) :: alpha, beta
-      real(wp), intent(in) :: a(lda, *), x(*)
-      real(wp), intent(inout) :: y(*)
-    end subroutine dgemv
-  end interface
 
 contains
 

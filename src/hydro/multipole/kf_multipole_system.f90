@@ -19,6 +19,7 @@
 !> part of the corrected friction is continuous.
 module kf_multipole_system
   use kf_kinds, only: wp
+  use kf_blas, only: dpotrf, dpotrs, dpotri, dtrsm, dgemm, dsyrk
   use kf_constants, only: pi
   use kf_error, only: error_t, fatal_error
   use kf_multipole_blocks, only: multipole_layout_t, pair_block_grouped, fam_phi, fam_p
@@ -60,55 +61,6 @@ module kf_multipole_system
     procedure :: corrected => system_corrected
     procedure :: pindex => system_pindex
   end type multipole_system_t
-
-  interface
-    subroutine dpotrf(uplo, n, a, lda, info)
-      import :: wp
-      character(len=1), intent(in) :: uplo
-      integer, intent(in) :: n, lda
-      real(wp), intent(inout) :: a(lda, *)
-      integer, intent(out) :: info
-    end subroutine dpotrf
-    subroutine dpotrs(uplo, n, nrhs, a, lda, b, ldb, info)
-      import :: wp
-      character(len=1), intent(in) :: uplo
-      integer, intent(in) :: n, nrhs, lda, ldb
-      real(wp), intent(in) :: a(lda, *)
-      real(wp), intent(inout) :: b(ldb, *)
-      integer, intent(out) :: info
-    end subroutine dpotrs
-    subroutine dpotri(uplo, n, a, lda, info)
-      import :: wp
-      character(len=1), intent(in) :: uplo
-      integer, intent(in) :: n, lda
-      real(wp), intent(inout) :: a(lda, *)
-      integer, intent(out) :: info
-    end subroutine dpotri
-    subroutine dtrsm(side, uplo, transa, diag, m, n, alpha, a, lda, b, ldb)
-      import :: wp
-      character(len=1), intent(in) :: side, uplo, transa, diag
-      integer, intent(in) :: m, n, lda, ldb
-      real(wp), intent(in) :: alpha
-      real(wp), intent(in) :: a(lda, *)
-      real(wp), intent(inout) :: b(ldb, *)
-    end subroutine dtrsm
-    subroutine dgemm(transa, transb, m, n, k, alpha, a, lda, b, ldb, beta, c, ldc)
-      import :: wp
-      character(len=1), intent(in) :: transa, transb
-      integer, intent(in) :: m, n, k, lda, ldb, ldc
-      real(wp), intent(in) :: alpha, beta
-      real(wp), intent(in) :: a(lda, *), b(ldb, *)
-      real(wp), intent(inout) :: c(ldc, *)
-    end subroutine dgemm
-    subroutine dsyrk(uplo, trans, n, k, alpha, a, lda, beta, c, ldc)
-      import :: wp
-      character(len=1), intent(in) :: uplo, trans
-      integer, intent(in) :: n, k, lda, ldc
-      real(wp), intent(in) :: alpha, beta
-      real(wp), intent(in) :: a(lda, *)
-      real(wp), intent(inout) :: c(ldc, *)
-    end subroutine dsyrk
-  end interface
 
 contains
 

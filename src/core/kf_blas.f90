@@ -1,0 +1,82 @@
+!> Explicit interfaces of the external BLAS and LAPACK routines the project calls, declared
+!> once. Code that wants errors as values should use the wrappers in kf_lapack instead.
+module kf_blas
+  use kf_kinds, only: wp
+  implicit none
+  private
+
+  public :: dpotrf, dpotrs, dpotri, dsyev, dtrsm, dgemm, dsyrk, dgemv, dsymv
+
+  interface
+    subroutine dpotrf(uplo, n, a, lda, info)
+      import :: wp
+      character(len=1), intent(in) :: uplo
+      integer, intent(in) :: n, lda
+      real(wp), intent(inout) :: a(lda, *)
+      integer, intent(out) :: info
+    end subroutine dpotrf
+    subroutine dpotrs(uplo, n, nrhs, a, lda, b, ldb, info)
+      import :: wp
+      character(len=1), intent(in) :: uplo
+      integer, intent(in) :: n, nrhs, lda, ldb
+      real(wp), intent(in) :: a(lda, *)
+      real(wp), intent(inout) :: b(ldb, *)
+      integer, intent(out) :: info
+    end subroutine dpotrs
+    subroutine dpotri(uplo, n, a, lda, info)
+      import :: wp
+      character(len=1), intent(in) :: uplo
+      integer, intent(in) :: n, lda
+      real(wp), intent(inout) :: a(lda, *)
+      integer, intent(out) :: info
+    end subroutine dpotri
+    subroutine dsyev(jobz, uplo, n, a, lda, w, work, lwork, info)
+      import :: wp
+      character(len=1), intent(in) :: jobz, uplo
+      integer, intent(in) :: n, lda, lwork
+      real(wp), intent(inout) :: a(lda, *)
+      real(wp), intent(out) :: w(*), work(*)
+      integer, intent(out) :: info
+    end subroutine dsyev
+    subroutine dtrsm(side, uplo, transa, diag, m, n, alpha, a, lda, b, ldb)
+      import :: wp
+      character(len=1), intent(in) :: side, uplo, transa, diag
+      integer, intent(in) :: m, n, lda, ldb
+      real(wp), intent(in) :: alpha
+      real(wp), intent(in) :: a(lda, *)
+      real(wp), intent(inout) :: b(ldb, *)
+    end subroutine dtrsm
+    subroutine dgemm(transa, transb, m, n, k, alpha, a, lda, b, ldb, beta, c, ldc)
+      import :: wp
+      character(len=1), intent(in) :: transa, transb
+      integer, intent(in) :: m, n, k, lda, ldb, ldc
+      real(wp), intent(in) :: alpha, beta
+      real(wp), intent(in) :: a(lda, *), b(ldb, *)
+      real(wp), intent(inout) :: c(ldc, *)
+    end subroutine dgemm
+    subroutine dsyrk(uplo, trans, n, k, alpha, a, lda, beta, c, ldc)
+      import :: wp
+      character(len=1), intent(in) :: uplo, trans
+      integer, intent(in) :: n, k, lda, ldc
+      real(wp), intent(in) :: alpha, beta
+      real(wp), intent(in) :: a(lda, *)
+      real(wp), intent(inout) :: c(ldc, *)
+    end subroutine dsyrk
+    subroutine dgemv(trans, m, n, alpha, a, lda, x, incx, beta, y, incy)
+      import :: wp
+      character(len=1), intent(in) :: trans
+      integer, intent(in) :: m, n, lda, incx, incy
+      real(wp), intent(in) :: alpha, beta
+      real(wp), intent(in) :: a(lda, *), x(*)
+      real(wp), intent(inout) :: y(*)
+    end subroutine dgemv
+    subroutine dsymv(uplo, n, alpha, a, lda, x, incx, beta, y, incy)
+      import :: wp
+      character(len=1), intent(in) :: uplo
+      integer, intent(in) :: n, lda, incx, incy
+      real(wp), intent(in) :: alpha, beta, a(lda, *), x(*)
+      real(wp), intent(inout) :: y(*)
+    end subroutine dsymv
+  end interface
+
+end module kf_blas
