@@ -11,7 +11,7 @@ program knotflow_analyze
   use kf_knot_closure, only: knot_stats_t, analyse_closures, default_closures, default_knot_seed
   use kf_knot_matrix, only: knot_matrix, knot_core, is_slipknot, default_min_length, &
     default_matrix_closures
-  use kf_knot_input, only: read_points
+  use kf_text_coords, only: read_coordinates
   use kf_analysis_farm, only: analysis_farm_t, farm_start, farm_stop, farm_max, farm_sum, farm_any, &
     farm_barrier
   use kf_h5, only: h5_initialize, h5_finalize
@@ -213,11 +213,11 @@ contains
     type(knot_stats_t) :: st
     integer :: core(2), n
     logical :: found, slip
-    call read_points(opt%files(1), r, error)
+    call read_coordinates(opt%files(1), r, error)
     if (allocated(error)) return
     n = size(r, 2)
     if (len_trim(opt%closure_points) > 0) then
-      call read_points(opt%closure_points, pts, error)
+      call read_coordinates(opt%closure_points, pts, error)
       if (allocated(error)) return
       call analyse_closures(r, size(pts, 2), opt%seed, st, error, points=pts, per_closure=.true.)
     else

@@ -15,7 +15,8 @@ program knotflow_mobility
   use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
   use, intrinsic :: iso_c_binding, only: c_int
   use kf_kinds, only: wp
-  use kf_error, only: error_t, fatal_error
+  use kf_error, only: error_t
+  use kf_text_coords, only: read_coordinates
   use kf_hydro_model, only: hydro_model_t
   use kf_hydro_multipole, only: multipole_model_t
   use kf_hydro_factory, only: make_hydro_model
@@ -31,7 +32,7 @@ program knotflow_mobility
 
   character(len=:), allocatable :: file, model_name, output, arg, val
   integer :: order, i, j, nargs, ios, n
-  logical :: lubrication
+  logical :: lubrication, exists
   real(wp) :: eps_lub, e(3, 3)
   real(wp), allocatable :: r(:, :), mu(:, :), u(:, :)
   class(hydro_model_t), allocatable :: model
@@ -86,7 +87,9 @@ program knotflow_mobility
   end do
   if (len(file) == 0) call die('no coordinate file given (usage: knotflow-mobility FILE [options])')
 
-  call read_beads(file, r, error)
+  inquire (file=file, exist=exists)
+  if (.not. exists) call die('cannot open coordinate file '//file//': no such file')
+  call read_coordinates(file, r, error)
   if (allocated(error)) call die(error%message)
   n = size(r, 2)
 
@@ -152,64 +155,5 @@ contains
     flush (output_unit)
     call c_exit(2_c_int)
   end subroutine die
-
-  !> Read bead centres: one "x y z" per line, blank and # lines ignored.
-  subroutine read_beads(path, pos, err)
-    character(len=*), intent(in) :: path
-    real(wp), allocatable, intent(out) :: pos(:, :)
-    type(error_t), allocatable, intent(out) :: err
-    integer :: unit, stat, nline, nb
-    character(len=1024) :: line
-    character(len=256) :: iomsg
-    character(len=32) :: buf
-    real(wp), allocatable :: tmp(:, :)
-    real(wp) :: xyz(3)
-
-    open (newunit=unit, file=path, status='old', action='read', iostat=stat, iomsg=iomsg)
-    if (stat /= 0) then
-      call fatal_error(err, 'cannot open coordinate file '//path//': '//trim(iomsg))
-      return
-    end if
-    allocate (tmp(3, 64))
-    nb = 0
-    nline = 0
-    do
-      read (unit, '(a)', iostat=stat, iomsg=iomsg) line
-      if (is_iostat_end(stat)) exit
-      nline = nline + 1
-      write (buf, '(i0)') nline
-      if (stat /= 0) then
-        call fatal_error(err, 'reading '//path//' line '//trim(buf)//': '//trim(iomsg))
-        close (unit)
-        return
-      end if
-      line = adjustl(line)
-      if (len_trim(line) == 0) cycle
-      if (line(1:1) == '#') cycle
-      read (line, *, iostat=stat) xyz
-      if (stat /= 0 .or. any(abs(xyz) > huge(1.0_wp)) .or. any(xyz /= xyz)) then
-        call fatal_error(err, 'coordinate file '//path//' line '//trim(buf)// &
-                         ': expected three numbers "x y z", got "'//trim(line)//'"')
-        close (unit)
-        return
-      end if
-      nb = nb + 1
-      if (nb > size(tmp, 2)) then
-        block
-          real(wp), allocatable :: bigger(:, :)
-          allocate (bigger(3, 2*size(tmp, 2)))
-          bigger(:, 1:size(tmp, 2)) = tmp
-          call move_alloc(bigger, tmp)
-        end block
-      end if
-      tmp(:, nb) = xyz
-    end do
-    close (unit)
-    if (nb == 0) then
-      call fatal_error(err, 'coordinate file '//path//' contains no beads')
-      return
-    end if
-    pos = tmp(:, 1:nb)
-  end subroutine read_beads
 
 end program knotflow_mobility
