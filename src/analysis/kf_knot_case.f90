@@ -4,6 +4,7 @@
 !> transitions, modes from the shape series and spectra of R_g, phi and the end-to-end vector.
 module kf_knot_case
   use kf_kinds, only: wp, i8
+  use kf_strings, only: to_str
   use kf_error, only: error_t
   use kf_shape, only: shape_t, compute_shape
   use kf_knot_invariants, only: n_knot_types
@@ -66,7 +67,6 @@ contains
     integer, intent(in), optional :: part, nparts
     type(knot_stats_t) :: st
     integer :: k, nk, p, np
-    character(len=24) :: buf
     p = 0
     np = 1
     if (present(part)) p = part
@@ -82,8 +82,7 @@ contains
       if (modulo(k - 1, np) /= p) cycle
       call analyse_closures(r(:, :, todo(k) + 1), closures, seed, st, error, stream=frame_stream(todo(k)))
       if (allocated(error)) then
-        write (buf, '(i0)') todo(k)
-        error%message = 'frame '//trim(buf)//': '//error%message
+        error%message = 'frame '//to_str(todo(k))//': '//error%message
         return
       end if
       res%kf(k) = st%kf

@@ -5,6 +5,7 @@
 !> frequent one (the first in table order on a tie).
 module kf_knot_closure
   use kf_kinds, only: wp, i8
+  use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_knot_rng, only: knot_rng_t, rng_init, rng_sphere_point
   use kf_knot_invariants, only: n_knot_types, type_unknot, classify_polygon
@@ -62,13 +63,11 @@ contains
     real(wp) :: centre(3), radius
     integer, allocatable :: types(:)
     integer :: n, nc, k, counts(n_knot_types)
-    character(len=32) :: buf
     n = size(r, 2)
     nc = closures
     if (present(points)) nc = size(points, 2)
     if (nc < 1) then
-      write (buf, '(i0)') nc
-      call fatal_error(error, 'knot closures: the number of closures must be >= 1, got '//trim(buf))
+      call fatal_error(error, 'knot closures: the number of closures must be >= 1, got '//to_str(nc))
       return
     end if
     st = 0_i8

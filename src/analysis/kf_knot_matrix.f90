@@ -6,6 +6,7 @@
 module kf_knot_matrix
   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_nan
   use kf_kinds, only: wp, i8
+  use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_knot_closure, only: knot_stats_t, analyse_closures
   implicit none
@@ -49,7 +50,6 @@ contains
     integer, intent(in), optional :: part, nparts
     type(knot_stats_t) :: st
     integer :: n, i, j, idx, p, np
-    character(len=32) :: buf
     n = size(r, 2)
     p = 0
     np = 1
@@ -57,8 +57,7 @@ contains
     if (present(nparts)) np = nparts
     kmat = ieee_value(0.0_wp, ieee_quiet_nan)
     if (min_length < 2) then
-      write (buf, '(i0)') min_length
-      call fatal_error(error, 'knot matrix: min_length must be >= 2, got '//trim(buf))
+      call fatal_error(error, 'knot matrix: min_length must be >= 2, got '//to_str(min_length))
       return
     end if
     if (size(kmat, 1) /= n .or. size(kmat, 2) /= n) then

@@ -462,14 +462,12 @@ contains
     type(error_t), allocatable, intent(out) :: error
     integer :: i, j, k, stat
     integer(i8) :: v
-    character(len=24) :: buf
     allocate (frames(0))
     if (len_trim(spec) == 0) return
     i = 1
     do while (i <= len_trim(spec))
       j = index(spec(i:), ',')
       k = merge(len_trim(spec), i + j - 2, j == 0)
-      write (buf, '(i0)') nframes - 1
       if (k >= i .and. spec(i:max(i, k)) == 'last') then
         frames = [frames, int(nframes - 1, i8)]
         i = k + 2
@@ -478,12 +476,12 @@ contains
       read (spec(i:max(i, k)), *, iostat=stat) v
       if (stat /= 0 .or. k < i) then
         call fatal_error(error, 'option --matrix-frames: invalid value "'//trim(spec)// &
-          '" (allowed: "last" or frame numbers 0..'//trim(buf)//')')
+          '" (allowed: "last" or frame numbers 0..'//to_str(nframes - 1)//')')
         return
       end if
       if (v < 0 .or. v >= nframes) then
         call fatal_error(error, 'option --matrix-frames: frame '//spec(i:k)//' is not in '//path// &
-          ' (allowed: 0..'//trim(buf)//')')
+          ' (allowed: 0..'//to_str(nframes - 1)//')')
         return
       end if
       frames = [frames, v]

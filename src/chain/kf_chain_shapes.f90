@@ -2,6 +2,7 @@
 !> candy-cane with a seeded random rotation, straight and random chains, and coordinate files.
 module kf_chain_shapes
   use kf_kinds, only: wp
+  use kf_strings, only: to_str
   use kf_constants, only: pi, two_pi
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: chain_params_t
@@ -34,12 +35,10 @@ contains
     real(wp), allocatable, intent(out) :: r(:, :)
     real(wp), intent(out) :: rotation(3, 3)
     type(error_t), allocatable, intent(out) :: error
-    character(len=32) :: buf
 
     rotation = identity3()
     if (.not. (params%bond_length > 0.0_wp .and. params%bond_length < huge(1.0_wp))) then
-      write (buf, '(g0)') params%bond_length
-      call fatal_error(error, 'chain: bond_length = '//trim(buf)//' is invalid (must be > 0)')
+      call fatal_error(error, 'chain: bond_length = '//to_str(params%bond_length)//' is invalid (must be > 0)')
       return
     end if
     select case (trim(params%shape))
@@ -134,12 +133,10 @@ contains
     type(error_t), allocatable, intent(out) :: error
     real(wp) :: p(3, trefoil_points), rot(3, 3), scale
     integer :: k, m
-    character(len=32) :: buf
 
     m = params%trefoil_removed_point
     if (m < 1 .or. m > trefoil_points) then
-      write (buf, '(i0)') m
-      call fatal_error(error, 'chain: trefoil_removed_point = '//trim(buf)//' is out of range (allowed: 1..100)')
+      call fatal_error(error, 'chain: trefoil_removed_point = '//to_str(m)//' is out of range (allowed: 1..100)')
       return
     end if
     rot = 0.0_wp
@@ -223,10 +220,8 @@ contains
     type(error_t), allocatable, intent(out) :: error
     real(wp) :: u(3), norm
     integer :: k
-    character(len=32) :: buf
     if (params%n_beads < 2) then
-      write (buf, '(i0)') params%n_beads
-      call fatal_error(error, 'chain: n_beads = '//trim(buf)//' is too small (must be >= 2)')
+      call fatal_error(error, 'chain: n_beads = '//to_str(params%n_beads)//' is too small (must be >= 2)')
       return
     end if
     norm = norm2(params%straight_direction)
@@ -252,16 +247,13 @@ contains
     real(wp) :: u(3), cz, phi, trial(3)
     integer :: n, i, j, attempt, restart
     logical :: ok
-    character(len=32) :: buf
     n = params%n_beads
     if (n < 2) then
-      write (buf, '(i0)') n
-      call fatal_error(error, 'chain: n_beads = '//trim(buf)//' is too small (must be >= 2)')
+      call fatal_error(error, 'chain: n_beads = '//to_str(n)//' is too small (must be >= 2)')
       return
     end if
     if (params%bond_length <= 0.5_wp) then
-      write (buf, '(g0)') params%bond_length
-      call fatal_error(error, 'chain: bond_length = '//trim(buf)// &
+      call fatal_error(error, 'chain: bond_length = '//to_str(params%bond_length)// &
         ' is too small for shape = random (must be > 0.5 so that non-adjacent beads can be 1 apart)')
       return
     end if

@@ -1,6 +1,7 @@
 !> LAPACK wrapped once: assumed-shape wrappers that work out the sizes and turn `info` into errors.
 module kf_lapack
   use kf_kinds, only: wp
+  use kf_strings, only: to_str
   use kf_blas, only: dpotrf, dpotrs, dpotri, dsyev
   use kf_error, only: error_t, fatal_error
   implicit none
@@ -16,15 +17,13 @@ contains
     type(error_t), allocatable, intent(out) :: error
     character(len=*), intent(in) :: what   !< name of the matrix, for the message
     integer :: info
-    character(len=24) :: buf
     call dpotrf('L', size(a, 1), a, size(a, 1), info)
     if (info /= 0) then
-      write (buf, '(i0)') info
       if (info > 0) then
         call fatal_error(error, 'Cholesky factorisation of the '//what// &
-          ' failed: matrix not positive definite (leading minor '//trim(buf)//')')
+          ' failed: matrix not positive definite (leading minor '//to_str(info)//')')
       else
-        call fatal_error(error, 'dpotrf: illegal argument '//trim(buf)//' for the '//what)
+        call fatal_error(error, 'dpotrf: illegal argument '//to_str(info)//' for the '//what)
       end if
     end if
   end subroutine cholesky_factor
@@ -43,12 +42,10 @@ contains
     type(error_t), allocatable, intent(out) :: error
     character(len=*), intent(in) :: what
     integer :: info, i, n
-    character(len=24) :: buf
     n = size(a, 1)
     call dpotri('L', n, a, n, info)
     if (info /= 0) then
-      write (buf, '(i0)') info
-      call fatal_error(error, 'inversion of the '//what//' failed (dpotri info = '//trim(buf)//')')
+      call fatal_error(error, 'inversion of the '//what//' failed (dpotri info = '//to_str(info)//')')
       return
     end if
     do i = 2, n

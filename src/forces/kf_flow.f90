@@ -2,6 +2,7 @@
 !> a general traceless linear flow, or quiescent fluid.
 module kf_flow
   use kf_kinds, only: wp
+  use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: flow_params_t
   implicit none
@@ -27,7 +28,6 @@ contains
     type(flow_params_t), intent(in) :: params
     type(error_t), allocatable, intent(out) :: error
     real(wp) :: tr
-    character(len=32) :: buf
     select case (trim(params%flow_type))
     case ('shear')
       if (.not. abs(params%shear_rate) < huge(1.0_wp)) then
@@ -43,8 +43,7 @@ contains
       end if
       tr = params%velocity_gradient(1, 1) + params%velocity_gradient(2, 2) + params%velocity_gradient(3, 3)
       if (abs(tr) > 1.0e-12_wp*max(1.0_wp, maxval(abs(params%velocity_gradient)))) then
-        write (buf, '(es12.4)') tr
-        call fatal_error(error, 'flow: velocity_gradient has trace '//trim(adjustl(buf))// &
+        call fatal_error(error, 'flow: velocity_gradient has trace '//to_str(tr, '(es12.4)')// &
           ' (must be traceless for an incompressible flow)')
         return
       end if

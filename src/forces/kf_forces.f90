@@ -8,6 +8,7 @@
 !> Units: force F0 = pi eta d^2 gamma_dot, k per pi eta d gamma_dot, A per pi eta d^4 gamma_dot.
 module kf_forces
   use kf_kinds, only: wp
+  use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: forces_params_t
   implicit none
@@ -41,36 +42,29 @@ contains
     integer, intent(in) :: n_beads
     real(wp), intent(in) :: bond_length
     type(error_t), allocatable, intent(out) :: error
-    character(len=32) :: buf
     if (n_beads < 1) then
-      write (buf, '(i0)') n_beads
-      call fatal_error(error, 'forces: number of beads = '//trim(buf)//' (must be >= 1)')
+      call fatal_error(error, 'forces: number of beads = '//to_str(n_beads)//' (must be >= 1)')
       return
     end if
     if (.not. bond_length > 0.0_wp) then
-      write (buf, '(g0)') bond_length
-      call fatal_error(error, 'forces: bond_length = '//trim(buf)//' (must be > 0)')
+      call fatal_error(error, 'forces: bond_length = '//to_str(bond_length)//' (must be > 0)')
       return
     end if
     if (params%springs .and. .not. params%spring_k >= 0.0_wp) then
-      write (buf, '(g0)') params%spring_k
-      call fatal_error(error, 'forces: spring_k = '//trim(buf)//' (must be >= 0)')
+      call fatal_error(error, 'forces: spring_k = '//to_str(params%spring_k)//' (must be >= 0)')
       return
     end if
     if (params%bending .and. .not. params%bending_a >= 0.0_wp) then
-      write (buf, '(g0)') params%bending_a
-      call fatal_error(error, 'forces: bending_a = '//trim(buf)//' (must be >= 0)')
+      call fatal_error(error, 'forces: bending_a = '//to_str(params%bending_a)//' (must be >= 0)')
       return
     end if
     if (params%excluded_volume) then
       if (.not. params%ev_strength >= 0.0_wp) then
-        write (buf, '(g0)') params%ev_strength
-        call fatal_error(error, 'forces: ev_strength = '//trim(buf)//' (must be >= 0)')
+        call fatal_error(error, 'forces: ev_strength = '//to_str(params%ev_strength)//' (must be >= 0)')
         return
       end if
       if (.not. params%ev_range > 0.0_wp) then
-        write (buf, '(g0)') params%ev_range
-        call fatal_error(error, 'forces: ev_range = '//trim(buf)//' (must be > 0)')
+        call fatal_error(error, 'forces: ev_range = '//to_str(params%ev_range)//' (must be > 0)')
         return
       end if
     end if

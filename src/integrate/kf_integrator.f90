@@ -10,6 +10,7 @@
 module kf_integrator
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use kf_kinds, only: wp, i8
+  use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: integrator_params_t
   use kf_ode_system, only: ode_system_t
@@ -72,7 +73,6 @@ contains
     class(integrator_t), intent(out) :: this
     type(integrator_params_t), intent(in) :: params
     type(error_t), allocatable, intent(out) :: error
-    character(len=32) :: buf
     select case (trim(params%method))
     case ('dopri45')
       this%method = method_dopri45
@@ -84,23 +84,19 @@ contains
       return
     end select
     if (.not. params%tolerance > 0.0_wp) then
-      write (buf, '(es10.3)') params%tolerance
-      call fatal_error(error, 'integrator: tolerance = '//trim(adjustl(buf))//' (must be > 0)')
+      call fatal_error(error, 'integrator: tolerance = '//to_str(params%tolerance, '(es10.3)')//' (must be > 0)')
       return
     end if
     if (.not. params%dt_initial > 0.0_wp) then
-      write (buf, '(es10.3)') params%dt_initial
-      call fatal_error(error, 'integrator: dt_initial = '//trim(adjustl(buf))//' (must be > 0)')
+      call fatal_error(error, 'integrator: dt_initial = '//to_str(params%dt_initial, '(es10.3)')//' (must be > 0)')
       return
     end if
     if (.not. (params%dt_min > 0.0_wp .and. params%dt_min <= params%dt_max)) then
-      write (buf, '(es10.3)') params%dt_min
-      call fatal_error(error, 'integrator: dt_min = '//trim(adjustl(buf))//' (must be > 0 and <= dt_max)')
+      call fatal_error(error, 'integrator: dt_min = '//to_str(params%dt_min, '(es10.3)')//' (must be > 0 and <= dt_max)')
       return
     end if
     if (params%max_steps < 1) then
-      write (buf, '(i0)') params%max_steps
-      call fatal_error(error, 'integrator: max_steps = '//trim(buf)//' (must be >= 1)')
+      call fatal_error(error, 'integrator: max_steps = '//to_str(params%max_steps)//' (must be >= 1)')
       return
     end if
     this%tolerance = params%tolerance
@@ -161,9 +157,7 @@ contains
   subroutine nonfinite_error(error, t)
     type(error_t), allocatable, intent(out) :: error
     real(wp), intent(in) :: t
-    character(len=24) :: buf
-    write (buf, '(es14.6)') t
-    call fatal_error(error, 'integrator: non-finite values (NaN/Inf) in the solution near t = '//trim(adjustl(buf)))
+    call fatal_error(error, 'integrator: non-finite values (NaN/Inf) in the solution near t = '//to_str(t, '(es14.6)'))
   end subroutine nonfinite_error
 
   subroutine max_steps_error(error, this, t)

@@ -2,6 +2,7 @@
 !> non-blank character is `#` are ignored.
 module kf_text_coords
   use kf_kinds, only: wp
+  use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   implicit none
   private
@@ -20,7 +21,6 @@ contains
     integer :: unit, stat, n, pass, line_no
     character(len=line_len) :: line
     character(len=256) :: msg
-    character(len=16) :: buf
     real(wp) :: x(3)
 
     open (newunit=unit, file=path, status='old', action='read', iostat=stat, iomsg=msg)
@@ -36,9 +36,8 @@ contains
         read (unit, '(a)', iostat=stat, iomsg=msg) line
         if (is_iostat_end(stat)) exit
         line_no = line_no + 1
-        write (buf, '(i0)') line_no
         if (stat /= 0) then
-          call fatal_error(error, "coordinates: reading '"//trim(path)//"' line "//trim(buf)//": "//trim(msg))
+          call fatal_error(error, "coordinates: reading '"//trim(path)//"' line "//to_str(line_no)//": "//trim(msg))
           close (unit)
           return
         end if
@@ -47,7 +46,7 @@ contains
         if (line(1:1) == '#') cycle
         call parse_point(line, x, stat)
         if (stat /= 0) then
-          call fatal_error(error, "coordinates: '"//trim(path)//"' line "//trim(buf)// &
+          call fatal_error(error, "coordinates: '"//trim(path)//"' line "//to_str(line_no)// &
             ": expected three numbers 'x y z', got '"//trim(line)//"'")
           close (unit)
           return

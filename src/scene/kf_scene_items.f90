@@ -116,14 +116,12 @@ contains
   function item_value_text(it) result(text)
     type(scene_item_t), intent(in) :: it
     character(len=:), allocatable :: text
-    character(len=40) :: buf
     integer :: k
     select case (it%kind)
     case (item_string)
       text = "'"//trim(it%s)//"'"
     case (item_integer)
-      write (buf, '(i0)') it%i
-      text = trim(buf)
+      text = to_str(it%i)
     case (item_logical)
       text = merge('.true. ', '.false.', it%i /= 0)
       text = trim(text)

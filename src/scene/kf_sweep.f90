@@ -2,6 +2,7 @@
 !> Group &sweep (optional): bending_a = list, orientation = list, seed = list.
 module kf_sweep
   use kf_kinds, only: wp, i8
+  use kf_strings, only: to_str, to_str_fixed
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: scene_t
   use kf_scene_read, only: read_scene, validate_scene, find_group
@@ -107,7 +108,6 @@ contains
     type(scene_t), intent(out) :: sc
     character(len=:), allocatable, intent(out) :: name
     integer :: ia, io, is, na, no, ns, r
-    character(len=40) :: buf
 
     na = max(1, size(this%bending_a))
     no = max(1, size(this%orientation))
@@ -121,9 +121,7 @@ contains
     name = ''
     if (size(this%bending_a) > 0) then
       sc%forces%bending_a = this%bending_a(ia)
-      write (buf, '(f0.2)') sc%forces%bending_a
-      if (buf(1:1) == '.') buf = '0'//buf
-      name = 'A'//trim(buf)
+      name = 'A'//to_str_fixed(sc%forces%bending_a, 2)
     end if
     if (size(this%orientation) > 0) then
       sc%chain%orientation = this%orientation(io)
@@ -132,8 +130,7 @@ contains
     end if
     if (size(this%seed) > 0) then
       sc%chain%seed = this%seed(is)
-      write (buf, '(i0)') this%seed(is)
-      name = name//merge('_', ' ', len(name) > 0)//'s'//trim(buf)
+      name = name//merge('_', ' ', len(name) > 0)//'s'//to_str(this%seed(is))
       name = trim(adjustl(name))
     end if
     if (len_trim(this%base%output%case_name) > 0) then

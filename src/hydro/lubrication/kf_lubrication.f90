@@ -14,6 +14,7 @@
 !> the correction is evaluated at max(|d|, 1 + eps_lub).
 module kf_lubrication
   use kf_kinds, only: wp
+  use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_two_sphere, only: n_functions, has_strain
   use kf_near_contact, only: singular_part, singular_weight, smoothstep
@@ -52,18 +53,15 @@ contains
     integer, intent(in) :: order
     real(wp), intent(in) :: eps_lub
     type(error_t), allocatable, intent(out) :: error
-    character(len=40) :: buf
     integer :: k
 
     if (order < 1 .or. order > lub_max_order) then
-      write (buf, '(i0)') order
-      call fatal_error(error, 'lubrication: truncation order '//trim(buf)// &
+      call fatal_error(error, 'lubrication: truncation order '//to_str(order)// &
         ' not tabulated (allowed 1..6)')
       return
     end if
     if (.not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) then
-      write (buf, '(es12.4)') eps_lub
-      call fatal_error(error, 'lubrication: eps_lub = '//trim(adjustl(buf))// &
+      call fatal_error(error, 'lubrication: eps_lub = '//to_str(eps_lub, '(es12.4)')// &
         ' out of range (0 < eps_lub < 0.5)')
       return
     end if

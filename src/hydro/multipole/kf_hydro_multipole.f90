@@ -7,6 +7,7 @@
 !> add_strain_disturbance are then matrix-vector products.
 module kf_hydro_multipole
   use kf_kinds, only: wp
+  use kf_strings, only: to_str
   use kf_blas, only: dgemv
   use kf_error, only: error_t, fatal_error
   use kf_hydro_model, only: hydro_model_t
@@ -49,11 +50,9 @@ contains
     logical, intent(in) :: lubrication
     real(wp), intent(in) :: eps_lub
     type(error_t), allocatable, intent(out) :: error
-    character(len=32) :: buf
 
     if (.not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) then
-      write (buf, '(es12.4)') eps_lub
-      call fatal_error(error, 'multipole: eps_lub = '//trim(adjustl(buf))// &
+      call fatal_error(error, 'multipole: eps_lub = '//to_str(eps_lub, '(es12.4)')// &
                        ' not allowed (0 < eps_lub < 0.5)')
       return
     end if
@@ -181,9 +180,7 @@ contains
   function multipole_name(this) result(label)
     class(multipole_model_t), intent(in) :: this
     character(len=:), allocatable :: label
-    character(len=16) :: buf
-    write (buf, '(i0)') this%order
-    label = 'multipole L='//trim(buf)
+    label = 'multipole L='//to_str(this%order)
     if (this%lubrication) label = label//' lubrication'
   end function multipole_name
 

@@ -19,6 +19,7 @@
 !> part of the corrected friction is continuous.
 module kf_multipole_system
   use kf_kinds, only: wp
+  use kf_strings, only: to_str
   use kf_blas, only: dpotrf, dpotrs, dpotri, dtrsm, dgemm, dsyrk
   use kf_constants, only: pi
   use kf_error, only: error_t, fatal_error
@@ -71,12 +72,10 @@ contains
     integer, intent(in) :: order
     real(wp), intent(in) :: min_distance
     type(error_t), allocatable, intent(out) :: error
-    character(len=32) :: buf
     integer :: c, s
 
     if (order < 1 .or. order > 20) then
-      write (buf, '(i0)') order
-      call fatal_error(error, 'multipole order L = '//trim(buf)//' not allowed (1 <= L <= 20)')
+      call fatal_error(error, 'multipole order L = '//to_str(order)//' not allowed (1 <= L <= 20)')
       return
     end if
     call this%lay%init(order)
@@ -116,7 +115,6 @@ contains
     integer :: lo(5), hi(5), ks(4, 2), bs(4, 2), ps(2)
     integer(8) :: c0, c1, c2, crate
     real(wp) :: d(3), dist
-    character(len=64) :: buf, buf2
 
     nsph = size(r, 2)
     if (nsph < 1) then
@@ -179,8 +177,7 @@ contains
         d = r(:, j) - r(:, i)
         dist = norm2(d)
         if (dist <= 0.0_wp) then
-          write (buf, '(i0," and ",i0)') i, j
-          call fatal_error(error, 'multipole system: spheres '//trim(buf)//' coincide')
+          call fatal_error(error, 'multipole system: spheres '//to_str(i)//' and '//to_str(j)//' coincide')
           this%n = 0
           return
         end if
@@ -228,14 +225,12 @@ contains
     this%t_assembly = real(c1 - c0, wp)/real(crate, wp)
     this%t_factor = real(c2 - c1, wp)/real(crate, wp)
     if (info /= 0) then
-      write (buf, '(i0)') info
       if (info > 0) then
-        write (buf2, '(i0)') this%n_clamped
         call fatal_error(error, 'Cholesky factorisation of the multipole system failed: matrix not '// &
-                         'positive definite (leading minor '//trim(buf)//'); '//trim(buf2)// &
+                         'positive definite (leading minor '//to_str(info)//'); '//to_str(this%n_clamped)// &
                          ' overlapping pairs (mutually overlapping spheres are not supported)')
       else
-        call fatal_error(error, 'dpotrf: illegal argument '//trim(buf)//' for the multipole system')
+        call fatal_error(error, 'dpotrf: illegal argument '//to_str(info)//' for the multipole system')
       end if
       this%n = 0
     end if
@@ -349,15 +344,13 @@ contains
     real(wp), intent(out) :: zeta(:, :)
     type(error_t), allocatable, intent(out) :: error
     integer :: i, j, c, cc, n6, info
-    character(len=24) :: buf
 
     n6 = this%n6
     call copy_lpp(this)
     call dpotri('L', n6, this%w6, n6, info)
     if (info /= 0) then
-      write (buf, '(i0)') info
       call fatal_error(error, 'inversion of the multipole grand mobility failed (dpotri info = '// &
-                       trim(buf)//')')
+                       to_str(info)//')')
       return
     end if
     do j = 1, n6
@@ -422,7 +415,6 @@ contains
     real(wp), intent(out) :: mu(:, :), dist(:, :)
     type(error_t), allocatable, intent(out) :: error
     integer :: info, i, j, n6
-    character(len=24) :: buf
 
     n6 = this%n6
     if (.not. allocated(this%zt)) allocate (this%zt(n6, n6), this%x6(n6, 5), this%t6(n6, 5))
@@ -435,9 +427,8 @@ contains
     this%x6 = this%x6 + dx
     call dpotrf('L', n6, this%zt, n6, info)
     if (info /= 0) then
-      write (buf, '(i0)') info
       call fatal_error(error, 'Cholesky factorisation of the lubrication-corrected friction '// &
-                       'failed (dpotrf info = '//trim(buf)//')')
+                       'failed (dpotrf info = '//to_str(info)//')')
       return
     end if
     call dpotrs('L', n6, 5, this%zt, n6, this%x6, n6, info)
@@ -447,9 +438,8 @@ contains
     end if
     call dpotri('L', n6, this%zt, n6, info)
     if (info /= 0) then
-      write (buf, '(i0)') info
       call fatal_error(error, 'inversion of the lubrication-corrected friction failed (dpotri info = '// &
-                       trim(buf)//')')
+                       to_str(info)//')')
       return
     end if
     do j = 1, this%n
