@@ -16,6 +16,7 @@ program knotflow
   use kf_case_runner, only: run_case, case_path, case_ok, case_failed, case_skipped
   use kf_comm, only: comm_t, comm_init, comm_finalize
   use kf_task_farm, only: run_task_farm, task_result_t, task_ok, task_failed, task_skipped
+  use kf_exit, only: exit_program
   implicit none
 
   type(comm_t) :: comm
@@ -64,7 +65,7 @@ program knotflow
   if (me == 0) call write_summary()
   call h5_finalize()
   call comm_finalize(error)
-  if (nfailed > 0) error stop 3
+  if (nfailed > 0) call exit_program(3)
 
 contains
 
@@ -242,8 +243,7 @@ contains
     if (me == 0) write (error_unit, '(a)') 'knotflow: error: '//message
     flush (error_unit)
     call comm_finalize(ignored)
-    if (code == 2) error stop 2
-    error stop 1
+    call exit_program(code)
   end subroutine die
 
 end program knotflow

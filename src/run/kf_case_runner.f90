@@ -141,7 +141,7 @@ contains
       if (t_next <= t) t_next = min(sc%integrator%t_end, t + sc%output%frame_interval)
       call integ%advance(dyn, t, r, t_next, error)
       if (allocated(error)) then
-        call fail(error%message//' at t = '//to_str_short(t))
+        call fail(error%message)
         return
       end if
       call compute_shape(r, obs, error)
