@@ -5,6 +5,7 @@ program knotflow_analyze
   use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
   use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
   use kf_kinds, only: wp, i8
+  use kf_exit, only: exit_program
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_knot_invariants, only: n_knot_types, knot_type_names
@@ -69,17 +70,9 @@ contains
   end function is_case_file
 
   subroutine die(message)
-    use, intrinsic :: iso_c_binding, only: c_int
     character(len=*), intent(in) :: message
-    interface
-      subroutine c_exit(status) bind(c, name='exit')
-        import :: c_int
-        integer(c_int), value :: status
-      end subroutine c_exit
-    end interface
     write (error_unit, '(a)') 'knotflow-analyze: error: '//message
-    flush (error_unit)
-    call c_exit(1_c_int)          ! one line and a non-zero exit status, no runtime backtrace
+    call exit_program(1)       ! flushes; one line and a non-zero exit status, no runtime backtrace
   end subroutine die
 
   subroutine usage()

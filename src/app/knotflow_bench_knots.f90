@@ -7,6 +7,7 @@ program knotflow_bench_knots
   use, intrinsic :: iso_fortran_env, only: output_unit, error_unit, int64
   use, intrinsic :: ieee_arithmetic, only: ieee_is_nan, ieee_value, ieee_quiet_nan
   use kf_kinds, only: wp, i8
+  use kf_exit, only: exit_program
   use kf_constants, only: pi
   use kf_error, only: error_t
   use kf_knot_closure, only: knot_stats_t, analyse_closures
@@ -76,17 +77,9 @@ contains
   end function wall
 
   subroutine die(message)
-    use, intrinsic :: iso_c_binding, only: c_int
     character(len=*), intent(in) :: message
-    interface
-      subroutine c_exit(status) bind(c, name='exit')
-        import :: c_int
-        integer(c_int), value :: status
-      end subroutine c_exit
-    end interface
     write (error_unit, '(a)') 'knotflow-bench-knots: error: '//message
-    flush (error_unit)
-    call c_exit(1_c_int)          ! one line and a non-zero exit status, no runtime backtrace
+    call exit_program(1)       ! flushes; one line and a non-zero exit status, no runtime backtrace
   end subroutine die
 
   subroutine open_trefoil(r)

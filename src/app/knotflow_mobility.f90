@@ -13,8 +13,8 @@
 !> Errors: one line on stderr and exit code 2.
 program knotflow_mobility
   use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
-  use, intrinsic :: iso_c_binding, only: c_int
   use kf_kinds, only: wp
+  use kf_exit, only: exit_program
   use kf_error, only: error_t
   use kf_text_coords, only: read_coordinates
   use kf_hydro_model, only: hydro_model_t
@@ -22,13 +22,6 @@ program knotflow_mobility
   use kf_hydro_factory, only: make_hydro_model
   use kf_scene, only: hydro_params_t
   implicit none
-
-  interface
-    subroutine c_exit(status) bind(C, name='exit')
-      import :: c_int
-      integer(c_int), value :: status
-    end subroutine c_exit
-  end interface
 
   character(len=:), allocatable :: file, model_name, output, arg, val
   integer :: order, i, j, nargs, ios, n
@@ -151,9 +144,7 @@ contains
   subroutine die(message)
     character(len=*), intent(in) :: message
     write (error_unit, '(a)') 'knotflow-mobility: error: '//message
-    flush (error_unit)
-    flush (output_unit)
-    call c_exit(2_c_int)
+    call exit_program(2)       ! flushes; one line and a non-zero exit status, no runtime backtrace
   end subroutine die
 
 end program knotflow_mobility
