@@ -134,11 +134,9 @@ contains
     real(wp), intent(inout) :: y(:, :)
     real(wp), intent(in) :: t_target
     type(error_t), allocatable, intent(out) :: error
-    character(len=40) :: b1, b2
     if (t_target < t) then
-      write (b1, '(es14.6)') t
-      write (b2, '(es14.6)') t_target
-      call fatal_error(error, 'integrator: t_target = '//trim(adjustl(b2))//' is before t = '//trim(adjustl(b1)))
+      call fatal_error(error, 'integrator: t_target = '//to_str(t_target, '(es14.6)')//' is before t = '// &
+        to_str(t, '(es14.6)'))
       return
     end if
     call this%ensure_work(y)
@@ -164,10 +162,8 @@ contains
     type(error_t), allocatable, intent(out) :: error
     class(integrator_t), intent(in) :: this
     real(wp), intent(in) :: t
-    character(len=24) :: b1, b2
-    write (b1, '(i0)') this%max_steps
-    write (b2, '(es14.6)') t
-    call fatal_error(error, 'integrator: max_steps = '//trim(b1)//' reached at t = '//trim(adjustl(b2)))
+    call fatal_error(error, 'integrator: max_steps = '//to_str(this%max_steps)//' reached at t = '// &
+      to_str(t, '(es14.6)'))
   end subroutine max_steps_error
 
   subroutine record_step(this, h)
@@ -234,7 +230,6 @@ contains
     real(wp) :: h, err, fac, dt_proposed
     integer :: i, n_bad
     logical :: last, finite
-    character(len=24) :: b1, b2
 
     ! FSAL: k1 is reusable if y and t are those it was evaluated at (the caller may change y).
     if (this%fsal_valid) then
@@ -335,10 +330,8 @@ contains
         this%dt = h*min(1.0_wp, fac)
       end if
       if (this%dt < this%dt_min .and. t < t_target) then
-        write (b1, '(es10.3)') this%dt
-        write (b2, '(es14.6)') t
-        call fatal_error(error, 'integrator: step size underflow (dt = '//trim(adjustl(b1))// &
-          ' < dt_min at t = '//trim(adjustl(b2))//')')
+        call fatal_error(error, 'integrator: step size underflow (dt = '//to_str(this%dt, '(es10.3)')// &
+          ' < dt_min at t = '//to_str(t, '(es14.6)')//')')
         return
       end if
     end do
