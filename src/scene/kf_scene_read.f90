@@ -23,12 +23,13 @@ module kf_scene_read
 contains
 
   !> Read and validate the scene in `path`. Groups listed in `extra_groups` (e.g. 'sweep') are
-  !> accepted and left to their own readers.
-  subroutine read_scene(path, sc, error, extra_groups)
+  !> accepted and left to their own readers, which get the scanned groups through `scanned`.
+  subroutine read_scene(path, sc, error, extra_groups, scanned)
     character(len=*), intent(in) :: path
     type(scene_t), intent(out) :: sc
     type(error_t), allocatable, intent(out) :: error
     character(len=*), intent(in), optional :: extra_groups(:)
+    type(nml_group_t), allocatable, intent(out), optional :: scanned(:)
     type(nml_group_t), allocatable :: groups(:)
     type(scene_item_t), allocatable :: catalogue(:)
     integer :: k
@@ -57,6 +58,7 @@ contains
       if (allocated(error)) return
     end do
     call validate_scene(sc, error)
+    if (present(scanned)) call move_alloc(groups, scanned)
 
   contains
 

@@ -6,7 +6,7 @@ module kf_sweep
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: scene_t
   use kf_scene_read, only: read_scene, validate_scene, find_group
-  use kf_namelist_scan, only: nml_group_t, scan_namelist_file, group_text
+  use kf_namelist_scan, only: nml_group_t, group_text
   implicit none
   private
 
@@ -43,9 +43,7 @@ contains
     integer(i8) :: seed(max_values)
     namelist /sweep/ bending_a, orientation, seed
 
-    call read_scene(path, sw%base, error, extra_groups=['sweep'])
-    if (allocated(error)) return
-    call scan_namelist_file(path, groups, error)
+    call read_scene(path, sw%base, error, extra_groups=['sweep'], scanned=groups)
     if (allocated(error)) return
     bending_a = unset_real
     orientation = ' '
