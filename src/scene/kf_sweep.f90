@@ -1,5 +1,8 @@
-!> A sweep: the Cartesian product of listed parameter values applied to a base scene.
-!> Group &sweep (optional): bending_a = list, orientation = list, seed = list.
+!> A sweep: listed parameter values applied to a base scene.
+!> Group &sweep (optional): bending_a = list, orientation = list, seed = list, and
+!> combine = 'product' (default: every combination of the lists) or 'zip' (case k takes the
+!> k-th value of every list; the non-empty lists must have equal lengths), so that a table of
+!> cases that is not a product (the study's Table 2) is one sweep.
 module kf_sweep
   use kf_kinds, only: wp, i8
   use kf_strings, only: to_str, to_str_fixed
@@ -20,6 +23,7 @@ module kf_sweep
     real(wp), allocatable :: bending_a(:)       !< listed values (empty: the base value only)
     character(len=1), allocatable :: orientation(:)
     integer(i8), allocatable :: seed(:)
+    logical :: zip = .false.                    !< combine = 'zip': lists are paired, not multiplied
   contains
     procedure :: n_cases
     procedure :: case_scene
@@ -41,21 +45,24 @@ contains
     real(wp) :: bending_a(max_values)
     character(len=1) :: orientation(max_values)
     integer(i8) :: seed(max_values)
-    namelist /sweep/ bending_a, orientation, seed
+    character(len=16) :: combine
+    integer :: lengths(3)
+    namelist /sweep/ bending_a, orientation, seed, combine
 
     call read_scene(path, sw%base, error, extra_groups=['sweep'], scanned=groups)
     if (allocated(error)) return
     bending_a = unset_real
     orientation = ' '
     seed = unset_int
+    combine = 'product'
     ig = find_group(groups, 'sweep')
     if (ig > 0) then
       do k = 1, size(groups(ig)%items)
         select case (groups(ig)%items(k)%name)
-        case ('bending_a', 'orientation', 'seed')
+        case ('bending_a', 'orientation', 'seed', 'combine')
         case default
           call fatal_error(error, trim(path)//': &sweep: unknown variable '''// &
-            groups(ig)%items(k)%name//''' (allowed: bending_a, orientation, seed)')
+            groups(ig)%items(k)%name//''' (allowed: bending_a, orientation, seed, combine)')
           return
         end select
         text = group_text(groups(ig), only=k)
@@ -72,6 +79,23 @@ contains
     sw%bending_a = pack(bending_a, bending_a /= unset_real)
     sw%orientation = pack(orientation, orientation /= ' ')
     sw%seed = pack(seed, seed /= unset_int)
+    select case (combine)
+    case ('product')
+      sw%zip = .false.
+    case ('zip')
+      sw%zip = .true.
+      lengths = [size(sw%bending_a), size(sw%orientation), size(sw%seed)]
+      if (any(lengths > 0 .and. lengths /= maxval(lengths))) then
+        call fatal_error(error, trim(path)//': &sweep: combine = ''zip'' needs lists of equal length, '// &
+          'but bending_a has '//to_str(lengths(1))//' values, orientation '//to_str(lengths(2))// &
+          ' and seed '//to_str(lengths(3))//' (empty lists are allowed)')
+        return
+      end if
+    case default
+      call fatal_error(error, trim(path)//': &sweep: combine = '''//trim(combine)// &
+        ''' is unknown (allowed: product, zip)')
+      return
+    end select
     if (size(sw%orientation) > 0 .and. sw%base%chain%shape /= 'trefoil') then
       call fatal_error(error, trim(path)//': &sweep: orientation is listed but &chain: shape = '''// &
         trim(sw%base%chain%shape)//''' has no orientations (only trefoil has a-e)')
@@ -95,10 +119,15 @@ contains
   !> Number of cases (1 without a &sweep group).
   pure integer function n_cases(this)
     class(sweep_t), intent(in) :: this
-    n_cases = max(1, size(this%bending_a))*max(1, size(this%orientation))*max(1, size(this%seed))
+    if (this%zip) then
+      n_cases = max(1, size(this%bending_a), size(this%orientation), size(this%seed))
+    else
+      n_cases = max(1, size(this%bending_a))*max(1, size(this%orientation))*max(1, size(this%seed))
+    end if
   end function n_cases
 
-  !> The scene of case `k` (1-based; bending_a varies slowest, seed fastest) and its name,
+  !> The scene of case `k` (1-based; product: bending_a varies slowest, seed fastest; zip: the
+  !> k-th value of each list) and its name,
   !> e.g. "A2.20_orc". Without listed parameters the name is output%case_name or "case".
   subroutine case_scene(this, k, sc, name)
     class(sweep_t), intent(in) :: this
@@ -110,11 +139,17 @@ contains
     na = max(1, size(this%bending_a))
     no = max(1, size(this%orientation))
     ns = max(1, size(this%seed))
-    r = k - 1
-    is = mod(r, ns) + 1
-    r = r/ns
-    io = mod(r, no) + 1
-    ia = r/no + 1
+    if (this%zip) then
+      ia = min(k, na)
+      io = min(k, no)
+      is = min(k, ns)
+    else
+      r = k - 1
+      is = mod(r, ns) + 1
+      r = r/ns
+      io = mod(r, no) + 1
+      ia = r/no + 1
+    end if
     sc = this%base
     name = ''
     if (size(this%bending_a) > 0) then
