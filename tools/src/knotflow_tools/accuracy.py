@@ -94,8 +94,9 @@ def summary_table(models: list[dict], case: list[dict]) -> str:
         key = label(r)
         if key not in wall or r["kind"] == "measured":
             wall[key] = (_num(r["wall"]), r["kind"])
+    t_end = "%g" % _num(case[0]["t_end"]) if case else "1000"
     header = ["model"] + ["RMS error, %s" % c for c in configs] + [
-        "one evaluation (trefoil)", "reference case t_end = 1000"]
+        "one evaluation (trefoil)", "reference case t_end = %s" % t_end]
     rows = []
     for m in order:
         row = [m] + [fmt_err(err[(c, m)]) if (c, m) in err else "–" for c in configs]
@@ -208,7 +209,8 @@ def build_markdown(directory: str, figdir_rel: str) -> tuple[str, str]:
         out += ["## Summary", "",
                 "RMS relative error of the bead velocities against multipole L = %s with "
                 "lubrication, time of one velocity evaluation, and wall time of one "
-                "reference-study case (trefoil N = 99, t_end = 1000, tolerance 1e-4)." % ref_order,
+                "reference-study case (trefoil N = 99, tolerance 1e-4; see the last section)."
+                % ref_order,
                 "", summary, ""]
         out += ["## Velocity error", "",
                 "u_i = dr_i/dt − v0(r_i): the velocity of bead i relative to the ambient shear "
@@ -321,8 +323,11 @@ def build_report(directory: str, markdown: str, figdir: str, readme: str | None 
         f.write(text)
     if readme and summary:
         meta = _meta(directory)
-        block = ("Measured by `bash scripts/accuracy.sh` (load average %s; details and figures "
-                 "in docs/accuracy.md):\n\n%s" % (meta.get("loadavg_start", "unknown"), summary))
+        block = ("Measured by `bash scripts/accuracy.sh`%s (load average %s; details and "
+                 "figures in docs/accuracy.md):\n\n%s" % (
+                     " **--quick: smoke-test sizes, not the real figures**"
+                     if meta.get("quick") == "1" else "",
+                     meta.get("loadavg_start", "unknown"), summary))
         update_readme(readme, block)
     return {"markdown": markdown, "figures": figures, "summary": summary}
 
