@@ -135,6 +135,8 @@ program knotflow_accuracy
   if (allocated(error)) call die(error%message)
   if (do_case_time) call part_case_time(cfg, error)
   if (allocated(error)) call die(error%message)
+  call append_meta('loadavg_end', load_average(), error)
+  if (allocated(error)) call die(error%message)
   write (output_unit, '(a)') '# knotflow-accuracy: done in '//to_str(wall_seconds() - t_start, '(f10.1)')// &
     ' s; results in '//cfg%out
   call exit_program(0)
@@ -259,6 +261,23 @@ contains
     if (allocated(error)) return
     call close_csv(unit, error)
   end subroutine write_meta
+
+  !> Append one key,value line to DIR/meta.csv.
+  subroutine append_meta(key, value, error)
+    character(len=*), intent(in) :: key, value
+    type(error_t), allocatable, intent(out) :: error
+    integer :: unit, ios
+    character(len=256) :: msg
+    open (newunit=unit, file=cfg%out//'/meta.csv', status='old', position='append', action='write', &
+          iostat=ios, iomsg=msg)
+    if (ios /= 0) then
+      call fatal_error(error, 'cannot append to '//cfg%out//'/meta.csv: '//trim(msg))
+      return
+    end if
+    call put_line(unit, key//','//value, error)
+    if (allocated(error)) return
+    call close_csv(unit, error)
+  end subroutine append_meta
 
   !> Velocity errors and time per evaluation of every model on the three configurations.
   subroutine part_models(cfg, error)
