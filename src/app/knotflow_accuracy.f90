@@ -143,6 +143,7 @@ program knotflow_accuracy
 
 contains
 
+  !> Command-line argument k (any length).
   function get_arg(k) result(s)
     integer, intent(in) :: k
     character(len=:), allocatable :: s
@@ -152,6 +153,7 @@ contains
     if (length > 0) call get_command_argument(k, s)
   end function get_arg
 
+  !> One error line on stderr and exit status 2.
   subroutine die(message)
     character(len=*), intent(in) :: message
     write (error_unit, '(a)') 'knotflow-accuracy: error: '//message
@@ -199,6 +201,7 @@ contains
     call put_line(unit, header, error)
   end subroutine open_csv
 
+  !> Write one line to a results file.
   subroutine put_line(unit, line, error)
     integer, intent(in) :: unit
     character(len=*), intent(in) :: line
@@ -209,6 +212,7 @@ contains
     if (ios /= 0) call fatal_error(error, 'writing a results file: '//trim(msg))
   end subroutine put_line
 
+  !> Close a results file.
   subroutine close_csv(unit, error)
     integer, intent(in) :: unit
     type(error_t), allocatable, intent(out) :: error
@@ -218,12 +222,14 @@ contains
     if (ios /= 0) call fatal_error(error, 'closing a results file: '//trim(msg))
   end subroutine close_csv
 
+  !> A real for the CSV tables (6 significant digits).
   function es(x) result(s)
     real(wp), intent(in) :: x
     character(len=:), allocatable :: s
     s = to_str(x, '(es12.5)')
   end function es
 
+  !> A logical for the CSV tables: 1 or 0.
   function lg(x) result(s)
     logical, intent(in) :: x
     character(len=:), allocatable :: s
@@ -243,6 +249,7 @@ contains
     close (unit, iostat=ios)
   end function load_average
 
+  !> DIR/meta.csv: the settings of the run and the load at its start.
   subroutine write_meta(cfg, error)
     type(settings_t), intent(in) :: cfg
     type(error_t), allocatable, intent(out) :: error
