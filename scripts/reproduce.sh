@@ -1,13 +1,16 @@
 #!/usr/bin/env bash
 # Reproduce the reference study: run the trefoil Table 2 sweep (29 cases, N = 99) and the
 # candy-cane sweep (A = 1, 1.4, 3; N = 152), analyse them, and write the comparison.
-#   scripts/reproduce.sh [--hydro rpy|multipole] [--no-run]
+#   scripts/reproduce.sh [--hydro rpy|multipole] [--no-run] [--no-extras]
 #
 #   --hydro rpy        (default) inputs/trefoil_table2.nml and inputs/candycane.nml:
 #                      RPY + excluded volume, about 30 s per trefoil case on one core.
 #   --hydro multipole  the *_multipole.nml variants: multipole L = 2 + lubrication, hours per case
 #                      (a cluster job: jobs/README.md).
 #   --no-run           only analyse what the sweeps already wrote (e.g. after cluster jobs).
+#   --no-extras        (rpy) skip the two checks beyond the study's inputs: the candy-cane with 5
+#                      random rotations (inputs/candycane_seeds.nml) and Table 2 with the open
+#                      trefoil whose k_f(0) = 0.98 (inputs/trefoil_table2_p24.nml).
 #
 # Re-running continues: finished cases are skipped, killed ones resumed, and knotflow-analyze
 # reuses the k_f and knot matrices it already stored. Output: results/<sweep>/ (case files,
@@ -19,16 +22,18 @@ source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
 hydro=rpy
 run=1
+extras=1
 while [ $# -gt 0 ]; do
   case "$1" in
     --hydro) [ $# -ge 2 ] || kf_die "--hydro needs a value (rpy or multipole)"; hydro="$2"; shift 2 ;;
     --no-run) run=0; shift ;;
-    *) kf_die "unknown argument '$1' (allowed: --hydro rpy|multipole, --no-run)" ;;
+    --no-extras) extras=0; shift ;;
+    *) kf_die "unknown argument '$1' (allowed: --hydro rpy|multipole, --no-run, --no-extras)" ;;
   esac
 done
 case "$hydro" in
   rpy) suffix="" ;;
-  multipole) suffix="_multipole" ;;
+  multipole) suffix="_multipole"; extras=0 ;;
   *) kf_die "--hydro $hydro is unknown (allowed: rpy, multipole)" ;;
 esac
 np="${KNOTFLOW_NP:-2}"
@@ -42,35 +47,49 @@ kf_mpirun_flags
 mpi=(mpirun -n "$np" "${KF_MPIRUN_FLAGS[@]}")
 analyze="$KF_ROOT/build/src/app/knotflow-analyze"
 
-trefoil_dir="results/trefoil_table2$suffix"
-cane_dir="results/candycane$suffix"
+# Sweeps: name of the input (inputs/<name>.nml) = name of the output directory (results/<name>).
+trefoil_sweeps=("trefoil_table2$suffix")
+cane_sweeps=("candycane$suffix")
+if [ "$extras" = 1 ]; then
+  trefoil_sweeps+=(trefoil_table2_p24)
+  cane_sweeps+=(candycane_seeds)
+fi
 if [ "$run" = 1 ]; then
-  for sweep in trefoil_table2 candycane; do
-    kf_log "knotflow inputs/$sweep$suffix.nml on $np rank(s)"
+  for sweep in "${trefoil_sweeps[@]}" "${cane_sweeps[@]}"; do
+    kf_log "knotflow inputs/$sweep.nml on $np rank(s)"
     # A failed case (exit 3) is reported in the summary; the others are still analysed.
-    "${mpi[@]}" build/knotflow "inputs/$sweep$suffix.nml" || [ $? -eq 3 ]
+    "${mpi[@]}" build/knotflow "inputs/$sweep.nml" || [ $? -eq 3 ]
   done
 fi
 
 shopt -s nullglob
-trefoils=("$trefoil_dir"/*.h5)
-canes=("$cane_dir"/*.h5)
-[ "${#trefoils[@]}" -gt 0 ] || [ "${#canes[@]}" -gt 0 ] || kf_die "no case files in $trefoil_dir or $cane_dir"
 # Trefoils: k_f of every frame (200 closures), knot matrix of the last frame.
-if [ "${#trefoils[@]}" -gt 0 ]; then
-  kf_log "knotflow-analyze: ${#trefoils[@]} trefoil case(s)"
-  "${mpi[@]}" "$analyze" "${trefoils[@]}" --closures 200 --stride 1 --matrix-frames last
-fi
-# Candy-canes: k_f of every frame, knot matrices (20 closures per subchain) every 50 frames and
-# at the 5 most entangled frames: the slipknot search.
-for f in "${canes[@]}"; do
-  frames="$(knotflow-study --select-frames "$f")"
-  kf_log "knotflow-analyze $f (knot matrices of frames $frames)"
-  "${mpi[@]}" "$analyze" "$f" --closures 200 --stride 1 --matrix-frames "$frames" --matrix-closures 20
+for sweep in "${trefoil_sweeps[@]}"; do
+  files=("results/$sweep"/*.h5)
+  [ "${#files[@]}" -gt 0 ] || { kf_log "no case files in results/$sweep: skipped"; continue; }
+  kf_log "knotflow-analyze: ${#files[@]} case(s) of results/$sweep"
+  "${mpi[@]}" "$analyze" "${files[@]}" --closures 200 --stride 1 --matrix-frames last
+done
+# Candy-canes: k_f of every frame; for the main sweep also knot matrices (20 closures per
+# subchain) every 50 frames and at the 5 most entangled frames: the slipknot search.
+for sweep in "${cane_sweeps[@]}"; do
+  for f in "results/$sweep"/*.h5; do
+    if [ "$sweep" = "candycane$suffix" ]; then
+      frames="$(knotflow-study --select-frames "$f")"
+      kf_log "knotflow-analyze $f (knot matrices of frames $frames)"
+      "${mpi[@]}" "$analyze" "$f" --closures 200 --stride 1 --matrix-frames "$frames" --matrix-closures 20
+    else
+      kf_log "knotflow-analyze $f"
+      "${mpi[@]}" "$analyze" "$f" --closures 200 --stride 1
+    fi
+  done
 done
 out="results/reproduction$suffix"
 kf_log "knotflow-study -> $out"
-args=()
-[ "${#trefoils[@]}" -gt 0 ] && args+=(--trefoil "$trefoil_dir")
-[ "${#canes[@]}" -gt 0 ] && args+=(--candycane "$cane_dir")
+args=(--trefoil "results/${trefoil_sweeps[0]}" --candycane "results/${cane_sweeps[0]}")
+[ "$extras" = 1 ] && args+=(--ensemble results/candycane_seeds)
 knotflow-study "${args[@]}" --out "$out"
+if [ "$extras" = 1 ]; then
+  kf_log "knotflow-study -> ${out}_p24 (the open trefoil with k_f(0) = 0.98)"
+  knotflow-study --trefoil results/trefoil_table2_p24 --out "${out}_p24"
+fi

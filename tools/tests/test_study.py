@@ -50,3 +50,14 @@ def test_slipknot_scan_finds_core_and_flags_slipknot():
     # the same matrix with a knotted whole chain is a knot, not a slipknot
     scan = study.slipknot_scan(case, np.array([0.0, 18.0]), np.array([1.0, 1.0]))
     assert not any(m["slipknot"] for m in scan)
+
+
+def test_history_counts_the_first_untying_of_a_trefoil():
+    t = np.arange(6.0)
+    kf = np.array([0.85, 0.5, 0.05, 0.5, 0.95, 0.97])
+    # starting knotted: untied at t = 2, knotted again at t = 4
+    assert study.history(t, kf, knotted_at_start=True) == [("unknot", 2.0), ("knot", 4.0)]
+    # the same series from an unknotted start: only the knotting
+    assert study.history(t, kf, knotted_at_start=False) == [("knot", 4.0)]
+    # inside the band throughout: nothing happens
+    assert study.history(t[:2], kf[:2], knotted_at_start=True) == []

@@ -24,7 +24,7 @@ from .analysis import analyze_case  # noqa: E402
 from .io import read_case  # noqa: E402
 from .plot import MODE_NAMES, _draw_chain  # noqa: E402
 from .report import find_case_files  # noqa: E402
-from .transitions import unknot_then_knot  # noqa: E402
+from .transitions import states  # noqa: E402
 
 #: Table 2 of the reference study: the cases whose k_f went unknotted and then knotted again.
 #: Every other case of the table had no such transition.
@@ -58,6 +58,21 @@ def entangled_frames(path, every=50, extra=5, gap=20):
     return sorted(sel + chosen)
 
 
+def history(time, kf, knotted_at_start):
+    """Events of k_f(t) with the hysteresis of `transitions` and a given initial state.
+
+    The open trefoil starts as a trefoil (k_f(0) about 0.8-0.9, inside the hysteresis band), so the
+    first frame below the band is already an untying: the sweep report, which takes the state of
+    the first frame outside the band as the initial one, does not count it as an event."""
+    prev = "knotted" if knotted_at_start else "unknotted"
+    events = []
+    for k, st in enumerate(states(kf)):
+        if st is not None and st != prev:
+            events.append(("unknot" if st == "unknotted" else "knot", float(time[k])))
+            prev = st
+    return events
+
+
 def _late(t, frac=0.5):
     """Mask of the second half of the run (after the transient)."""
     return t >= t[0] + frac * (t[-1] - t[0])
@@ -71,19 +86,19 @@ def trefoil_rows(files, closures=200):
             continue
         ana = analyze_case(case, closures=closures)
         a, o = float(case.bending_a), str(case.orientation)
-        kinds = [e.kind for e in ana.events]
-        utk = unknot_then_knot(ana.events)
-        t_unknot = next((e.time for e in ana.events if e.kind == "unknot"), None)
+        events = history(ana.time, ana.kf, knotted_at_start=ana.kf[0] >= 0.5)
+        kinds = [k for k, _ in events]
+        t_unknot = next((t for k, t in events if k == "unknot"), None)
         t_reknot = None
-        if utk:
-            k0 = kinds.index("unknot")
-            t_reknot = next(e.time for e in ana.events[k0 + 1:] if e.kind == "knot")
+        if "unknot" in kinds and "knot" in kinds[kinds.index("unknot"):]:
+            t_reknot = next(t for k, t in events[kinds.index("unknot"):] if k == "knot")
+        utk = t_reknot is not None
         rows.append({
             "case": case.name, "A": a, "orientation": o, "status": case.status,
             "t_end": float(case.time[-1]), "kf0": float(ana.kf[0]), "final_kf": ana.final_kf,
             "final_state": ana.final_state or "undecided",
-            "events": [[e.kind, float(e.time)] for e in ana.events],
-            "unknot_then_knot": bool(utk), "t_unknot": t_unknot, "t_reknot": t_reknot,
+            "events": [[k, t] for k, t in events],
+            "unknot_then_knot": utk, "t_unknot": t_unknot, "t_reknot": t_reknot,
             "study_transition": _in_study(a, o), "mode": MODE_NAMES.get(ana.case_mode, "?"),
             "time": ana.time.tolist(), "kf": ana.kf.tolist(), "kf_source": ana.kf_source,
         })
@@ -258,7 +273,8 @@ def trefoil_tables(rows):
     by = {(r["A"], r["orientation"]): r for r in rows}
     out = ["### Unknot-then-knot transitions, ours vs the study (Table 2)", "",
            "Cell: ours / study; `U->K` an unknot-then-knot transition, `-` none; "
-           "**bold** where they differ.", "",
+           "**bold** where they differ. Every case starts as an open trefoil (knotted); an "
+           "untying is k_f falling below 0.1, a re-knotting k_f rising above 0.9 afterwards.", "",
            "| A | " + " | ".join(o_vals) + " |", "|---|" + "---|" * len(o_vals)]
     agree = total = 0
     for a in a_vals:
@@ -321,7 +337,30 @@ def candycane_tables(rows):
     return out
 
 
-def write_study(trefoil_dir, candycane_dir, out, closures=200):
+def ensemble_tables(rows):
+    """Candy-canes with several random rotations: every case, then mean and range per A."""
+    out = ["### Candy-cane ensemble (several random rotations; late = second half of the run)", "",
+           "| case | close pairs (all t) | close pairs (late) | R_g (late) | c (late) | "
+           "mean abs cos theta (late) | mode I / II frames (late) | max k_f |",
+           "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        out.append(f"| {r['case']} | {r['close_pairs_mean']:.2f} | {r['close_pairs_late']:.2f} | "
+                   f"{r['rg_late']:.1f} | {r['c_late']:.2f} | {r['abs_cos_theta_late']:.2f} | "
+                   f"{_f(r['mode_I_late'])} / {_f(r['mode_II_late'])} | {r['max_kf']:.2f} |")
+    out += ["", "| A | cases | close pairs, all t: mean (min-max) | mean abs cos theta, late: mean "
+            "(min-max) | cases with theta mostly along vorticity (late mean abs cos > 0.7) |",
+            "|---|---|---|---|---|"]
+    for a in sorted({r["A"] for r in rows}):
+        g = [r for r in rows if r["A"] == a]
+        cp = [r["close_pairs_mean"] for r in g]
+        ct = [r["abs_cos_theta_late"] for r in g]
+        out.append(f"| {a:g} | {len(g)} | {np.mean(cp):.2f} ({min(cp):.2f}-{max(cp):.2f}) | "
+                   f"{np.mean(ct):.2f} ({min(ct):.2f}-{max(ct):.2f}) | "
+                   f"{sum(c > 0.7 for c in ct)} of {len(g)} |")
+    return out
+
+
+def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None):
     os.makedirs(out, exist_ok=True)
     md = ["# knotflow-study: generated results", "",
           f"Trefoil sweep: `{trefoil_dir}`; candy-cane sweep: `{candycane_dir}`.", ""]
@@ -344,6 +383,10 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200):
         md += [f"![{os.path.basename(f)}]({os.path.basename(f)})" for f in figs if f] + [""]
         md += candycane_tables(rows) + [""]
         result["candycane"] = [{k: v for k, v in r.items() if not k.startswith("_")} for r in rows]
+    if ensemble_dir:
+        rows = candycane_rows(find_case_files(ensemble_dir), closures)
+        md += ["## Candy-cane ensemble", ""] + ensemble_tables(rows) + [""]
+        result["ensemble"] = [{k: v for k, v in r.items() if not k.startswith("_")} for r in rows]
     with open(os.path.join(out, "results.md"), "w", encoding="utf-8") as fh:
         fh.write("\n".join(md) + "\n")
     with open(os.path.join(out, "results.json"), "w", encoding="utf-8") as fh:
@@ -355,6 +398,7 @@ def main(argv=None):
     p = argparse.ArgumentParser(prog="knotflow-study", description=__doc__.splitlines()[0])
     p.add_argument("--trefoil", help="output directory of inputs/trefoil_table2.nml")
     p.add_argument("--candycane", help="output directory of inputs/candycane.nml")
+    p.add_argument("--ensemble", help="output directory of inputs/candycane_seeds.nml (optional)")
     p.add_argument("--out", default="docs/reproduction", help="where figures and results.md go")
     p.add_argument("--closures", type=int, default=200,
                    help="closures per frame where /analysis/knots is missing")
@@ -365,12 +409,12 @@ def main(argv=None):
     if args.select_frames:
         print(",".join(str(k) for k in entangled_frames(args.select_frames)))
         return 0
-    if not args.trefoil and not args.candycane:
-        p.error("give --trefoil DIR and/or --candycane DIR")
-    for d in (args.trefoil, args.candycane):
+    if not (args.trefoil or args.candycane or args.ensemble):
+        p.error("give --trefoil DIR, --candycane DIR and/or --ensemble DIR")
+    for d in (args.trefoil, args.candycane, args.ensemble):
         if d and not os.path.isdir(d):
             p.error(f"directory not found: {d}")
-    res = write_study(args.trefoil, args.candycane, args.out, args.closures)
+    res = write_study(args.trefoil, args.candycane, args.out, args.closures, args.ensemble)
     if "trefoil" in res:
         print(f"trefoils: {res['trefoil']['agree']} of {res['trefoil']['total']} cases agree with "
               "the study on unknot-then-knot transitions")
