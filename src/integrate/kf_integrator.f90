@@ -14,6 +14,7 @@ module kf_integrator
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: integrator_params_t
   use kf_ode_system, only: ode_system_t
+  use kf_step_monitor, only: step_monitor_t
   implicit none
   private
 
@@ -126,14 +127,16 @@ contains
   !> Integrate y from t exactly to t_target (t is updated). The last step is clipped to hit
   !> t_target; the step size proposed before the clip is kept for the next call. On failure
   !> (non-finite values, step size underflow, max_steps, an error of the system) y and t are
-  !> left at the last accepted state.
-  subroutine integrator_advance(this, sys, t, y, t_target, error)
+  !> left at the last accepted state. An optional `monitor` sees every accepted step
+  !> (kf_step_monitor): its `on_step` gets the configurations before and after the step.
+  subroutine integrator_advance(this, sys, t, y, t_target, error, monitor)
     class(integrator_t), intent(inout) :: this
     class(ode_system_t), intent(inout) :: sys
     real(wp), intent(inout) :: t
     real(wp), intent(inout) :: y(:, :)
     real(wp), intent(in) :: t_target
     type(error_t), allocatable, intent(out) :: error
+    class(step_monitor_t), intent(inout), optional :: monitor
     if (t_target < t) then
       call fatal_error(error, 'integrator: t_target = '//to_str(t_target, '(es14.6)')//' is before t = '// &
         to_str(t, '(es14.6)'))
@@ -141,9 +144,9 @@ contains
     end if
     call this%ensure_work(y)
     if (this%method == method_rk4) then
-      call this%step_rk4(sys, t, y, t_target, error)
+      call this%step_rk4(sys, t, y, t_target, error, monitor)
     else
-      call this%step_dopri(sys, t, y, t_target, error)
+      call this%step_dopri(sys, t, y, t_target, error, monitor)
     end if
   end subroutine integrator_advance
 
@@ -175,14 +178,15 @@ contains
   end subroutine record_step
 
   !> Fixed-step classic RK4 with step this%dt (the last step clipped to t_target).
-  subroutine step_rk4(this, sys, t, y, t_target, error)
+  subroutine step_rk4(this, sys, t, y, t_target, error, monitor)
     class(integrator_t), intent(inout) :: this
     class(ode_system_t), intent(inout) :: sys
     real(wp), intent(inout) :: t
     real(wp), intent(inout) :: y(:, :)
     real(wp), intent(in) :: t_target
     type(error_t), allocatable, intent(out) :: error
-    real(wp) :: h
+    class(step_monitor_t), intent(inout), optional :: monitor
+    real(wp) :: h, t_old
     logical :: last
     do while (t < t_target)
       if (this%steps >= this%max_steps) then
@@ -209,25 +213,28 @@ contains
         call nonfinite_error(error, t)
         return
       end if
-      y = this%ynew
+      t_old = t
       if (last) then
         t = t_target
       else
         t = t + h
       end if
+      if (present(monitor)) call monitor%on_step(t_old, y, t, this%ynew)
+      y = this%ynew
       call record_step(this, h)
     end do
   end subroutine step_rk4
 
   !> Adaptive Dormand-Prince 5(4) with FSAL and PI step-size control.
-  subroutine step_dopri(this, sys, t, y, t_target, error)
+  subroutine step_dopri(this, sys, t, y, t_target, error, monitor)
     class(integrator_t), intent(inout) :: this
     class(ode_system_t), intent(inout) :: sys
     real(wp), intent(inout) :: t
     real(wp), intent(inout) :: y(:, :)
     real(wp), intent(in) :: t_target
     type(error_t), allocatable, intent(out) :: error
-    real(wp) :: h, err, fac, dt_proposed
+    class(step_monitor_t), intent(inout), optional :: monitor
+    real(wp) :: h, err, fac, dt_proposed, t_old
     integer :: i, n_bad
     logical :: last, finite
 
@@ -300,12 +307,14 @@ contains
         this%dt = h*this%fac_min
       else if (err <= 1.0_wp) then
         n_bad = 0
-        y = this%ynew
+        t_old = t
         if (last) then
           t = t_target
         else
           t = t + h
         end if
+        if (present(monitor)) call monitor%on_step(t_old, y, t, this%ynew)
+        y = this%ynew
         call record_step(this, h)
         this%k1 = this%k7
         this%t_fsal = t

@@ -11,6 +11,14 @@
 !>   extendible along the frame axis.
 !> - /checkpoint/{time, positions (N, 3), dt, steps, rejected, nframes}: the state of the last
 !>   frame, rewritten with every frame.
+!> - With run diagnostics (kf_run_diagnostics; `enable_diagnostics` after `create`):
+!>   /frames/diagnostics/{strand_passages, overlap_episodes} int64 (cumulative since t = 0),
+!>   overlapping_pairs int32, min_distance and max_bond_strain float64 (of the frame's
+!>   configuration); root attributes diagnostics.{strand_passages, first_passage_time,
+!>   overlap_episodes, overlap_mean_duration, overlap_max_duration, max_overlapping_pairs,
+!>   min_distance, max_bond_strain} (run totals, rewritten with every frame); and the monitor
+!>   state in /checkpoint/diagnostics/{counters, values, ongoing} (`restore_diagnostics`).
+!>   Files without /frames/diagnostics are valid: diagnostics are optional.
 !>
 !> Choices made here:
 !> - The file is created under its final name (no '<path>.tmp' and rename): the very first
@@ -30,6 +38,7 @@ module kf_case_file
   use kf_kinds, only: wp, i4, i8
   use kf_error, only: error_t, fatal_error
   use kf_shape, only: shape_t
+  use kf_run_diagnostics, only: run_diagnostics_t, configuration_diagnostics
   use kf_build_info, only: knotflow_version, knotflow_git_hash, knotflow_compiler, knotflow_flags
   use kf_h5, only: h5_file_t, h5_create_file, h5_open_file, h5_close_file, h5_flush, &
     h5_create_group, h5_exists, h5_attr_exists, h5_write_attr, h5_read_attr, h5_write, h5_read, &
@@ -75,6 +84,7 @@ module kf_case_file
     integer :: n_beads = 0
     integer(i8) :: nframes = 0
     real(wp) :: last_time = 0.0_wp
+    logical :: diagnostics = .false.     !< the file has /frames/diagnostics
   contains
     !> create(path, case_name, n_beads, scene_text, [scene_attrs,] rotation, error): the
     !> scene attributes can also be written afterwards with `write_attribute`.
@@ -87,6 +97,9 @@ module kf_case_file
     procedure :: close => close_case
     procedure :: is_open => case_is_open
     procedure :: frame_count
+    procedure :: enable_diagnostics
+    procedure :: has_diagnostics
+    procedure :: restore_diagnostics
     !> Write one more root attribute (same kinds as `attribute_list_t%add`).
     generic :: write_attribute => write_attr_str, write_attr_i4, write_attr_i8, write_attr_real, &
       write_attr_logical, write_attr_real1, write_attr_real2
@@ -99,6 +112,13 @@ module kf_case_file
     '/frames/observables/rg', '/frames/observables/a', '/frames/observables/b', &
     '/frames/observables/c', '/frames/observables/theta', '/frames/observables/phi', &
     '/frames/integrator/dt']
+
+  !> The /frames/diagnostics datasets and their element kinds.
+  character(len=*), parameter :: diag_sets(5) = [character(len=40) :: &
+    '/frames/diagnostics/strand_passages', '/frames/diagnostics/overlapping_pairs', &
+    '/frames/diagnostics/overlap_episodes', '/frames/diagnostics/min_distance', &
+    '/frames/diagnostics/max_bond_strain']
+  integer, parameter :: diag_kinds(5) = [h5_int64, h5_int32, h5_int64, h5_real, h5_real]
 
 contains
 
@@ -219,6 +239,7 @@ contains
     if (allocated(error)) return
     this%n_beads = n_beads
     this%nframes = 0
+    this%diagnostics = .false.
     call h5_write_attr(this%file, '/', 'status', 'running', error)
     if (allocated(error)) return
     call h5_write_attr(this%file, '/', 'knotflow_version', knotflow_version, error)
@@ -271,9 +292,60 @@ contains
     if (allocated(error)) text = ''
   end function file_scene_text
 
+  !> Create the (empty) /frames/diagnostics datasets of a file just created, before its first
+  !> frame: from then on every `append_frame` must pass the run diagnostics.
+  subroutine enable_diagnostics(this, error)
+    class(case_file_t), intent(inout) :: this
+    type(error_t), allocatable, intent(out) :: error
+    integer :: i
+    if (.not. this%file%is_open()) then
+      call fatal_error(error, 'case file: enable_diagnostics on a file that is not open')
+      return
+    end if
+    if (this%nframes > 0) then
+      call fatal_error(error, "case file '"//this%file%name()//"': diagnostics must be enabled before the first frame")
+      return
+    end if
+    do i = 1, size(diag_sets)
+      if (h5_exists(this%file, trim(diag_sets(i)))) cycle
+      call h5_create_extendible(this%file, trim(diag_sets(i)), diag_kinds(i), [integer ::], error)
+      if (allocated(error)) return
+    end do
+    this%diagnostics = .true.
+    call h5_flush(this%file, error)
+  end subroutine enable_diagnostics
+
+  !> Does the open file hold run diagnostics (/frames/diagnostics)?
+  pure logical function has_diagnostics(this)
+    class(case_file_t), intent(in) :: this
+    has_diagnostics = this%diagnostics
+  end function has_diagnostics
+
+  !> Restore the run diagnostics from /checkpoint/diagnostics of a file opened with
+  !> `open_resume` (`diag` initialised for the file's number of beads).
+  subroutine restore_diagnostics(this, diag, error)
+    class(case_file_t), intent(inout) :: this
+    type(run_diagnostics_t), intent(inout) :: diag
+    type(error_t), allocatable, intent(out) :: error
+    integer(i8), allocatable :: counters(:)
+    real(wp), allocatable :: values(:), ongoing(:, :)
+    if (.not. (this%diagnostics .and. h5_exists(this%file, '/checkpoint/diagnostics/counters'))) then
+      call fatal_error(error, "case file '"//this%file%name()//"' has no diagnostics checkpoint")
+      return
+    end if
+    call h5_read(this%file, '/checkpoint/diagnostics/counters', counters, error)
+    if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/diagnostics/values', values, error)
+    if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/diagnostics/ongoing', ongoing, error)
+    if (allocated(error)) return
+    call diag%set_state(counters, values, ongoing, error)
+    if (allocated(error)) error%message = "case file '"//this%file%name()//"': "//error%message
+  end subroutine restore_diagnostics
+
   !> Append frame (t, r(3, N)) with its shape observables and cumulative integrator counts,
-  !> rewrite /checkpoint with this state and flush the file.
-  subroutine append_frame(this, t, r, shape, steps, rejected, dt, error)
+  !> rewrite /checkpoint with this state and flush the file. A file with diagnostics
+  !> (`enable_diagnostics`) needs `diagnostics`, the run's monitor after the frame's last step:
+  !> its per-frame values, run totals (root attributes) and state (checkpoint) are written too.
+  subroutine append_frame(this, t, r, shape, steps, rejected, dt, error, diagnostics)
     class(case_file_t), intent(inout) :: this
     real(wp), intent(in) :: t
     real(wp), intent(in) :: r(:, :)
@@ -281,9 +353,18 @@ contains
     integer(i8), intent(in) :: steps, rejected
     real(wp), intent(in) :: dt
     type(error_t), allocatable, intent(out) :: error
+    type(run_diagnostics_t), intent(in), optional :: diagnostics
     real(wp), allocatable :: rc(:, :)
     if (.not. this%file%is_open()) then
       call fatal_error(error, 'case file: append_frame on a file that is not open')
+      return
+    end if
+    if (this%diagnostics .and. .not. present(diagnostics)) then
+      call fatal_error(error, "case file '"//this%file%name()//"': append_frame needs the run diagnostics")
+      return
+    else if (present(diagnostics) .and. .not. this%diagnostics) then
+      call fatal_error(error, "case file '"//this%file%name()//"': append_frame got diagnostics "// &
+        'but the file has none (enable_diagnostics)')
       return
     end if
     if (size(r, 1) /= 3 .or. size(r, 2) /= this%n_beads) then
@@ -309,6 +390,10 @@ contains
     if (.not. allocated(error)) call h5_append(this%file, '/frames/integrator/rejected', rejected, error)
     if (.not. allocated(error)) call h5_append(this%file, '/frames/integrator/dt', dt, error)
     if (allocated(error)) return
+    if (present(diagnostics)) then
+      call write_diagnostics(this%file, r, diagnostics, error)
+      if (allocated(error)) return
+    end if
     this%nframes = this%nframes + 1
     this%last_time = t
     call h5_write(this%file, '/checkpoint/time', t, error)
@@ -321,6 +406,46 @@ contains
     if (allocated(error)) return
     call h5_flush(this%file, error)
   end subroutine append_frame
+
+  !> Per-frame values, run totals and checkpoint state of the run diagnostics.
+  subroutine write_diagnostics(file, r, diag, error)
+    type(h5_file_t), intent(in) :: file
+    real(wp), intent(in) :: r(:, :)
+    type(run_diagnostics_t), intent(in) :: diag
+    type(error_t), allocatable, intent(out) :: error
+    integer :: pairs
+    real(wp) :: dmin, strain
+    integer(i8) :: counters(5)
+    real(wp) :: values(5)
+    real(wp), allocatable :: ongoing(:, :)
+    call configuration_diagnostics(r, diag%bond_length, pairs, dmin, strain)
+    call h5_append(file, '/frames/diagnostics/strand_passages', diag%strand_passages, error)
+    if (.not. allocated(error)) call h5_append(file, '/frames/diagnostics/overlapping_pairs', int(pairs, i4), error)
+    if (.not. allocated(error)) call h5_append(file, '/frames/diagnostics/overlap_episodes', diag%overlap_episodes, error)
+    if (.not. allocated(error)) call h5_append(file, '/frames/diagnostics/min_distance', dmin, error)
+    if (.not. allocated(error)) call h5_append(file, '/frames/diagnostics/max_bond_strain', strain, error)
+    if (.not. allocated(error)) &
+      call h5_write_attr(file, '/', 'diagnostics.strand_passages', diag%strand_passages, error)
+    if (.not. allocated(error)) &
+      call h5_write_attr(file, '/', 'diagnostics.first_passage_time', diag%first_passage_time, error)
+    if (.not. allocated(error)) &
+      call h5_write_attr(file, '/', 'diagnostics.overlap_episodes', diag%overlap_episodes, error)
+    if (.not. allocated(error)) &
+      call h5_write_attr(file, '/', 'diagnostics.overlap_mean_duration', diag%mean_duration(), error)
+    if (.not. allocated(error)) &
+      call h5_write_attr(file, '/', 'diagnostics.overlap_max_duration', diag%duration_max, error)
+    if (.not. allocated(error)) &
+      call h5_write_attr(file, '/', 'diagnostics.max_overlapping_pairs', int(diag%max_overlapping_pairs, i4), error)
+    if (.not. allocated(error)) &
+      call h5_write_attr(file, '/', 'diagnostics.min_distance', diag%min_distance(), error)
+    if (.not. allocated(error)) &
+      call h5_write_attr(file, '/', 'diagnostics.max_bond_strain', diag%max_bond_strain, error)
+    if (allocated(error)) return
+    call diag%get_state(counters, values, ongoing)
+    call h5_write(file, '/checkpoint/diagnostics/counters', counters, error)
+    if (.not. allocated(error)) call h5_write(file, '/checkpoint/diagnostics/values', values, error)
+    if (.not. allocated(error)) call h5_write(file, '/checkpoint/diagnostics/ongoing', ongoing, error)
+  end subroutine write_diagnostics
 
   !> Open an existing case file to continue it: read /checkpoint, truncate every /frames
   !> dataset to the checkpoint's nframes, set status 'running' and return the state.
@@ -348,7 +473,8 @@ contains
     integer :: i
     character(len=32), parameter :: other_sets(4) = [character(len=32) :: '/frames/positions', &
       '/frames/observables/close_pairs', '/frames/integrator/steps', '/frames/integrator/rejected']
-    character(len=32) :: all_sets(size(frame_real_sets) + size(other_sets))
+    character(len=40) :: all_sets(size(frame_real_sets) + size(other_sets) + size(diag_sets))
+    integer :: n_sets
     call this%close()
     t = 0.0_wp
     dt = 0.0_wp
@@ -378,9 +504,15 @@ contains
       call fatal_error(error, "case file '"//path//"': checkpoint has no frames")
       return
     end if
+    this%diagnostics = h5_exists(this%file, trim(diag_sets(1)))
+    n_sets = size(frame_real_sets) + size(other_sets)
     all_sets(1:size(frame_real_sets)) = frame_real_sets
-    all_sets(size(frame_real_sets) + 1:) = other_sets
-    do i = 1, size(all_sets)
+    all_sets(size(frame_real_sets) + 1:n_sets) = other_sets
+    if (this%diagnostics) then
+      all_sets(n_sets + 1:n_sets + size(diag_sets)) = diag_sets
+      n_sets = n_sets + size(diag_sets)
+    end if
+    do i = 1, n_sets
       call h5_length(this%file, trim(all_sets(i)), length, error)
       if (allocated(error)) return
       if (length < nframes) then

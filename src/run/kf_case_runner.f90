@@ -14,6 +14,7 @@ module kf_case_runner
   use kf_integrator, only: integrator_t
   use kf_shape, only: shape_t, compute_shape
   use kf_case_file, only: case_file_t, case_file_status
+  use kf_run_diagnostics, only: run_diagnostics_t
   use kf_fs, only: remove_file
   implicit none
   private
@@ -50,6 +51,7 @@ contains
     type(dynamics_t) :: dyn
     type(integrator_t) :: integ
     type(shape_t) :: obs
+    type(run_diagnostics_t) :: diag
     real(wp), allocatable :: r(:, :)
     real(wp) :: rotation(3, 3), t, t_next, dt
     integer(i8) :: steps, rejected, nframes
@@ -108,6 +110,17 @@ contains
       return
     end if
 
+    if (sc%output%diagnostics) call diag%init(size(r, 2), sc%chain%bond_length)
+    if (resumed .and. sc%output%diagnostics) then
+      call file%restore_diagnostics(diag, error)
+      if (allocated(error)) then
+        call file%close()
+        status = case_failed
+        message = error%message
+        return
+      end if
+    end if
+
     if (resumed) then
       integ%dt = dt
       integ%steps = steps
@@ -117,6 +130,7 @@ contains
     else
       call file%create(path, name, size(r, 2), scene_text(sc), rotation, error)
       if (.not. allocated(error)) call write_scene_attributes(file, sc, error)
+      if (.not. allocated(error) .and. sc%output%diagnostics) call file%enable_diagnostics(error)
       if (allocated(error)) then
         status = case_failed
         message = error%message
@@ -125,7 +139,14 @@ contains
       t = 0.0_wp
       nframes = 0
       call compute_shape(r, obs, error)
-      if (.not. allocated(error)) call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt, error)
+      if (.not. allocated(error)) then
+        if (sc%output%diagnostics) then
+          call diag%start(t, r)
+          call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt, error, diag)
+        else
+          call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt, error)
+        end if
+      end if
       if (allocated(error)) then
         call fail(error%message)
         return
@@ -139,14 +160,22 @@ contains
     do while (t < sc%integrator%t_end*(1.0_wp - 1.0e-12_wp))
       t_next = min(sc%integrator%t_end, real(nframes, wp)*sc%output%frame_interval)
       if (t_next <= t) t_next = min(sc%integrator%t_end, t + sc%output%frame_interval)
-      call integ%advance(dyn, t, r, t_next, error)
+      if (sc%output%diagnostics) then
+        call integ%advance(dyn, t, r, t_next, error, diag)
+      else
+        call integ%advance(dyn, t, r, t_next, error)
+      end if
       if (allocated(error)) then
         call fail(error%message)
         return
       end if
       call compute_shape(r, obs, error)
       if (.not. allocated(error)) then
-        call file%append_frame(t, r, obs, integ%steps, integ%rejected, integ%dt, error)
+        if (sc%output%diagnostics) then
+          call file%append_frame(t, r, obs, integ%steps, integ%rejected, integ%dt, error, diag)
+        else
+          call file%append_frame(t, r, obs, integ%steps, integ%rejected, integ%dt, error)
+        end if
       end if
       if (allocated(error)) then
         call fail(error%message)

@@ -64,6 +64,7 @@ module kf_scene
     character(len=path_len) :: case_name = ''       !< default: derived from the parameters
     real(wp) :: frame_interval = 1.0_wp             !< simulated time between frames
     real(wp) :: progress_interval = 10.0_wp         !< wall seconds between progress lines
+    logical :: diagnostics = .true.                 !< strand passages, overlaps, bond strain per step
   end type output_params_t
 
   !> The whole scene of one case.

@@ -85,6 +85,7 @@ contains
       call add_s(items, 'output.case_name', o%case_name)
       call add_r(items, 'output.frame_interval', o%frame_interval)
       call add_r(items, 'output.progress_interval', o%progress_interval)
+      call add_l(items, 'output.diagnostics', o%diagnostics)
     end associate
   end subroutine scene_items
 

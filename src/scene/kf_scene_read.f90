@@ -158,13 +158,14 @@ contains
       character(len=*), intent(inout) :: msg
       character(len=path_len) :: directory, case_name
       real(wp) :: frame_interval, progress_interval
-      namelist /output/ directory, case_name, frame_interval, progress_interval
+      logical :: diagnostics
+      namelist /output/ directory, case_name, frame_interval, progress_interval, diagnostics
       associate (p => sc%output)
         directory = p%directory; case_name = p%case_name; frame_interval = p%frame_interval
-        progress_interval = p%progress_interval
+        progress_interval = p%progress_interval; diagnostics = p%diagnostics
         read (text, nml=output, iostat=ios, iomsg=msg)
         p%directory = directory; p%case_name = case_name; p%frame_interval = frame_interval
-        p%progress_interval = progress_interval
+        p%progress_interval = progress_interval; p%diagnostics = diagnostics
       end associate
     end subroutine read_output
 

@@ -10,6 +10,13 @@ import numpy as np
 from .knots import KNOT_TYPES
 
 OBSERVABLES = ("rg", "a", "b", "c", "theta", "phi", "close_pairs")
+# Run diagnostics (optional: files written without them have neither): per-frame datasets in
+# /frames/diagnostics and run totals as root attributes "diagnostics.<name>".
+DIAGNOSTICS = ("strand_passages", "overlapping_pairs", "overlap_episodes", "min_distance",
+               "max_bond_strain")
+DIAGNOSTIC_TOTALS = ("strand_passages", "first_passage_time", "overlap_episodes",
+                     "overlap_mean_duration", "overlap_max_duration", "max_overlapping_pairs",
+                     "min_distance", "max_bond_strain")
 
 
 def _attr(value):
@@ -47,6 +54,8 @@ class Case:
     knot_matrices: dict = field(default_factory=dict)   # frame index -> (N, N)
     modes: np.ndarray | None = None
     case_mode: int | None = None
+    diagnostics: dict | None = None            # /frames/diagnostics: name -> (nframes,)
+    diagnostic_totals: dict | None = None      # diagnostics.* root attributes, without prefix
 
     @property
     def name(self) -> str:
@@ -86,6 +95,13 @@ def read_case(path) -> Case:
                 if k in fr["observables"]:
                     obs[k] = np.asarray(fr["observables"][k][()])[:n]
         case = Case(path=str(path), attrs=attrs, time=time, positions=pos, observables=obs)
+        if "diagnostics" in fr:
+            g = fr["diagnostics"]
+            case.diagnostics = {k: np.asarray(g[k][()])[:n] for k in DIAGNOSTICS if k in g}
+        totals = {k: attrs["diagnostics." + k] for k in DIAGNOSTIC_TOTALS
+                  if "diagnostics." + k in attrs}
+        if totals:
+            case.diagnostic_totals = totals
         an = f.get("analysis")
         if an is not None:
             if "knots" in an:

@@ -52,7 +52,8 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
             rows.append({"file": os.path.basename(path), "name": os.path.basename(path),
                          "A": None, "orientation": None, "status": f"unreadable: {exc}",
                          "final_kf": None, "final_state": "-", "transitions": "-",
-                         "events": 0, "unknot_then_knot": False, "mode": "-", "figures": []})
+                         "events": 0, "unknot_then_knot": False, "mode": "-",
+                         "strand_passages": None, "overlap_episodes": None, "figures": []})
             continue
         if case.nframes == 0:
             ana = None
@@ -69,6 +70,8 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
             "transitions": ("yes" if ana.has_transitions else "no") if ana else "-",
             "events": len(ana.events) if ana else 0, "unknot_then_knot": utk,
             "mode": MODE_NAMES.get(ana.case_mode, "?") if ana else "-",
+            "strand_passages": _total(case, "strand_passages"),
+            "overlap_episodes": _total(case, "overlap_episodes"),
             "figures": [os.path.relpath(f, outdir) for f in figs],
         })
     summary_name, summary = _read_summary(sweep_dir)
@@ -81,6 +84,12 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
             "html": os.path.join(outdir, "report.html")}
 
 
+def _total(case, name):
+    """A run total of the case's diagnostics (an int), or None for a file without them."""
+    totals = case.diagnostic_totals or {}
+    return int(totals[name]) if name in totals else None
+
+
 def _fmt(v, spec=".3f"):
     if v is None:
         return "-"
@@ -90,13 +99,14 @@ def _fmt(v, spec=".3f"):
 
 
 COLUMNS = ("case", "A", "orientation", "status", "final k_f", "final state", "transitions",
-           "events", "unknot then knot", "mode")
+           "events", "unknot then knot", "mode", "strand passages", "overlap episodes")
 
 
 def _row_cells(r):
     return [r["name"], _fmt(r["A"], "g"), _fmt(r["orientation"]), r["status"],
             _fmt(r["final_kf"]), r["final_state"], r["transitions"], str(r["events"]),
-            "yes" if r["unknot_then_knot"] else "no", r["mode"]]
+            "yes" if r["unknot_then_knot"] else "no", r["mode"], _fmt(r["strand_passages"]),
+            _fmt(r["overlap_episodes"])]
 
 
 def _grid(rows):

@@ -1,0 +1,282 @@
+!> Numerical diagnostics of a run, updated at every accepted integrator step (a step monitor,
+!> kf_step_monitor): strand passages, overlapping beads and bond strain.
+!>
+!> - Strand passages: `count_strand_passages(y_old, y_new, passage_tolerance)` per accepted
+!>   step (kf_strand_passage; beads move linearly within a step), summed over the run; the
+!>   time of the first one is the end time of the step in which it happened.
+!> - Overlaps: a pair i < j (any |i - j|) overlaps when |r_i - r_j| < 1 (= d). An episode of a
+!>   pair starts at the first accepted step (or the initial configuration) where it overlaps and
+!>   ends at the first accepted step where it does not; its duration is the difference of these
+!>   two step times, so durations are resolved to one step. Kept: episodes started (completed +
+!>   ongoing), mean and maximum duration of the completed ones, the current and the largest
+!>   number of overlapping pairs, the smallest distance over pairs with |i - j| > 1.
+!> - The largest relative bond strain |l - l0|/l0 over the run.
+!> The initial configuration (`start`) counts as a step of the run for overlaps, distances and
+!> strain. The state can be saved and restored (`get_state` / `set_state`) so a resumed run
+!> continues the counters, ongoing episodes included.
+!> Cost per step: one pass over the N(N-1)/2 pairs (squared distances only; a pair is looked at
+!> further only when its overlap status changes) plus the strand-passage test, whose swept
+!> bounding boxes discard distant bond pairs.
+module kf_run_diagnostics
+  use kf_kinds, only: wp, i8
+  use kf_strings, only: to_str
+  use kf_error, only: error_t, fatal_error
+  use kf_step_monitor, only: step_monitor_t
+  use kf_strand_passage, only: count_strand_passages
+  implicit none
+  private
+
+  public :: configuration_diagnostics
+
+  !> Sizes of the saved state (`get_state` / `set_state`).
+  integer, parameter, public :: diag_n_counters = 5, diag_n_values = 5
+
+  !> Diagnostics of one run; `init` before use, `start` with the initial configuration.
+  type, extends(step_monitor_t), public :: run_diagnostics_t
+    real(wp) :: bond_length = 1.02_wp            !< l0 of the strain
+    real(wp) :: passage_tolerance = 1.0e-6_wp    !< contact distance of the passage test (units of d)
+    integer :: n_beads = 0
+    integer(i8) :: strand_passages = 0           !< cumulative since t = 0
+    real(wp) :: first_passage_time = -1.0_wp     !< -1 while there is none
+    integer(i8) :: overlap_episodes = 0          !< episodes started (completed + ongoing)
+    integer(i8) :: completed_episodes = 0
+    real(wp) :: duration_sum = 0.0_wp            !< over completed episodes
+    real(wp) :: duration_max = 0.0_wp            !< over completed episodes
+    integer :: overlapping_pairs = 0             !< now (after the last step seen)
+    integer :: max_overlapping_pairs = 0
+    real(wp) :: min_distance2 = huge(1.0_wp)     !< smallest squared distance, |i - j| > 1
+    real(wp) :: max_bond_strain = 0.0_wp
+    logical, allocatable, private :: overlapping(:)    !< per pair (i < j), packed
+    real(wp), allocatable, private :: episode_start(:) !< per pair: start of the ongoing episode
+  contains
+    procedure :: init => diagnostics_init
+    procedure :: start => diagnostics_start
+    procedure :: on_step => diagnostics_on_step
+    procedure :: min_distance => diagnostics_min_distance
+    procedure :: mean_duration => diagnostics_mean_duration
+    procedure :: get_state => diagnostics_get_state
+    procedure :: set_state => diagnostics_set_state
+    procedure, private :: observe
+  end type run_diagnostics_t
+
+contains
+
+  !> Index of pair (i, j), i < j, in the packed pair arrays.
+  pure integer function pair_index(i, j)
+    integer, intent(in) :: i, j
+    pair_index = (j - 1)*(j - 2)/2 + i
+  end function pair_index
+
+  !> Reset for a chain of `n_beads` beads with rest length `bond_length`; `passage_tolerance`
+  !> (default 1e-6) is the contact distance of the strand-passage test.
+  subroutine diagnostics_init(this, n_beads, bond_length, passage_tolerance)
+    class(run_diagnostics_t), intent(out) :: this
+    integer, intent(in) :: n_beads
+    real(wp), intent(in) :: bond_length
+    real(wp), intent(in), optional :: passage_tolerance
+    integer :: n_pairs
+    this%n_beads = n_beads
+    this%bond_length = bond_length
+    if (present(passage_tolerance)) this%passage_tolerance = passage_tolerance
+    n_pairs = max(0, n_beads*(n_beads - 1)/2)
+    allocate (this%overlapping(n_pairs), this%episode_start(n_pairs))
+    this%overlapping = .false.
+    this%episode_start = 0.0_wp
+  end subroutine diagnostics_init
+
+  !> Take the initial configuration r(3, N) at time t: overlaps present now start episodes at t.
+  subroutine diagnostics_start(this, t, r)
+    class(run_diagnostics_t), intent(inout) :: this
+    real(wp), intent(in) :: t
+    real(wp), intent(in) :: r(:, :)
+    call this%observe(t, r)
+  end subroutine diagnostics_start
+
+  !> One accepted step (kf_step_monitor).
+  subroutine diagnostics_on_step(this, t_old, y_old, t_new, y_new)
+    class(run_diagnostics_t), intent(inout) :: this
+    real(wp), intent(in) :: t_old
+    real(wp), intent(in) :: y_old(:, :)
+    real(wp), intent(in) :: t_new
+    real(wp), intent(in) :: y_new(:, :)
+    integer :: passages
+    passages = count_strand_passages(y_old, y_new, this%passage_tolerance)
+    if (passages > 0) then
+      if (this%strand_passages == 0) this%first_passage_time = t_new
+      this%strand_passages = this%strand_passages + passages
+    end if
+    call this%observe(t_new, y_new)
+  end subroutine diagnostics_on_step
+
+  !> Overlap bookkeeping, distances and strain of configuration r at time t.
+  subroutine observe(this, t, r)
+    class(run_diagnostics_t), intent(inout) :: this
+    real(wp), intent(in) :: t
+    real(wp), intent(in) :: r(:, :)
+    integer :: i, j, k, n, now
+    real(wp) :: d2, dmin2, duration, xj(3)
+    logical :: over
+    n = min(this%n_beads, size(r, 2))
+    now = 0
+    dmin2 = this%min_distance2
+    do j = 2, n
+      xj = r(:, j)
+      k = pair_index(1, j) - 1
+      do i = 1, j - 1
+        k = k + 1
+        d2 = (r(1, i) - xj(1))**2 + (r(2, i) - xj(2))**2 + (r(3, i) - xj(3))**2
+        if (j - i > 1) dmin2 = min(dmin2, d2)
+        over = d2 < 1.0_wp
+        if (over) now = now + 1
+        if (over .eqv. this%overlapping(k)) cycle
+        ! the status of pair k changes: an episode starts or ends at t
+        this%overlapping(k) = over
+        if (over) then
+          this%episode_start(k) = t
+          this%overlap_episodes = this%overlap_episodes + 1
+        else
+          duration = t - this%episode_start(k)
+          this%completed_episodes = this%completed_episodes + 1
+          this%duration_sum = this%duration_sum + duration
+          this%duration_max = max(this%duration_max, duration)
+        end if
+      end do
+    end do
+    this%min_distance2 = dmin2
+    this%overlapping_pairs = now
+    this%max_overlapping_pairs = max(this%max_overlapping_pairs, now)
+    this%max_bond_strain = max(this%max_bond_strain, max_strain(r(:, 1:n), this%bond_length))
+  end subroutine observe
+
+  !> Smallest distance over pairs with |i - j| > 1 seen so far (-1 when there is none: N < 3).
+  pure real(wp) function diagnostics_min_distance(this) result(d)
+    class(run_diagnostics_t), intent(in) :: this
+    if (this%min_distance2 < huge(1.0_wp)) then
+      d = sqrt(this%min_distance2)
+    else
+      d = -1.0_wp
+    end if
+  end function diagnostics_min_distance
+
+  !> Mean duration of the completed overlap episodes (0 when none is completed).
+  pure real(wp) function diagnostics_mean_duration(this) result(d)
+    class(run_diagnostics_t), intent(in) :: this
+    if (this%completed_episodes > 0) then
+      d = this%duration_sum/real(this%completed_episodes, wp)
+    else
+      d = 0.0_wp
+    end if
+  end function diagnostics_mean_duration
+
+  !> The state for a checkpoint: counters(diag_n_counters) = [strand passages, episodes started,
+  !> episodes completed, max overlapping pairs, ongoing episodes n_on];
+  !> values(diag_n_values) = [first passage time, sum and max of completed durations, smallest
+  !> squared distance (|i - j| > 1; huge when none), max bond strain];
+  !> ongoing(3, max(1, n_on)) = (i, j, start time) of every ongoing episode (one unused column
+  !> of zeros when there is none, so the array is never empty).
+  subroutine diagnostics_get_state(this, counters, values, ongoing)
+    class(run_diagnostics_t), intent(in) :: this
+    integer(i8), intent(out) :: counters(diag_n_counters)
+    real(wp), intent(out) :: values(diag_n_values)
+    real(wp), allocatable, intent(out) :: ongoing(:, :)
+    integer :: i, j, k, m, n_on
+    n_on = count(this%overlapping)
+    counters = [this%strand_passages, this%overlap_episodes, this%completed_episodes, &
+                int(this%max_overlapping_pairs, i8), int(n_on, i8)]
+    values = [this%first_passage_time, this%duration_sum, this%duration_max, this%min_distance2, &
+              this%max_bond_strain]
+    allocate (ongoing(3, max(1, n_on)))
+    ongoing = 0.0_wp
+    m = 0
+    do j = 2, this%n_beads
+      do i = 1, j - 1
+        k = pair_index(i, j)
+        if (.not. this%overlapping(k)) cycle
+        m = m + 1
+        ongoing(:, m) = [real(i, wp), real(j, wp), this%episode_start(k)]
+      end do
+    end do
+  end subroutine diagnostics_get_state
+
+  !> Restore a state written by `get_state` (after `init` with the same number of beads).
+  subroutine diagnostics_set_state(this, counters, values, ongoing, error)
+    class(run_diagnostics_t), intent(inout) :: this
+    integer(i8), intent(in) :: counters(:)
+    real(wp), intent(in) :: values(:)
+    real(wp), intent(in) :: ongoing(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: i, j, m, n_on
+    if (size(counters) /= diag_n_counters .or. size(values) /= diag_n_values .or. size(ongoing, 1) /= 3) then
+      call fatal_error(error, 'diagnostics state: wrong sizes (counters '//to_str(size(counters))// &
+        ', values '//to_str(size(values))//', ongoing rows '//to_str(size(ongoing, 1))//')')
+      return
+    end if
+    n_on = int(counters(5))
+    if (n_on < 0 .or. n_on > size(ongoing, 2) .or. n_on > size(this%overlapping)) then
+      call fatal_error(error, 'diagnostics state: '//to_str(n_on)//' ongoing episodes do not fit')
+      return
+    end if
+    this%overlapping = .false.
+    this%episode_start = 0.0_wp
+    do m = 1, n_on
+      i = nint(ongoing(1, m))
+      j = nint(ongoing(2, m))
+      if (i < 1 .or. i >= j .or. j > this%n_beads) then
+        call fatal_error(error, 'diagnostics state: ongoing episode of pair ('//to_str(i)//', '// &
+          to_str(j)//') is not a pair of '//to_str(this%n_beads)//' beads')
+        return
+      end if
+      this%overlapping(pair_index(i, j)) = .true.
+      this%episode_start(pair_index(i, j)) = ongoing(3, m)
+    end do
+    this%strand_passages = counters(1)
+    this%overlap_episodes = counters(2)
+    this%completed_episodes = counters(3)
+    this%max_overlapping_pairs = int(counters(4))
+    this%overlapping_pairs = n_on
+    this%first_passage_time = values(1)
+    this%duration_sum = values(2)
+    this%duration_max = values(3)
+    this%min_distance2 = values(4)
+    this%max_bond_strain = values(5)
+  end subroutine diagnostics_set_state
+
+  !> Largest |l - l0|/l0 over the bonds of r(3, N).
+  pure real(wp) function max_strain(r, l0) result(s)
+    real(wp), intent(in) :: r(:, :)
+    real(wp), intent(in) :: l0
+    integer :: i
+    s = 0.0_wp
+    do i = 1, size(r, 2) - 1
+      s = max(s, abs(norm2(r(:, i + 1) - r(:, i)) - l0))
+    end do
+    s = s/l0
+  end function max_strain
+
+  !> Per-configuration diagnostics of r(3, N): pairs i < j closer than 1, the smallest distance
+  !> over pairs with |i - j| > 1 (-1 when N < 3) and the largest relative bond strain.
+  pure subroutine configuration_diagnostics(r, bond_length, overlapping_pairs, min_distance, max_bond_strain)
+    real(wp), intent(in) :: r(:, :)
+    real(wp), intent(in) :: bond_length
+    integer, intent(out) :: overlapping_pairs
+    real(wp), intent(out) :: min_distance, max_bond_strain
+    integer :: i, j
+    real(wp) :: d2, dmin2
+    overlapping_pairs = 0
+    dmin2 = huge(1.0_wp)
+    do j = 2, size(r, 2)
+      do i = 1, j - 1
+        d2 = sum((r(:, i) - r(:, j))**2)
+        if (d2 < 1.0_wp) overlapping_pairs = overlapping_pairs + 1
+        if (j - i > 1) dmin2 = min(dmin2, d2)
+      end do
+    end do
+    if (dmin2 < huge(1.0_wp)) then
+      min_distance = sqrt(dmin2)
+    else
+      min_distance = -1.0_wp
+    end if
+    max_bond_strain = max_strain(r, bond_length)
+  end subroutine configuration_diagnostics
+
+end module kf_run_diagnostics
