@@ -2,8 +2,10 @@
 beads exactly touching (spacing 1.0 = l0), hairpins folded onto themselves (strands 1.0 and 0.5
 apart) with rpy and with multipole + lubrication. Each case must either finish (exit 0, status
 'finished', every frame finite, the last frame at t_end, bonds within a sane bound) or stop with
-exit status 3 and a named reason ('failed: <reason>' in the case file and in summary.txt, the
-frames written so far finite). Never a signal, another exit status, NaN in /frames or a
+exit status 3 and a named reason ('failed: <reason>' in the case file and in summary.json, the
+frames written so far finite). Where the file has run diagnostics (diagnostics.* attributes, taken
+at every accepted step), their extremes must bound the same quantities computed here from the
+frames (a subset of the steps). Never a signal, another exit status, NaN in /frames or a
 'finished' case holding garbage.
 Usage: check_extreme_inputs.py KNOTFLOW WORKDIR
 """
@@ -96,8 +98,31 @@ for name, (chain, forces, hydro, t_end, fi, strain_max) in cases.items():
             pos = h["frames/positions"][:]
             time = h["frames/time"][:]
             l0 = float(h.attrs["chain.bond_length"])
+            diag = {k[len("diagnostics."):]: h.attrs[k] for k in h.attrs
+                    if k.startswith("diagnostics.")}
         if not np.all(np.isfinite(pos)):
             problems.append("non-finite positions in /frames")
+        elif not diag:
+            problems.append("no run diagnostics (diagnostics.* attributes) in the case file")
+        else:
+            # The run diagnostics look at every accepted step, the frames at a subset of them:
+            # the step extremes must bound the frame-sampled ones.
+            n = pos.shape[1]
+            i, j = np.triu_indices(n, 1)
+            far = (j - i) > 1
+            d = np.linalg.norm(pos[:, i, :] - pos[:, j, :], axis=-1)
+            frame_pairs = int((d < 1.0).sum(axis=1).max())
+            frame_strain = float((np.abs(np.linalg.norm(np.diff(pos, axis=1), axis=-1) - l0) / l0).max())
+            tiny = 1e-9
+            if int(diag["max_overlapping_pairs"]) < frame_pairs:
+                problems.append("diagnostics.max_overlapping_pairs %d < %d in a frame"
+                                % (diag["max_overlapping_pairs"], frame_pairs))
+            if far.any() and float(diag["min_distance"]) > d[:, far].min() + tiny:
+                problems.append("diagnostics.min_distance %g > %g in a frame"
+                                % (diag["min_distance"], d[:, far].min()))
+            if float(diag["max_bond_strain"]) < frame_strain - tiny:
+                problems.append("diagnostics.max_bond_strain %g < %g in a frame"
+                                % (diag["max_bond_strain"], frame_strain))
         if run.returncode == 0:
             if status != "finished":
                 problems.append("exit 0 but status %r" % status)
