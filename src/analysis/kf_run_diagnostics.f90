@@ -14,19 +14,22 @@
 !> The initial configuration (`start`) counts as a step of the run for overlaps, distances and
 !> strain. The state can be saved and restored (`get_state` / `set_state`) so a resumed run
 !> continues the counters, ongoing episodes included.
-!> Cost per step: one pass over the N(N-1)/2 pairs (squared distances only; a pair is looked at
-!> further only when its overlap status changes) plus the strand-passage test, whose swept
-!> bounding boxes discard distant bond pairs.
+!> Cost per step: two vectorised passes over the pairs. Beads: squared distances only; a pair
+!> is looked at further only when its overlap status changes. Bonds: during the step every point
+!> of bond k stays within rho_k = l_k/2 + (largest displacement of its two beads) of the bond's
+!> midpoint at the start, so bonds i, j can only touch when their midpoints are closer than
+!> rho_i + rho_j + tolerance; only those pairs go through the exact test `segments_pass` of
+!> kf_strand_passage (the count is the same as `count_strand_passages`).
 module kf_run_diagnostics
   use kf_kinds, only: wp, i8
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_step_monitor, only: step_monitor_t
-  use kf_strand_passage, only: count_strand_passages
+  use kf_strand_passage, only: segments_pass
   implicit none
   private
 
-  public :: configuration_diagnostics
+  public :: configuration_diagnostics, prefiltered_passages
 
   !> Sizes of the saved state (`get_state` / `set_state`).
   integer, parameter, public :: diag_n_counters = 5, diag_n_values = 5
@@ -48,6 +51,7 @@ module kf_run_diagnostics
     real(wp) :: max_bond_strain = 0.0_wp
     logical, allocatable, private :: overlapping(:)    !< per pair (i < j), packed
     real(wp), allocatable, private :: episode_start(:) !< per pair: start of the ongoing episode
+    real(wp), allocatable, private :: work(:, :)       !< (N, 4) work space
   contains
     procedure :: init => diagnostics_init
     procedure :: start => diagnostics_start
@@ -79,7 +83,7 @@ contains
     this%bond_length = bond_length
     if (present(passage_tolerance)) this%passage_tolerance = passage_tolerance
     n_pairs = max(0, n_beads*(n_beads - 1)/2)
-    allocate (this%overlapping(n_pairs), this%episode_start(n_pairs))
+    allocate (this%overlapping(n_pairs), this%episode_start(n_pairs), this%work(max(n_beads, 1), 4))
     this%overlapping = .false.
     this%episode_start = 0.0_wp
   end subroutine diagnostics_init
@@ -100,7 +104,7 @@ contains
     real(wp), intent(in) :: t_new
     real(wp), intent(in) :: y_new(:, :)
     integer :: passages
-    passages = count_strand_passages(y_old, y_new, this%passage_tolerance)
+    passages = prefiltered_passages(y_old, y_new, this%passage_tolerance, this%work)
     if (passages > 0) then
       if (this%strand_passages == 0) this%first_passage_time = t_new
       this%strand_passages = this%strand_passages + passages
@@ -113,35 +117,40 @@ contains
     class(run_diagnostics_t), intent(inout) :: this
     real(wp), intent(in) :: t
     real(wp), intent(in) :: r(:, :)
-    integer :: i, j, k, n, now
-    real(wp) :: d2, dmin2, duration, xj(3)
+    integer :: i, j, k0, k, n, now
+    real(wp) :: dmin2, duration
     logical :: over
     n = min(this%n_beads, size(r, 2))
     now = 0
     dmin2 = this%min_distance2
-    do j = 2, n
-      xj = r(:, j)
-      k = pair_index(1, j) - 1
-      do i = 1, j - 1
-        k = k + 1
-        d2 = (r(1, i) - xj(1))**2 + (r(2, i) - xj(2))**2 + (r(3, i) - xj(3))**2
-        if (j - i > 1) dmin2 = min(dmin2, d2)
-        over = d2 < 1.0_wp
-        if (over) now = now + 1
-        if (over .eqv. this%overlapping(k)) cycle
-        ! the status of pair k changes: an episode starts or ends at t
-        this%overlapping(k) = over
-        if (over) then
-          this%episode_start(k) = t
-          this%overlap_episodes = this%overlap_episodes + 1
-        else
-          duration = t - this%episode_start(k)
-          this%completed_episodes = this%completed_episodes + 1
-          this%duration_sum = this%duration_sum + duration
-          this%duration_max = max(this%duration_max, duration)
-        end if
+    associate (x => this%work(:, 1), y => this%work(:, 2), z => this%work(:, 3), d2 => this%work(:, 4))
+      x(1:n) = r(1, 1:n)
+      y(1:n) = r(2, 1:n)
+      z(1:n) = r(3, 1:n)
+      do j = 2, n
+        k0 = pair_index(1, j) - 1
+        d2(1:j - 1) = (x(1:j - 1) - x(j))**2 + (y(1:j - 1) - y(j))**2 + (z(1:j - 1) - z(j))**2
+        if (j > 2) dmin2 = min(dmin2, minval(d2(1:j - 2)))
+        now = now + count(d2(1:j - 1) < 1.0_wp)
+        if (all((d2(1:j - 1) < 1.0_wp) .eqv. this%overlapping(k0 + 1:k0 + j - 1))) cycle
+        do i = 1, j - 1
+          k = k0 + i
+          over = d2(i) < 1.0_wp
+          if (over .eqv. this%overlapping(k)) cycle
+          ! the status of pair k changes: an episode starts or ends at t
+          this%overlapping(k) = over
+          if (over) then
+            this%episode_start(k) = t
+            this%overlap_episodes = this%overlap_episodes + 1
+          else
+            duration = t - this%episode_start(k)
+            this%completed_episodes = this%completed_episodes + 1
+            this%duration_sum = this%duration_sum + duration
+            this%duration_max = max(this%duration_max, duration)
+          end if
+        end do
       end do
-    end do
+    end associate
     this%min_distance2 = dmin2
     this%overlapping_pairs = now
     this%max_overlapping_pairs = max(this%max_overlapping_pairs, now)
@@ -240,6 +249,38 @@ contains
     this%min_distance2 = values(4)
     this%max_bond_strain = values(5)
   end subroutine diagnostics_set_state
+
+  !> Number of pairs of non-adjacent bonds passing through each other while the chain moves
+  !> linearly from r0(3, N) to r1(3, N): the count of `count_strand_passages` (kf_strand_passage),
+  !> with the midpoint-sphere prefilter described at the top of this module. `work` has at least
+  !> N rows and 4 columns.
+  integer function prefiltered_passages(r0, r1, tolerance, work) result(count)
+    real(wp), intent(in) :: r0(:, :), r1(:, :)
+    real(wp), intent(in) :: tolerance
+    real(wp), intent(inout) :: work(:, :)
+    integer :: n, i, j
+    real(wp) :: shift(size(r0, 2))
+    count = 0
+    n = size(r0, 2)
+    if (n < 4) return
+    shift = sqrt(sum((r1 - r0)**2, dim=1))
+    associate (cx => work(:, 1), cy => work(:, 2), cz => work(:, 3), rho => work(:, 4))
+      cx(1:n - 1) = 0.5_wp*(r0(1, 1:n - 1) + r0(1, 2:n))
+      cy(1:n - 1) = 0.5_wp*(r0(2, 1:n - 1) + r0(2, 2:n))
+      cz(1:n - 1) = 0.5_wp*(r0(3, 1:n - 1) + r0(3, 2:n))
+      rho(1:n - 1) = 0.5_wp*sqrt(sum((r0(:, 2:n) - r0(:, 1:n - 1))**2, dim=1)) + &
+                     max(shift(1:n - 1), shift(2:n)) + 0.5_wp*tolerance
+      do j = 3, n - 1
+        if (all((cx(1:j - 2) - cx(j))**2 + (cy(1:j - 2) - cy(j))**2 + (cz(1:j - 2) - cz(j))**2 > &
+                (rho(1:j - 2) + rho(j))**2)) cycle
+        do i = 1, j - 2
+          if ((cx(i) - cx(j))**2 + (cy(i) - cy(j))**2 + (cz(i) - cz(j))**2 > (rho(i) + rho(j))**2) cycle
+          if (segments_pass(r0(:, i), r0(:, i + 1), r0(:, j), r0(:, j + 1), &
+                            r1(:, i), r1(:, i + 1), r1(:, j), r1(:, j + 1), tolerance)) count = count + 1
+        end do
+      end do
+    end associate
+  end function prefiltered_passages
 
   !> Largest |l - l0|/l0 over the bonds of r(3, N).
   pure real(wp) function max_strain(r, l0) result(s)

@@ -58,7 +58,7 @@ contains
     character(len=:), allocatable :: path, state, name
     integer(int64) :: clock0, clock_last, clock_now, rate
     real(wp) :: t_start
-    logical :: resumed
+    logical :: resumed, with_diag
 
     path = case_path(sc)
     name = trim(sc%output%case_name)
@@ -69,6 +69,7 @@ contains
       return
     end if
     resumed = .false.
+    with_diag = sc%output%diagnostics
     if (state == 'finished') then
       status = case_skipped
       message = 'already finished ('//path//')'
@@ -76,7 +77,7 @@ contains
     else if (state == 'running') then
       call file%open_resume(path, r, t, dt, steps, rejected, nframes, error)
       if (.not. allocated(error)) then
-        if (file%scene_text() /= scene_text(sc)) then
+        if (file%scene_text() /= scene_text(sc) .and. .not. is_pre_diagnostics(file%scene_text(), sc)) then
           call file%close()
           status = case_failed
           message = path//' was written with a different scene: remove it or use another '// &
@@ -84,6 +85,8 @@ contains
           return
         end if
         resumed = .true.
+        ! a file written before the run diagnostics existed is continued without them
+        with_diag = with_diag .and. file%has_diagnostics()
       else
         ! An unreadable checkpoint: start again from the beginning.
         call remove_file(path)
@@ -110,8 +113,8 @@ contains
       return
     end if
 
-    if (sc%output%diagnostics) call diag%init(size(r, 2), sc%chain%bond_length)
-    if (resumed .and. sc%output%diagnostics) then
+    if (with_diag) call diag%init(size(r, 2), sc%chain%bond_length)
+    if (resumed .and. with_diag) then
       call file%restore_diagnostics(diag, error)
       if (allocated(error)) then
         call file%close()
@@ -130,7 +133,7 @@ contains
     else
       call file%create(path, name, size(r, 2), scene_text(sc), rotation, error)
       if (.not. allocated(error)) call write_scene_attributes(file, sc, error)
-      if (.not. allocated(error) .and. sc%output%diagnostics) call file%enable_diagnostics(error)
+      if (.not. allocated(error) .and. with_diag) call file%enable_diagnostics(error)
       if (allocated(error)) then
         status = case_failed
         message = error%message
@@ -140,7 +143,7 @@ contains
       nframes = 0
       call compute_shape(r, obs, error)
       if (.not. allocated(error)) then
-        if (sc%output%diagnostics) then
+        if (with_diag) then
           call diag%start(t, r)
           call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt, error, diag)
         else
@@ -160,7 +163,7 @@ contains
     do while (t < sc%integrator%t_end*(1.0_wp - 1.0e-12_wp))
       t_next = min(sc%integrator%t_end, real(nframes, wp)*sc%output%frame_interval)
       if (t_next <= t) t_next = min(sc%integrator%t_end, t + sc%output%frame_interval)
-      if (sc%output%diagnostics) then
+      if (with_diag) then
         call integ%advance(dyn, t, r, t_next, error, diag)
       else
         call integ%advance(dyn, t, r, t_next, error)
@@ -171,7 +174,7 @@ contains
       end if
       call compute_shape(r, obs, error)
       if (.not. allocated(error)) then
-        if (sc%output%diagnostics) then
+        if (with_diag) then
           call file%append_frame(t, r, obs, integ%steps, integ%rejected, integ%dt, error, diag)
         else
           call file%append_frame(t, r, obs, integ%steps, integ%rejected, integ%dt, error)
@@ -222,6 +225,23 @@ contains
     end function progress_line
 
   end subroutine run_case
+
+  !> Is `text` the scene text of `sc` as written before `&output diagnostics` existed (the same
+  !> text without the diagnostics line)? Such files are resumed (without diagnostics).
+  logical function is_pre_diagnostics(text, sc) result(same)
+    character(len=*), intent(in) :: text
+    type(scene_t), intent(in) :: sc
+    character(len=:), allocatable :: current
+    character(len=*), parameter :: key = new_line('a')//'  diagnostics = '
+    integer :: k, eol
+    current = scene_text(sc)
+    k = index(current, key)
+    same = .false.
+    if (k == 0 .or. index(text, key) /= 0) return
+    eol = index(current(k + 1:), new_line('a'))
+    if (eol == 0) return
+    same = text == current(1:k)//current(k + eol + 1:)
+  end function is_pre_diagnostics
 
   !> Every effective scene variable as a root attribute `<group>.<variable>`.
   subroutine write_scene_attributes(file, sc, error)

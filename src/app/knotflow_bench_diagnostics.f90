@@ -1,0 +1,170 @@
+!> knotflow-bench-diagnostics: the cost of the run diagnostics (kf_run_diagnostics) per accepted
+!> step against one RPY velocity evaluation (a dopri45 step makes 6 of them), for the trefoil
+!> (N = 99) and the candy-cane (N = 152), on a real step of each (taken after t = 5 of the RPY
+!> dynamics with excluded volume); medians over batches. Then the trefoil (A = 2.2, orientation
+!> c, rpy, excluded volume) integrated to t = 50 with and without the monitor (wall times).
+program knotflow_bench_diagnostics
+  use, intrinsic :: iso_fortran_env, only: int64, output_unit, error_unit
+  use kf_kinds, only: wp, i8
+  use kf_error, only: error_t
+  use kf_scene, only: scene_t
+  use kf_chain_shapes, only: build_initial_chain
+  use kf_dynamics, only: dynamics_t
+  use kf_integrator, only: integrator_t
+  use kf_run_diagnostics, only: run_diagnostics_t
+  implicit none
+
+  type(scene_t) :: scene
+  type(error_t), allocatable :: error
+  character(len=9), parameter :: shapes(2) = ['trefoil  ', 'candycane']
+  integer :: ishape
+  real(wp) :: t_eval, t_diag, t_with, t_without
+
+  if (command_argument_count() > 0) then
+    write (error_unit, '(a)') 'usage: knotflow-bench-diagnostics (no arguments)'
+    stop 1
+  end if
+  write (output_unit, '(a)') '# run diagnostics per accepted step against one RPY evaluation, median'
+  write (output_unit, '(a10,a6,a16,a18,a22)') 'shape', 'N', 'rpy eval [us]', 'diagnostics [us]', &
+    '% of a dopri45 step'
+  do ishape = 1, 2
+    scene = bench_scene(shapes(ishape))
+    call time_step_costs(scene, t_eval, t_diag, error)
+    if (allocated(error)) call fail(error)
+    write (output_unit, '(a10,i6,f16.2,f18.2,f22.2)') trim(shapes(ishape)), merge(99, 152, ishape == 1), &
+      1.0e6_wp*t_eval, 1.0e6_wp*t_diag, 100.0_wp*t_diag/(6.0_wp*t_eval)
+  end do
+
+  scene = bench_scene('trefoil')
+  call time_run(scene, 50.0_wp, .false., t_without, error)
+  if (.not. allocated(error)) call time_run(scene, 50.0_wp, .true., t_with, error)
+  if (allocated(error)) call fail(error)
+  write (output_unit, '(a)') '# trefoil (A = 2.2, orientation c, rpy, excluded volume) to t = 50, wall time'
+  write (output_unit, '(a,f10.3)') 'without diagnostics [s]', t_without
+  write (output_unit, '(a,f10.3)') 'with diagnostics    [s]', t_with
+
+contains
+
+  function bench_scene(shape) result(sc)
+    character(len=*), intent(in) :: shape
+    type(scene_t) :: sc
+    sc%chain%shape = shape
+    sc%chain%orientation = 'c'
+    sc%forces%bending_a = 2.2_wp
+    sc%forces%excluded_volume = .true.
+    sc%hydro%model = 'rpy'
+  end function bench_scene
+
+  subroutine fail(error)
+    type(error_t), intent(in) :: error
+    write (error_unit, '(a)') 'ERROR: '//error%message
+    stop 1
+  end subroutine fail
+
+  real(wp) function wall_time()
+    integer(int64) :: count, rate
+    call system_clock(count, rate)
+    wall_time = real(count, wp)/real(rate, wp)
+  end function wall_time
+
+  !> Median times of one velocity evaluation and of one `on_step` of the diagnostics, on the
+  !> step of the proposed size that follows t = 5.
+  subroutine time_step_costs(sc, t_eval, t_diag, error)
+    type(scene_t), intent(in) :: sc
+    real(wp), intent(out) :: t_eval, t_diag
+    type(error_t), allocatable, intent(out) :: error
+    type(dynamics_t) :: dyn
+    type(integrator_t) :: integ
+    type(run_diagnostics_t) :: diag
+    real(wp), allocatable :: r(:, :), v(:, :), y_old(:, :)
+    real(wp) :: rot(3, 3), t, t_old, s_eval(21), s_diag(21), t0, checksum
+    integer :: n, k, rep, batch_eval, batch_diag
+    call build_initial_chain(sc%chain, r, rot, error)
+    if (allocated(error)) return
+    n = size(r, 2)
+    call dyn%init(sc, n, error)
+    if (.not. allocated(error)) call integ%init(sc%integrator, error)
+    if (allocated(error)) return
+    t = 0.0_wp
+    call integ%advance(dyn, t, r, 5.0_wp, error)
+    if (allocated(error)) return
+    y_old = r
+    t_old = t
+    call integ%advance(dyn, t, r, t + integ%dt, error)
+    if (allocated(error)) return
+    call diag%init(n, sc%chain%bond_length)
+    call diag%start(t_old, y_old)
+    allocate (v(3, n))
+    batch_eval = 100
+    batch_diag = 1000
+    checksum = 0.0_wp
+    do rep = 1, size(s_eval)
+      t0 = wall_time()
+      do k = 1, batch_eval
+        call dyn%velocity(r, v, error)
+        if (allocated(error)) return
+        checksum = checksum + v(1, 1)
+      end do
+      s_eval(rep) = (wall_time() - t0)/batch_eval
+      t0 = wall_time()
+      do k = 1, batch_diag
+        call diag%on_step(t_old, y_old, t, r)
+      end do
+      s_diag(rep) = (wall_time() - t0)/batch_diag
+    end do
+    call sort(s_eval)
+    call sort(s_diag)
+    t_eval = s_eval((size(s_eval) + 1)/2)
+    t_diag = s_diag((size(s_diag) + 1)/2)
+    if (.not. abs(checksum) <= huge(1.0_wp) .or. diag%strand_passages < 0_i8) t_eval = -1.0_wp
+  end subroutine time_step_costs
+
+  !> Wall time of integrating the scene from its initial chain to t_end, with or without the
+  !> diagnostics monitor.
+  subroutine time_run(sc, t_end, with_monitor, wall, error)
+    type(scene_t), intent(in) :: sc
+    real(wp), intent(in) :: t_end
+    logical, intent(in) :: with_monitor
+    real(wp), intent(out) :: wall
+    type(error_t), allocatable, intent(out) :: error
+    type(dynamics_t) :: dyn
+    type(integrator_t) :: integ
+    type(run_diagnostics_t) :: diag
+    real(wp), allocatable :: r(:, :)
+    real(wp) :: rot(3, 3), t, t0
+    integer :: n
+    call build_initial_chain(sc%chain, r, rot, error)
+    if (allocated(error)) return
+    n = size(r, 2)
+    call dyn%init(sc, n, error)
+    if (.not. allocated(error)) call integ%init(sc%integrator, error)
+    if (allocated(error)) return
+    t = 0.0_wp
+    t0 = wall_time()
+    if (with_monitor) then
+      call diag%init(n, sc%chain%bond_length)
+      call diag%start(t, r)
+      call integ%advance(dyn, t, r, t_end, error, diag)
+    else
+      call integ%advance(dyn, t, r, t_end, error)
+    end if
+    wall = wall_time() - t0
+  end subroutine time_run
+
+  subroutine sort(a)
+    real(wp), intent(inout) :: a(:)
+    integer :: i, j
+    real(wp) :: x
+    do i = 2, size(a)
+      x = a(i)
+      j = i - 1
+      do while (j >= 1)
+        if (a(j) <= x) exit
+        a(j + 1) = a(j)
+        j = j - 1
+      end do
+      a(j + 1) = x
+    end do
+  end subroutine sort
+
+end program knotflow_bench_diagnostics
