@@ -10,6 +10,9 @@
 KF_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 KF_JOBS="${KNOTFLOW_JOBS:-2}"
 export DEBIAN_FRONTEND=noninteractive
+# One thread per MPI rank: every rank runs one serial case, and idle OpenBLAS threads spin
+# (sched_yield) and steal the cores the other ranks need. Set them yourself to override.
+export OPENBLAS_NUM_THREADS="${OPENBLAS_NUM_THREADS:-1}" OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}"
 
 kf_log() { printf '==> %s\n' "$*"; }
 kf_die() { printf 'ERROR: %s\n' "$*" >&2; exit 1; }

@@ -7,6 +7,7 @@ program knotflow
   use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
   use kf_kinds, only: wp
   use kf_strings, only: to_str
+  use kf_memory, only: keep_freed_heap
   use kf_error, only: error_t
   use kf_build_info, only: knotflow_version, knotflow_git_hash
   use kf_scene, only: scene_t
@@ -29,6 +30,7 @@ program knotflow
 
   call comm_init(comm, error)
   if (allocated(error)) call die(error%message, 2)
+  call keep_freed_heap()   ! after MPI start-up, which sets its own allocator options
   me = comm%rank()
   call parse_arguments(scene_file, dry_run)
   call h5_initialize(error)

@@ -7,6 +7,7 @@ program knotflow_analyze
   use kf_kinds, only: wp, i8
   use kf_exit, only: exit_program
   use kf_strings, only: to_str
+  use kf_memory, only: keep_freed_heap
   use kf_error, only: error_t, fatal_error
   use kf_knot_invariants, only: n_knot_types, knot_type_names
   use kf_knot_closure, only: knot_stats_t, analyse_closures, default_closures, default_knot_seed
@@ -50,6 +51,7 @@ program knotflow_analyze
   if (allocated(error)) call die(error%message)
   call farm_start(farm, error)
   if (allocated(error)) call die(error%message)
+  call keep_freed_heap()   ! after MPI start-up, which sets its own allocator options
   if (is_case_file(opt%files(1))) then
     call analyse_case_files(opt, farm, error)
   else

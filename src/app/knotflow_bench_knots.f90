@@ -10,6 +10,7 @@ program knotflow_bench_knots
   use kf_exit, only: exit_program
   use kf_constants, only: pi
   use kf_error, only: error_t
+  use kf_memory, only: keep_freed_heap
   use kf_knot_closure, only: knot_stats_t, analyse_closures
   use kf_knot_matrix, only: knot_matrix, knot_core, n_subchains
   use kf_analysis_farm, only: analysis_farm_t, farm_start, farm_stop, farm_max, farm_barrier
@@ -37,6 +38,7 @@ program knotflow_bench_knots
   end if
   call farm_start(farm, error)
   if (allocated(error)) call die(error%message)
+  call keep_freed_heap()
 
   call open_trefoil(trefoil)
   if (farm%rank == 0) then
