@@ -12,7 +12,7 @@ program knotflow
   use kf_build_info, only: knotflow_version, knotflow_git_hash
   use kf_scene, only: scene_t
   use kf_sweep, only: sweep_t, read_sweep
-  use kf_fs, only: make_directory, check_writable_directory
+  use kf_fs, only: make_directory, check_writable_directory, lock_directory
   use kf_h5, only: h5_initialize, h5_finalize
   use kf_case_runner, only: run_case, case_path, case_ok, case_failed, case_skipped
   use kf_comm, only: comm_t, comm_init, comm_finalize
@@ -43,6 +43,7 @@ program knotflow
   if (me == 0) then
     call make_directory(directory, error)
     if (.not. allocated(error)) call check_writable_directory(directory, error)
+    if (.not. (allocated(error) .or. dry_run)) call lock_directory(directory, error)
   end if
   call agree(error)
   if (allocated(error)) call die(trim(scene_file)//': &output: directory = '''//directory// &

@@ -1,12 +1,12 @@
 !> Small file-system helpers through the C library (POSIX): create directories, check that a
-!> directory is writable, remove files.
+!> directory is writable, remove files, and lock a directory against a second writer.
 module kf_fs
   use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char
   use kf_error, only: error_t, fatal_error
   implicit none
   private
 
-  public :: make_directory, check_writable_directory, file_exists, remove_file
+  public :: make_directory, check_writable_directory, file_exists, remove_file, lock_directory
 
   interface
     function c_mkdir(path, mode) bind(c, name='mkdir') result(rc)
@@ -21,9 +21,22 @@ module kf_fs
       integer(c_int), value :: mode
       integer(c_int) :: rc
     end function c_access
+    function c_open(path, flags, mode) bind(c, name='open') result(fd)
+      import :: c_char, c_int
+      character(kind=c_char), intent(in) :: path(*)
+      integer(c_int), value :: flags, mode
+      integer(c_int) :: fd
+    end function c_open
+    function c_flock(fd, operation) bind(c, name='flock') result(rc)
+      import :: c_int
+      integer(c_int), value :: fd, operation
+      integer(c_int) :: rc
+    end function c_flock
   end interface
 
   integer(c_int), parameter :: w_ok = 2, x_ok = 1, f_ok = 0
+  ! open(2) and flock(2) constants of Linux (and the BSDs for these values).
+  integer(c_int), parameter :: o_rdwr = 2, o_creat = 64, lock_ex = 2, lock_nb = 4
 
 contains
 
@@ -77,5 +90,27 @@ contains
     open (newunit=unit, file=trim(path), status='old', iostat=ios)
     if (ios == 0) close (unit, status='delete')
   end subroutine remove_file
+
+  !> Take an exclusive lock on `<dir>/.knotflow.lock` for the rest of the process: a second
+  !> run writing into the same directory would otherwise find the case files open (HDF5 file
+  !> locking) and take them for corrupt ones. The kernel releases the lock when the process ends,
+  !> however it ends (kill -9 included), so a killed run never leaves a stale lock.
+  subroutine lock_directory(dir, error)
+    character(len=*), intent(in) :: dir
+    type(error_t), allocatable, intent(out) :: error
+    character(len=:), allocatable :: path
+    integer(c_int) :: fd
+    path = trim(dir)//'/.knotflow.lock'
+    fd = c_open(path//c_null_char, ior(o_rdwr, o_creat), int(o'644', c_int))
+    if (fd < 0) then
+      call fatal_error(error, "cannot create the lock file '"//path//"'")
+      return
+    end if
+    ! The descriptor stays open on purpose: closing it would release the lock.
+    if (c_flock(fd, ior(lock_ex, lock_nb)) /= 0) then
+      call fatal_error(error, 'another knotflow run is writing into this directory (it holds '''// &
+        path//'''): wait for it to end, or choose another output directory')
+    end if
+  end subroutine lock_directory
 
 end module kf_fs

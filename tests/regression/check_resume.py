@@ -7,6 +7,8 @@
    continue across the kill: the frames before the kill are those of the uninterrupted run
    exactly, and the run totals agree with it (counts exactly or, for the overlap episodes, to
    the few episodes the different step times after the restart can add or remove).
+   While the first run is alive, a second run into the same directory is refused with exit
+   status 2 and leaves its case file alone; after the kill the lock is gone (the resume runs).
 2. A case that cannot finish (max_steps too small) is reported with its reason: exit status 3,
    status 'failed: ...' in the case file and 'FAILED' in the summary.
 Usage: check_resume.py KNOTFLOW WORKDIR
@@ -51,6 +53,13 @@ path = os.path.join(work, "killed", "c.h5")
 for line in proc.stdout:          # one progress line per frame (progress_interval = 0)
     if ": t = 15.000 /" in line:
         break
+# A second run into the same directory while the first is alive is refused (exit 2) and must not
+# touch the case file the first one is writing (it would otherwise see a locked HDF5 file, take it
+# for a corrupt one and delete it).
+second = subprocess.run([exe, killed], capture_output=True, text=True, timeout=120)
+assert second.returncode == 2, (second.returncode, second.stdout, second.stderr)
+assert "another knotflow run" in second.stderr and ".knotflow.lock" in second.stderr, second.stderr
+assert os.path.exists(path)
 proc.send_signal(signal.SIGKILL)
 proc.wait()
 with h5py.File(path, "r") as h:

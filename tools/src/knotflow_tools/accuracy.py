@@ -1,0 +1,363 @@
+"""The accuracy-versus-cost report: turns the CSV tables of ``knotflow-accuracy`` into
+docs/accuracy.md (tables), PNG figures and, optionally, the summary block of README.md
+(between ``<!-- accuracy:begin -->`` and ``<!-- accuracy:end -->``)."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+BEGIN = "<!-- accuracy:begin -->"
+END = "<!-- accuracy:end -->"
+TABLES = ("meta.csv", "models.csv", "tolerance.csv", "scaling.csv", "scaling_fit.csv",
+          "case_time.csv")
+CONFIG_TEXT = {
+    "trefoil": "open trefoil (N = 99, orientation a)",
+    "coil": "compact coil of the A = 1 candy-cane run (N = 152, t = 306)",
+    "loose": "loose chain: the candy-cane initial shape (N = 152)",
+}
+MARKERS = {"trefoil": "o", "coil": "s", "loose": "^"}
+
+
+def read_table(directory: str, name: str) -> list[dict]:
+    """Rows of DIR/name as dictionaries (an absent file gives no rows)."""
+    path = os.path.join(directory, name)
+    if not os.path.exists(path):
+        return []
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def label(row: dict) -> str:
+    """Short model label: none, rpy, L2, L2+lub."""
+    if row["model"] != "multipole":
+        return row["model"]
+    return "L%s%s" % (row["order"], "+lub" if row["lubrication"] == "1" else "")
+
+
+def _num(x: str) -> float:
+    return float(x)
+
+
+def fmt_time(seconds: float) -> str:
+    """A duration with a sensible unit (µs, ms, s, min, h, d)."""
+    if not seconds > 0:
+        return "–"
+    if seconds < 1e-3:
+        return "%.3g µs" % (seconds * 1e6)
+    if seconds < 1:
+        return "%.3g ms" % (seconds * 1e3)
+    if seconds < 120:
+        return "%.3g s" % seconds
+    if seconds < 7200:
+        return "%.3g min" % (seconds / 60)
+    if seconds < 3 * 86400:
+        return "%.3g h" % (seconds / 3600)
+    return "%.3g d" % (seconds / 86400)
+
+
+def fmt_err(x: float) -> str:
+    if x < 0:
+        return "failed"
+    if x == 0:
+        return "0"
+    return "%.2e" % x
+
+
+def _md_table(header: list[str], rows: list[list[str]]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def summary_table(models: list[dict], case: list[dict]) -> str:
+    """One row per model: RMS error per configuration, time per evaluation (trefoil) and the
+    wall time of the reference case (measured or extrapolated)."""
+    configs = [c for c in CONFIG_TEXT if any(r["config"] == c for r in models)]
+    order, seen = [], set()
+    for r in models:
+        if label(r) not in seen:
+            seen.add(label(r))
+            order.append(label(r))
+    err = {(r["config"], label(r)): _num(r["rms_rel"]) for r in models}
+    teval = {label(r): _num(r["t_eval"]) for r in models if r["config"] == "trefoil"}
+    wall = {}
+    for r in case:
+        key = label(r)
+        if key not in wall or r["kind"] == "measured":
+            wall[key] = (_num(r["wall"]), r["kind"])
+    t_end = "%g" % _num(case[0]["t_end"]) if case else "1000"
+    header = ["model"] + ["RMS error, %s" % c for c in configs] + [
+        "one evaluation (trefoil)", "reference case t_end = %s" % t_end]
+    rows = []
+    for m in order:
+        row = [m] + [fmt_err(err[(c, m)]) if (c, m) in err else "–" for c in configs]
+        row.append(fmt_time(teval.get(m, -1.0)))
+        if m in wall:
+            row.append("%s (%s)" % (fmt_time(wall[m][0]), wall[m][1]))
+        else:
+            row.append("–")
+        rows.append(row)
+    return _md_table(header, rows)
+
+
+def _meta(directory: str) -> dict:
+    return {r["key"]: r["value"] for r in read_table(directory, "meta.csv")}
+
+
+def plot_errors(models: list[dict], path: str) -> None:
+    """RMS error against time per evaluation, log-log; marker = configuration, colour = model."""
+    fig, ax = plt.subplots(figsize=(7.5, 5), constrained_layout=True)
+    labels = []
+    for r in models:
+        if label(r) not in labels:
+            labels.append(label(r))
+    cmap = plt.get_cmap("tab20")
+    colour = {m: cmap(i % 20) for i, m in enumerate(labels)}
+    for r in models:
+        e, t = _num(r["rms_rel"]), _num(r["t_eval"])
+        if e <= 0 or t <= 0:
+            continue
+        ax.loglog(t, e, MARKERS.get(r["config"], "x"), color=colour[label(r)], ms=7)
+        ax.annotate(label(r), (t, e), xytext=(4, 3), textcoords="offset points", fontsize=6,
+                    color="0.3")
+    for m in labels:
+        ax.plot([], [], "o", color=colour[m], label=m)
+    for c, mk in MARKERS.items():
+        ax.plot([], [], mk, color="0.4", mfc="none", label=c)
+    ax.set_xlabel("time per evaluation [s]")
+    ax.set_ylabel("RMS relative velocity error")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, ncol=2, loc="best")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_tolerance(tol: list[dict], path: str) -> None:
+    """Wall time and trajectory deviation against the tolerance, per model."""
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.8), constrained_layout=True)
+    for m in sorted({label(r) for r in tol}):
+        rows = sorted((r for r in tol if label(r) == m and r["tolerance"] != r["ref_tolerance"]),
+                      key=lambda r: _num(r["tolerance"]))
+        x = [_num(r["tolerance"]) for r in rows]
+        name = "%s (t_end = %g)" % (m, _num(rows[0]["t_end"])) if rows else m
+        a1.loglog(x, [_num(r["wall"]) for r in rows], "o-", label=name)
+        dev = [(xx, _num(r["max_deviation"])) for xx, r in zip(x, rows)
+               if _num(r["max_deviation"]) > 0]
+        a2.loglog([d[0] for d in dev], [d[1] for d in dev], "o-", label=name)
+    a1.set_xlabel("tolerance")
+    a1.set_ylabel("wall time [s]")
+    a2.set_xlabel("tolerance")
+    a2.set_ylabel("max bead deviation at t_end [d]")
+    for a in (a1, a2):
+        a.grid(True, which="both", alpha=0.3)
+        a.legend(fontsize=8)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_scaling(scaling: list[dict], fits: list[dict], path: str) -> None:
+    """Time per evaluation against N, log-log, with the fitted exponents."""
+    fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
+    slope = {label(r): _num(r["exponent"]) for r in fits}
+    names = []
+    for r in scaling:
+        if label(r) not in names:
+            names.append(label(r))
+    for m in names:
+        pts = [(int(r["n"]), _num(r["t_eval"])) for r in scaling
+               if label(r) == m and r["status"] == "ok" and _num(r["t_eval"]) > 0]
+        text = "%s (N^%.2f)" % (m, slope[m]) if m in slope else m
+        ax.loglog([p[0] for p in pts], [p[1] for p in pts], "o-", label=text)
+    ax.set_xlabel("N (beads)")
+    ax.set_ylabel("time per evaluation [s]")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def build_markdown(directory: str, figdir_rel: str) -> tuple[str, str]:
+    """docs/accuracy.md text and the README summary block text."""
+    meta = _meta(directory)
+    models = read_table(directory, "models.csv")
+    tol = read_table(directory, "tolerance.csv")
+    scaling = read_table(directory, "scaling.csv")
+    fits = read_table(directory, "scaling_fit.csv")
+    case = read_table(directory, "case_time.csv")
+    ref_order = meta.get("ref_order", "?")
+    load = meta.get("loadavg_start", "unknown")
+    if "loadavg_end" in meta:
+        load += "; at the end: %s" % meta["loadavg_end"]
+    out = ["# Accuracy versus cost of the hydrodynamic models", "",
+           "Generated by `bash scripts/accuracy.sh` (`knotflow-accuracy --all`, then "
+           "`knotflow-accuracy-report`); do not edit by hand.%s" % (
+               " **Quick run (smoke-test sizes): not the real figures.**"
+               if meta.get("quick") == "1" else ""),
+           "Timings: one core (OPENBLAS_NUM_THREADS=1) of a shared 2-core machine; load average "
+           "at the start of the run: %s (1, 5, 15 min, as in /proc/loadavg). Timings scale with "
+           "the load; the errors do not depend on it." % load, ""]
+    summary = ""
+    if models:
+        summary = summary_table(models, case)
+        out += ["## Summary", "",
+                "RMS relative error of the bead velocities against multipole L = %s with "
+                "lubrication, time of one velocity evaluation, and wall time of one "
+                "reference-study case (trefoil N = 99, tolerance 1e-4; see the last section)."
+                % ref_order,
+                "", summary, ""]
+        out += ["## Velocity error", "",
+                "u_i = dr_i/dt − v0(r_i): the velocity of bead i relative to the ambient shear "
+                "v0 = (z, 0, 0) (the force-driven part μF plus the disturbance of the flow), with "
+                "springs k = 500, l0 = 1.02, bending A = %s, shear rate 1, eps_lub = 1e-4. Norms: "
+                "RMS = sqrt(Σ|u − u_ref|² / Σ|u_ref|²), max = max_i |u_i − u_ref,i| / max_i "
+                "|u_ref,i|; 'force' and 'shear' are the RMS errors of the two parts separately. "
+                "Reference: multipole L = %s with lubrication; its own convergence is the row "
+                "L%s+lub (the difference between L = %s and L = %s). Time per evaluation: "
+                "median over repeated evaluations (≥ 3 and ≥ 0.5 s, at most 15 s)." % (
+                    meta.get("bending_a_models", "?"), ref_order, int(ref_order) - 1
+                    if ref_order.isdigit() else "?", int(ref_order) - 1
+                    if ref_order.isdigit() else "?", ref_order), ""]
+        for c in [c for c in CONFIG_TEXT if any(r["config"] == c for r in models)]:
+            rows = [r for r in models if r["config"] == c]
+            out += ["### %s" % CONFIG_TEXT[c], "", _md_table(
+                ["model", "RMS", "max", "RMS force", "RMS shear", "time per evaluation",
+                 "evaluations timed", "status"],
+                [[label(r), fmt_err(_num(r["rms_rel"])), fmt_err(_num(r["max_rel"])),
+                  fmt_err(_num(r["rms_force"])), fmt_err(_num(r["rms_shear"])),
+                  fmt_time(_num(r["t_eval"])), r["n_evals"], r["status"]] for r in rows]), ""]
+        out += ["![error versus cost](%s/accuracy_error_cost.png)" % figdir_rel, ""]
+    if tol:
+        out += ["## Integration tolerance", "",
+                "Trefoil (N = 99, orientation a, A = 2.2) from t = 0 to t_end; deviation = "
+                "max over beads of |r − r_ref| at t_end against the run at the tightest "
+                "tolerance (the row with deviation 0). eps_lub is fixed at 1e-4 so that only "
+                "the integration changes.", "",
+                _md_table(["model", "t_end", "tolerance", "wall", "steps", "rejected",
+                           "evaluations", "max deviation [d]"],
+                          [[label(r), "%g" % _num(r["t_end"]), "%.0e" % _num(r["tolerance"]),
+                            fmt_time(_num(r["wall"])), r["steps"], r["rejected"],
+                            r["evaluations"], fmt_err(_num(r["max_deviation"]))] for r in tol]),
+                "", "![tolerance](%s/accuracy_tolerance.png)" % figdir_rel, ""]
+    if scaling:
+        sizes = sorted({int(r["n"]) for r in scaling})
+        names = []
+        for r in scaling:
+            if label(r) not in names:
+                names.append(label(r))
+        t = {(label(r), int(r["n"])): r for r in scaling}
+        slope = {label(r): r for r in fits}
+        rows = []
+        for m in names:
+            row = [m]
+            for n in sizes:
+                r = t.get((m, n))
+                row.append(fmt_time(_num(r["t_eval"])) if r and r["status"] == "ok"
+                           else (r["status"] if r else "–"))
+            f = slope.get(m)
+            row.append("%.2f (N = %s–%s)" % (_num(f["exponent"]), f["n_min"], f["n_max"])
+                       if f else "–")
+            rows.append(row)
+        out += ["## Scaling with N", "",
+                "Time per evaluation for self-avoiding random walks (bond 1.02, non-bonded beads "
+                "≥ 1 apart, fixed seed). Sizes predicted (N³ from the previous size) to exceed "
+                "the limit per evaluation are skipped. Exponent: least-squares line in log-log "
+                "through the (up to) three largest measured sizes.", "",
+                _md_table(["model"] + ["N = %d" % n for n in sizes] + ["exponent"], rows), "",
+                "![scaling](%s/accuracy_scaling.png)" % figdir_rel, ""]
+    if case:
+        out += ["## What it means: one reference-study case", "",
+                "Trefoil N = 99, A = 2.2, orientation c, tolerance 1e-4, t_end = %g. "
+                "'measured': the whole case was run. 'extrapolated': (evaluations per unit time, "
+                "counted over a short window after a warm-up) × t_end × (median time per "
+                "evaluation); the rpy row extrapolated in the same way checks the method "
+                "against its measured run." % _num(case[0]["t_end"]), "",
+                _md_table(["model", "kind", "wall time", "evaluations per unit time",
+                           "time per evaluation", "rate from"],
+                          [[label(r), r["kind"], fmt_time(_num(r["wall"])),
+                            "%.0f" % _num(r["evals_per_time"]), fmt_time(_num(r["t_eval"])),
+                            r["rate_source"]] for r in case]), ""]
+    return "\n".join(out), summary
+
+
+def update_readme(path: str, block: str) -> None:
+    """Replace the text between the accuracy markers of README.md by `block`."""
+    with open(path) as f:
+        text = f.read()
+    i, j = text.find(BEGIN), text.find(END)
+    if i < 0 or j < i:
+        raise ValueError("%s: markers %s ... %s not found" % (path, BEGIN, END))
+    text = text[:i + len(BEGIN)] + "\n" + block.strip() + "\n" + text[j:]
+    with open(path, "w") as f:
+        f.write(text)
+
+
+def build_report(directory: str, markdown: str, figdir: str, readme: str | None = None) -> dict:
+    """Write the markdown report and the figures; update the README block if asked."""
+    if not os.path.exists(os.path.join(directory, "meta.csv")):
+        raise FileNotFoundError("%s: no meta.csv (run knotflow-accuracy first)" % directory)
+    os.makedirs(figdir, exist_ok=True)
+    os.makedirs(os.path.dirname(os.path.abspath(markdown)), exist_ok=True)
+    figures = []
+    models = read_table(directory, "models.csv")
+    if models:
+        figures.append(os.path.join(figdir, "accuracy_error_cost.png"))
+        plot_errors(models, figures[-1])
+    tol = read_table(directory, "tolerance.csv")
+    if tol:
+        figures.append(os.path.join(figdir, "accuracy_tolerance.png"))
+        plot_tolerance(tol, figures[-1])
+    scaling = read_table(directory, "scaling.csv")
+    if scaling:
+        figures.append(os.path.join(figdir, "accuracy_scaling.png"))
+        plot_scaling(scaling, read_table(directory, "scaling_fit.csv"), figures[-1])
+    rel = os.path.relpath(os.path.abspath(figdir), os.path.dirname(os.path.abspath(markdown)))
+    text, summary = build_markdown(directory, rel)
+    with open(markdown, "w") as f:
+        f.write(text)
+    if readme and summary:
+        meta = _meta(directory)
+        block = ("Measured by `bash scripts/accuracy.sh`%s (load average %s; details and "
+                 "figures in docs/accuracy.md):\n\n%s" % (
+                     " **--quick: smoke-test sizes, not the real figures**"
+                     if meta.get("quick") == "1" else "",
+                     meta.get("loadavg_start", "unknown") + (
+                         "; at the end %s" % meta["loadavg_end"] if "loadavg_end" in meta
+                         else ""), summary))
+        update_readme(readme, block)
+    return {"markdown": markdown, "figures": figures, "summary": summary}
+
+
+def main(argv=None) -> int:
+    """knotflow-accuracy-report entry point."""
+    p = argparse.ArgumentParser(
+        prog="knotflow-accuracy-report",
+        description="docs/accuracy.md and figures from the CSV tables of knotflow-accuracy.")
+    p.add_argument("results", help="directory written by knotflow-accuracy --out")
+    p.add_argument("--markdown", default="docs/accuracy.md", help="report file to write")
+    p.add_argument("--figures", default="docs/figures", help="directory of the PNG figures")
+    p.add_argument("--readme", default=None,
+                   help="README.md whose block between %s and %s is replaced by the summary"
+                   % (BEGIN, END))
+    args = p.parse_args(argv)
+    try:
+        res = build_report(args.results, args.markdown, args.figures, args.readme)
+    except (OSError, ValueError, KeyError) as exc:
+        print("knotflow-accuracy-report: error: %s" % exc, file=sys.stderr)
+        return 2
+    print(res["summary"])
+    print("wrote %s and %d figure(s) in %s" % (res["markdown"], len(res["figures"]),
+                                                args.figures))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
