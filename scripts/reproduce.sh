@@ -79,8 +79,8 @@ for sweep in "${cane_sweeps[@]}"; do
       kf_log "knotflow-analyze $f (knot matrices of frames $frames)"
       "${mpi[@]}" "$analyze" "$f" --closures 200 --stride 1 --matrix-frames "$frames" --matrix-closures 20
     else
-      kf_log "knotflow-analyze $f"
-      "${mpi[@]}" "$analyze" "$f" --closures 200 --stride 1
+      kf_log "knotflow-analyze $f (ensemble: 100 closures, every 2nd frame)"
+      "${mpi[@]}" "$analyze" "$f" --closures 100 --stride 2
     fi
   done
 done
