@@ -85,6 +85,20 @@ for sweep in "${cane_sweeps[@]}"; do
   done
 done
 out="results/reproduction$suffix"
+# Slipknot candidates of the screen (20 closures per subchain: its largest K over ~10^4
+# subchains is biased upwards) are recomputed with 100 closures per subchain.
+mkdir -p "$out/confirm"
+for f in "results/candycane$suffix"/*.h5; do
+  name="$(basename "$f" .h5)"
+  for k in $(knotflow-study --slip-candidates "$f"); do
+    json="$out/confirm/${name}_frame$k.json"
+    [ -s "$json" ] && continue
+    kf_log "slipknot candidate $name frame $k: knot matrix with 100 closures per subchain"
+    knotflow-study --write-frame "$f" "$k" "$out/confirm/${name}_frame$k.xyz"
+    "${mpi[@]}" "$analyze" "$out/confirm/${name}_frame$k.xyz" --matrix --matrix-closures 100 --json > "$json.tmp"
+    mv "$json.tmp" "$json"
+  done
+done
 kf_log "knotflow-study -> $out"
 args=(--trefoil "results/${trefoil_sweeps[0]}" --candycane "results/${cane_sweeps[0]}")
 [ "$extras" = 1 ] && args+=(--ensemble results/candycane_seeds)

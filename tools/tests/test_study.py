@@ -6,6 +6,8 @@ from knotflow_tools import study
 
 
 class _FakeCase:
+    name = "A1.40"
+
     def __init__(self, mats, time):
         self.knot_matrices = mats
         self.time = np.asarray(time, dtype=float)
@@ -61,3 +63,21 @@ def test_history_counts_the_first_untying_of_a_trefoil():
     assert study.history(t, kf, knotted_at_start=False) == [("knot", 4.0)]
     # inside the band throughout: nothing happens
     assert study.history(t[:2], kf[:2], knotted_at_start=True) == []
+
+
+def test_confirmation_with_more_closures_replaces_the_screen(tmp_path):
+    import json
+    n = 30
+    screen = np.full((n, n), np.nan)
+    screen[np.triu_indices(n, 10)] = 0.0
+    screen[3, 25] = 0.6                    # a noisy screening value above the threshold
+    case = _FakeCase({4: screen}, np.arange(6) * 10.0)
+    recomputed = np.where(np.isfinite(screen), 0.0, np.nan)
+    recomputed[3, 25] = 0.35               # the same subchain with more closures
+    doc = {"kf": 0.0, "knot_core": None,
+           "matrix": [[None if np.isnan(v) else v for v in row] for row in recomputed]}
+    with open(study.confirm_path(str(tmp_path), "A1.40", 4), "w") as fh:
+        json.dump(doc, fh)
+    (m,) = study.slipknot_scan(case, np.array([0.0, 50.0]), np.zeros(2), str(tmp_path))
+    assert m["slipknot"] and m["max_K"] == 0.6
+    assert m["confirmed_max_K"] == 0.35 and not m["confirmed_slipknot"]

@@ -21,7 +21,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from .analysis import analyze_case  # noqa: E402
-from .io import read_case  # noqa: E402
+from .io import read_case, write_xyz  # noqa: E402
 from .plot import MODE_NAMES, _draw_chain  # noqa: E402
 from .report import find_case_files  # noqa: E402
 from .transitions import states  # noqa: E402
@@ -106,8 +106,13 @@ def trefoil_rows(files, closures=200):
     return rows
 
 
-def slipknot_scan(case, kf_time, kf):
-    """Per stored knot matrix: whole-chain k_f at that frame, max K, knot core, slipknot flag."""
+def slipknot_scan(case, kf_time, kf, confirm_dir=None):
+    """Per stored knot matrix: whole-chain k_f at that frame, max K, knot core, slipknot flag.
+
+    The matrices of the scan use few closures per subchain (20), so their largest entry over
+    ~10^4 subchains is biased upwards. Where `confirm_dir` holds `<case>_frame<k>.json` (the
+    `knotflow-analyze --matrix --json` output of that frame with more closures) its max K, core
+    and slipknot flag are reported as `confirmed_*`."""
     out = []
     for frame, mat in sorted(case.knot_matrices.items()):
         t = float(case.time[frame])
@@ -120,12 +125,42 @@ def slipknot_scan(case, kf_time, kf):
             lengths = jj - ii
             m = int(np.argmin(lengths))
             core = [int(ii[m]), int(jj[m])]
-        out.append({"frame": int(frame), "time": t, "whole_kf": kw, "max_K": kmax,
-                    "knot_core": core, "slipknot": bool(kmax >= SLIP_K and kw < SLIP_WHOLE)})
+        entry = {"frame": int(frame), "time": t, "whole_kf": kw, "max_K": kmax,
+                 "knot_core": core, "slipknot": bool(kmax >= SLIP_K and kw < SLIP_WHOLE)}
+        conf = _confirmation(confirm_dir, case, frame)
+        if conf is not None:
+            entry.update(conf)
+        out.append(entry)
     return out
 
 
-def candycane_rows(files, closures=200):
+def confirm_path(confirm_dir, case_name, frame):
+    return os.path.join(confirm_dir, f"{case_name}_frame{int(frame)}.json")
+
+
+def _confirmation(confirm_dir, case, frame):
+    if not confirm_dir:
+        return None
+    path = confirm_path(confirm_dir, getattr(case, "name", "case"), frame)
+    if not os.path.isfile(path):
+        return None
+    with open(path, encoding="utf-8") as fh:
+        d = json.load(fh)
+    mat = np.array([[np.nan if v is None else v for v in row] for row in d["matrix"]], dtype=float)
+    kmax = float(np.nanmax(mat))
+    return {"confirmed_whole_kf": float(d["kf"]), "confirmed_max_K": kmax,
+            "confirmed_core": d.get("knot_core"),
+            "confirmed_slipknot": bool(kmax >= SLIP_K and d["kf"] < SLIP_WHOLE)}
+
+
+def slip_candidates(path):
+    """Frames whose stored (screening) knot matrix looks like a slipknot."""
+    case = read_case(path)
+    ana = analyze_case(case)
+    return [m["frame"] for m in slipknot_scan(case, ana.time, ana.kf) if m["slipknot"]]
+
+
+def candycane_rows(files, closures=200, confirm_dir=None):
     rows = []
     for path in files:
         case = read_case(path)
@@ -150,7 +185,7 @@ def candycane_rows(files, closures=200):
             "mode_II_late": float(np.mean(modes[late] == 2)) if len(modes) == len(t) else None,
             "case_mode": MODE_NAMES.get(ana.case_mode, "?"),
             "max_kf": float(np.max(ana.kf)), "mean_kf": float(np.mean(ana.kf)),
-            "matrices": slipknot_scan(case, ana.time, ana.kf),
+            "matrices": slipknot_scan(case, ana.time, ana.kf, confirm_dir),
             "_case": case, "_ana": ana,
         })
     rows.sort(key=lambda r: r["A"])
@@ -319,21 +354,29 @@ def candycane_tables(rows):
         out += ["", f"Close pairs A = 1 / A = 3: {a1['close_pairs_mean'] / a3['close_pairs_mean']:.1f} "
                 f"(whole run), {a1['close_pairs_late'] / max(a3['close_pairs_late'], 1e-12):.1f} (late)."]
     out += ["", "### Knot matrices (slipknot search)", "",
-            f"Slipknot: some K(i, j) >= {SLIP_K} while the whole chain has k_f < {SLIP_WHOLE}.", "",
-            "| A | frames with a matrix | frames with max K >= 0.5 | slipknot frames (t) | "
-            "largest K (t, whole k_f, core) |", "|---|---|---|---|---|"]
+            f"Slipknot: some K(i, j) >= {SLIP_K} while the whole chain has k_f < {SLIP_WHOLE}. "
+            "Screening: 20 closures per subchain on every 50th frame and the 5 most entangled "
+            "frames; candidates recomputed with 100 closures per subchain (and 1000 for the whole "
+            "chain) where listed.", "",
+            "| A | frames screened | frames with max K >= 0.5 | candidates (t) | "
+            "largest K in the screen (t, whole k_f, core) | candidates recomputed: t, max K, slipknot |",
+            "|---|---|---|---|---|---|"]
     for r in rows:
         ms = r["matrices"]
         if not ms:
-            out.append(f"| {r['A']:g} | 0 | - | - | - |")
+            out.append(f"| {r['A']:g} | 0 | - | - | - | - |")
             continue
         knotted = [m for m in ms if m["max_K"] >= SLIP_K]
         slips = [m for m in ms if m["slipknot"]]
         best = max(ms, key=lambda m: m["max_K"])
         core = "-" if best["knot_core"] is None else f"{best['knot_core'][0]}-{best['knot_core'][1]}"
         slip_times = ", ".join(format(m["time"], "g") for m in slips) or "none"
+        conf = "; ".join(f"t = {m['time']:g}: {m['confirmed_max_K']:.2f}, "
+                         f"{'yes' if m['confirmed_slipknot'] else 'no'}"
+                         for m in ms if "confirmed_max_K" in m) or "-"
         out.append(f"| {r['A']:g} | {len(ms)} | {len(knotted)} | {slip_times} | "
-                   f"{best['max_K']:.2f} (t = {best['time']:g}, {best['whole_kf']:.2f}, {core}) |")
+                   f"{best['max_K']:.2f} (t = {best['time']:g}, {best['whole_kf']:.2f}, {core}) | "
+                   f"{conf} |")
     return out
 
 
@@ -361,6 +404,7 @@ def ensemble_tables(rows):
 
 
 def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None):
+    confirm_dir = os.path.join(out, "confirm")
     os.makedirs(out, exist_ok=True)
     md = ["# knotflow-study: generated results", "",
           f"Trefoil sweep: `{trefoil_dir}`; candy-cane sweep: `{candycane_dir}`.", ""]
@@ -374,7 +418,7 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
                              "cases": [{k: v for k, v in r.items() if k not in ("time", "kf")}
                                        for r in rows]}
     if candycane_dir:
-        rows = candycane_rows(find_case_files(candycane_dir), closures)
+        rows = candycane_rows(find_case_files(candycane_dir), closures, confirm_dir)
         figs = [plot_candycane_shapes(rows, os.path.join(out, "candycane_shape.png")),
                 plot_candycane_kf(rows, os.path.join(out, "candycane_kf.png")),
                 plot_candycane_snapshots(rows, os.path.join(out, "candycane_snapshots.png")),
@@ -405,7 +449,20 @@ def main(argv=None):
     p.add_argument("--select-frames", metavar="CASE",
                    help="print the frames to give knotflow-analyze --matrix-frames for CASE "
                    "(every 50th and the 5 with most close pairs) and exit")
+    p.add_argument("--slip-candidates", metavar="CASE",
+                   help="print the frames of CASE whose stored knot matrix looks like a slipknot")
+    p.add_argument("--write-frame", nargs=3, metavar=("CASE", "FRAME", "XYZ"),
+                   help="write frame FRAME of CASE as a coordinate file and exit")
     args = p.parse_args(argv)
+    if args.slip_candidates:
+        print(" ".join(str(k) for k in slip_candidates(args.slip_candidates)))
+        return 0
+    if args.write_frame:
+        path, frame, xyz = args.write_frame
+        case = read_case(path)
+        write_xyz(xyz, case.positions[int(frame)], comment=f"{case.name} frame {frame} "
+                  f"t = {case.time[int(frame)]:g}")
+        return 0
     if args.select_frames:
         print(",".join(str(k) for k in entangled_frames(args.select_frames)))
         return 0
