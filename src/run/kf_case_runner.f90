@@ -200,7 +200,7 @@ contains
     end if
     status = case_ok
     call system_clock(clock_now)
-    message = 'finished: '//to_str(integ%steps)//' steps ('//to_str(integ%rejected)//' rejected), '// &
+    message = to_str(integ%steps)//' steps ('//to_str(integ%rejected)//' rejected), '// &
               to_str_short(real(clock_now - clock0, wp)/rate)//' s'
 
   contains
