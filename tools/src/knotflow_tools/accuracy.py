@@ -221,7 +221,10 @@ def build_markdown(directory: str, figdir_rel: str) -> tuple[str, str]:
                 "RMS = sqrt(Σ|u − u_ref|² / Σ|u_ref|²), max = max_i |u_i − u_ref,i| / max_i "
                 "|u_ref,i|; 'force' and 'shear' are the RMS errors of the two parts separately. "
                 "Reference: multipole L = %s with lubrication; its own convergence is the row "
-                "L%s+lub (the difference between L = %s and L = %s). Time per evaluation: "
+                "L%s+lub (the difference between L = %s and L = %s); with lubrication the "
+                "error alternates with the parity of L on straight chain stretches (missing "
+                "three-body terms, docs/multipole.md), so even orders share part of the "
+                "reference's bias. Time per evaluation: "
                 "median over repeated evaluations (≥ 3 and ≥ 0.5 s, at most 15 s)." % (
                     meta.get("bending_a_models", "?"), ref_order, int(ref_order) - 1
                     if ref_order.isdigit() else "?", int(ref_order) - 1
