@@ -9,6 +9,7 @@ program knotflow_bench
   use kf_kinds, only: wp
   use kf_blas, only: dsymv
   use kf_error, only: error_t
+  use kf_accuracy, only: wall_seconds, median
   use kf_scene, only: scene_t
   use kf_chain_shapes, only: build_initial_chain
   use kf_dynamics, only: dynamics_t
@@ -76,12 +77,6 @@ contains
     stop 1
   end subroutine fail
 
-  real(wp) function wall_time()
-    integer(int64) :: count, rate
-    call system_clock(count, rate)
-    wall_time = real(count, wp)/real(rate, wp)
-  end function wall_time
-
   !> Median over 41 batches of the time per evaluation (a batch lasts about 10 ms).
   subroutine time_velocity(scene, t_eval, error)
     type(scene_t), intent(in) :: scene
@@ -100,26 +95,25 @@ contains
     ! Calibrate the batch size.
     batch = 1
     do
-      t0 = wall_time()
+      t0 = wall_seconds()
       do k = 1, batch
         call dyn%velocity(r, v, error)
       end do
-      if (wall_time() - t0 > 0.01_wp .or. batch > 10**7) exit
+      if (wall_seconds() - t0 > 0.01_wp .or. batch > 10**7) exit
       batch = 2*batch
     end do
     checksum = 0.0_wp
     do rep = 1, size(samples)
-      t0 = wall_time()
+      t0 = wall_seconds()
       do k = 1, batch
         r(1, 1) = r(1, 1) + 1.0e-12_wp   ! keep the work from being hoisted
         call dyn%velocity(r, v, error)
         if (allocated(error)) return
         checksum = checksum + v(1, 1)
       end do
-      samples(rep) = (wall_time() - t0)/batch
+      samples(rep) = (wall_seconds() - t0)/batch
     end do
-    call sort(samples)
-    t_eval = samples((size(samples) + 1)/2)
+    t_eval = median(samples)
     if (.not. abs(checksum) <= huge(1.0_wp)) t_eval = -1.0_wp
   end subroutine time_velocity
 
@@ -138,43 +132,25 @@ contains
     call random_number(f)
     reps = 200
     do rep = 1, size(s_loop)
-      t0 = wall_time()
+      t0 = wall_seconds()
       do k = 1, reps
         call model%prepare(r, error)
         call model%apply_mobility(f, u)
       end do
-      s_loop(rep) = (wall_time() - t0)/reps
-      t0 = wall_time()
+      s_loop(rep) = (wall_seconds() - t0)/reps
+      t0 = wall_seconds()
       do k = 1, reps
         call model%prepare(r, error)
         call model%mobility_matrix(mu)
         call dsymv('L', 3*n, 1.0_wp, mu, 3*n, f, 1, 0.0_wp, u2, 1)
       end do
-      s_mat(rep) = (wall_time() - t0)/reps
+      s_mat(rep) = (wall_seconds() - t0)/reps
     end do
-    call sort(s_loop)
-    call sort(s_mat)
     write (output_unit, '(a)') '# RPY mu F for the trefoil (N = 99), median'
-    write (output_unit, '(a,f12.3)') 'pair loop            [us]', 1.0e6_wp*s_loop(11)
-    write (output_unit, '(a,f12.3)') 'matrix + DSYMV       [us]', 1.0e6_wp*s_mat(11)
+    write (output_unit, '(a,f12.3)') 'pair loop            [us]', 1.0e6_wp*median(s_loop)
+    write (output_unit, '(a,f12.3)') 'matrix + DSYMV       [us]', 1.0e6_wp*median(s_mat)
     write (output_unit, '(a,es12.3)') 'max |difference|        ', maxval(abs(reshape(u, [3*n]) - u2))
   end subroutine compare_matrix
-
-  subroutine sort(a)
-    real(wp), intent(inout) :: a(:)
-    integer :: i, j
-    real(wp) :: x
-    do i = 2, size(a)
-      x = a(i)
-      j = i - 1
-      do while (j >= 1)
-        if (a(j) <= x) exit
-        a(j + 1) = a(j)
-        j = j - 1
-      end do
-      a(j + 1) = x
-    end do
-  end subroutine sort
 
   !> Integrate the scene to t_end with no output and report the cost.
   subroutine run_case(scene, error)
@@ -193,9 +169,9 @@ contains
     call integ%init(scene%integrator, error)
     if (allocated(error)) return
     t = 0.0_wp
-    t0 = wall_time()
+    t0 = wall_seconds()
     call integ%advance(dyn, t, r, scene%integrator%t_end, error)
-    wall = wall_time() - t0
+    wall = wall_seconds() - t0
     if (allocated(error)) return
     write (output_unit, '(a)') '# trefoil case: N = 99, A = 2.2, orientation c, rpy, t_end = 1000, tolerance 1e-4'
     write (output_unit, '(a,f12.3)') 'wall time [s]      ', wall

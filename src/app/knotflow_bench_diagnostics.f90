@@ -4,9 +4,10 @@
 !> dynamics with excluded volume); medians over batches. Then the trefoil (A = 2.2, orientation
 !> c, rpy, excluded volume) integrated to t = 50 with and without the monitor (wall times).
 program knotflow_bench_diagnostics
-  use, intrinsic :: iso_fortran_env, only: int64, output_unit, error_unit
+  use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
   use kf_kinds, only: wp, i8
   use kf_error, only: error_t
+  use kf_accuracy, only: wall_seconds, median
   use kf_scene, only: scene_t
   use kf_chain_shapes, only: build_initial_chain
   use kf_dynamics, only: dynamics_t
@@ -61,12 +62,6 @@ contains
     stop 1
   end subroutine fail
 
-  real(wp) function wall_time()
-    integer(int64) :: count, rate
-    call system_clock(count, rate)
-    wall_time = real(count, wp)/real(rate, wp)
-  end function wall_time
-
   !> Median times of one velocity evaluation and of one `on_step` of the diagnostics, on the
   !> step of the proposed size that follows t = 5.
   subroutine time_step_costs(sc, t_eval, t_diag, error)
@@ -99,23 +94,21 @@ contains
     batch_diag = 1000
     checksum = 0.0_wp
     do rep = 1, size(s_eval)
-      t0 = wall_time()
+      t0 = wall_seconds()
       do k = 1, batch_eval
         call dyn%velocity(r, v, error)
         if (allocated(error)) return
         checksum = checksum + v(1, 1)
       end do
-      s_eval(rep) = (wall_time() - t0)/batch_eval
-      t0 = wall_time()
+      s_eval(rep) = (wall_seconds() - t0)/batch_eval
+      t0 = wall_seconds()
       do k = 1, batch_diag
         call diag%on_step(t_old, y_old, t, r)
       end do
-      s_diag(rep) = (wall_time() - t0)/batch_diag
+      s_diag(rep) = (wall_seconds() - t0)/batch_diag
     end do
-    call sort(s_eval)
-    call sort(s_diag)
-    t_eval = s_eval((size(s_eval) + 1)/2)
-    t_diag = s_diag((size(s_diag) + 1)/2)
+    t_eval = median(s_eval)
+    t_diag = median(s_diag)
     if (.not. abs(checksum) <= huge(1.0_wp) .or. diag%strand_passages < 0_i8) t_eval = -1.0_wp
   end subroutine time_step_costs
 
@@ -140,7 +133,7 @@ contains
     if (.not. allocated(error)) call integ%init(sc%integrator, error)
     if (allocated(error)) return
     t = 0.0_wp
-    t0 = wall_time()
+    t0 = wall_seconds()
     if (with_monitor) then
       call diag%init(n, sc%chain%bond_length)
       call diag%start(t, r)
@@ -148,23 +141,7 @@ contains
     else
       call integ%advance(dyn, t, r, t_end, error)
     end if
-    wall = wall_time() - t0
+    wall = wall_seconds() - t0
   end subroutine time_run
-
-  subroutine sort(a)
-    real(wp), intent(inout) :: a(:)
-    integer :: i, j
-    real(wp) :: x
-    do i = 2, size(a)
-      x = a(i)
-      j = i - 1
-      do while (j >= 1)
-        if (a(j) <= x) exit
-        a(j + 1) = a(j)
-        j = j - 1
-      end do
-      a(j + 1) = x
-    end do
-  end subroutine sort
 
 end program knotflow_bench_diagnostics

@@ -13,7 +13,7 @@ module kf_accuracy
   implicit none
   private
 
-  public :: wall_seconds, relative_velocity, velocity_error_norms, time_per_evaluation, &
+  public :: wall_seconds, median, relative_velocity, velocity_error_norms, time_per_evaluation, &
             max_bead_deviation, loglog_slope, integrate_timed
 
   !> Cost and statistics of one timed integration.
