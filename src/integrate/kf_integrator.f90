@@ -169,13 +169,28 @@ contains
       to_str(t, '(es14.6)'))
   end subroutine max_steps_error
 
-  subroutine record_step(this, h)
+  !> Accept the step of size h to this%ynew: advance t (to t_target exactly on the last step),
+  !> show the step to the monitor, take the new state and count the step.
+  subroutine accept_step(this, t, y, h, last, t_target, monitor)
     class(integrator_t), intent(inout) :: this
-    real(wp), intent(in) :: h
+    real(wp), intent(inout) :: t
+    real(wp), intent(inout) :: y(:, :)
+    real(wp), intent(in) :: h, t_target
+    logical, intent(in) :: last
+    class(step_monitor_t), intent(inout), optional :: monitor
+    real(wp) :: t_old
+    t_old = t
+    if (last) then
+      t = t_target
+    else
+      t = t + h
+    end if
+    if (present(monitor)) call monitor%on_step(t_old, y, t, this%ynew)
+    y = this%ynew
     this%steps = this%steps + 1
     this%dt_min_used = min(this%dt_min_used, h)
     this%dt_max_used = max(this%dt_max_used, h)
-  end subroutine record_step
+  end subroutine accept_step
 
   !> Fixed-step classic RK4 with step this%dt (the last step clipped to t_target).
   subroutine step_rk4(this, sys, t, y, t_target, error, monitor)
@@ -186,7 +201,7 @@ contains
     real(wp), intent(in) :: t_target
     type(error_t), allocatable, intent(out) :: error
     class(step_monitor_t), intent(inout), optional :: monitor
-    real(wp) :: h, t_old
+    real(wp) :: h
     logical :: last
     do while (t < t_target)
       if (this%steps >= this%max_steps) then
@@ -213,15 +228,7 @@ contains
         call nonfinite_error(error, t)
         return
       end if
-      t_old = t
-      if (last) then
-        t = t_target
-      else
-        t = t + h
-      end if
-      if (present(monitor)) call monitor%on_step(t_old, y, t, this%ynew)
-      y = this%ynew
-      call record_step(this, h)
+      call accept_step(this, t, y, h, last, t_target, monitor)
     end do
   end subroutine step_rk4
 
@@ -234,7 +241,7 @@ contains
     real(wp), intent(in) :: t_target
     type(error_t), allocatable, intent(out) :: error
     class(step_monitor_t), intent(inout), optional :: monitor
-    real(wp) :: h, err, fac, dt_proposed, t_old
+    real(wp) :: h, err, fac, dt_proposed
     integer :: i, n_bad
     logical :: last, finite
 
@@ -307,15 +314,7 @@ contains
         this%dt = h*this%fac_min
       else if (err <= 1.0_wp) then
         n_bad = 0
-        t_old = t
-        if (last) then
-          t = t_target
-        else
-          t = t + h
-        end if
-        if (present(monitor)) call monitor%on_step(t_old, y, t, this%ynew)
-        y = this%ynew
-        call record_step(this, h)
+        call accept_step(this, t, y, h, last, t_target, monitor)
         this%k1 = this%k7
         this%t_fsal = t
         this%y_fsal = y
