@@ -51,7 +51,7 @@ contains
     type(dynamics_t) :: dyn
     type(integrator_t) :: integ
     type(shape_t) :: obs
-    type(run_diagnostics_t) :: diag
+    type(run_diagnostics_t), allocatable :: diag   !< allocated only with diagnostics: else absent
     real(wp), allocatable :: r(:, :)
     real(wp) :: rotation(3, 3), t, t_next, dt
     integer(i8) :: steps, rejected, nframes
@@ -113,7 +113,10 @@ contains
       return
     end if
 
-    if (with_diag) call diag%init(size(r, 2), sc%chain%bond_length)
+    if (with_diag) then
+      allocate (diag)
+      call diag%init(size(r, 2), sc%chain%bond_length)
+    end if
     if (resumed .and. with_diag) then
       call file%restore_diagnostics(diag, error)
       if (allocated(error)) then
@@ -143,12 +146,8 @@ contains
       nframes = 0
       call compute_shape(r, obs, error)
       if (.not. allocated(error)) then
-        if (with_diag) then
-          call diag%start(t, r)
-          call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt, error, diag)
-        else
-          call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt, error)
-        end if
+        if (with_diag) call diag%start(t, r)
+        call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt, error, diag)
       end if
       if (allocated(error)) then
         call fail(error%message)
@@ -163,22 +162,14 @@ contains
     do while (t < sc%integrator%t_end*(1.0_wp - 1.0e-12_wp))
       t_next = min(sc%integrator%t_end, real(nframes, wp)*sc%output%frame_interval)
       if (t_next <= t) t_next = min(sc%integrator%t_end, t + sc%output%frame_interval)
-      if (with_diag) then
-        call integ%advance(dyn, t, r, t_next, error, diag)
-      else
-        call integ%advance(dyn, t, r, t_next, error)
-      end if
+      call integ%advance(dyn, t, r, t_next, error, diag)
       if (allocated(error)) then
         call fail(error%message)
         return
       end if
       call compute_shape(r, obs, error)
       if (.not. allocated(error)) then
-        if (with_diag) then
-          call file%append_frame(t, r, obs, integ%steps, integ%rejected, integ%dt, error, diag)
-        else
-          call file%append_frame(t, r, obs, integ%steps, integ%rejected, integ%dt, error)
-        end if
+        call file%append_frame(t, r, obs, integ%steps, integ%rejected, integ%dt, error, diag)
       end if
       if (allocated(error)) then
         call fail(error%message)
