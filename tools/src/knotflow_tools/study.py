@@ -87,11 +87,9 @@ def trefoil_rows(files, closures=200):
         ana = analyze_case(case, closures=closures)
         a, o = float(case.bending_a), str(case.orientation)
         events = history(ana.time, ana.kf, knotted_at_start=ana.kf[0] >= 0.5)
-        kinds = [k for k, _ in events]
         t_unknot = next((t for k, t in events if k == "unknot"), None)
-        t_reknot = None
-        if "unknot" in kinds and "knot" in kinds[kinds.index("unknot"):]:
-            t_reknot = next(t for k, t in events[kinds.index("unknot"):] if k == "knot")
+        t_reknot = None if t_unknot is None else next(
+            (t for k, t in events if k == "knot" and t > t_unknot), None)
         utk = t_reknot is not None
         rows.append({
             "case": case.name, "A": a, "orientation": o, "status": case.status,
