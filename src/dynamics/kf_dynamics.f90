@@ -21,11 +21,14 @@ module kf_dynamics
     integer :: n = 0                     !< number of beads
     integer(i8) :: evaluations = 0       !< calls of velocity
     real(wp), allocatable :: f(:, :)     !< work: forces of the last evaluation
-    real(wp), allocatable :: u(:, :)     !< work: mu F of the last evaluation
+    real(wp), allocatable :: u(:, :)     !< work: mu F + C:E of the last evaluation
   contains
     procedure :: init => dynamics_init
     procedure :: velocity => dynamics_velocity
     procedure :: derivative => dynamics_derivative
+    procedure :: step_begin => dynamics_step_begin
+    procedure :: step_accepted => dynamics_step_accepted
+    procedure :: step_rejected => dynamics_step_rejected
   end type dynamics_t
 
 contains
@@ -46,20 +49,24 @@ contains
     allocate (this%f(3, n_beads), this%u(3, n_beads))
   end subroutine dynamics_init
 
-  !> Bead velocities v(3, N) at positions r(3, N).
-  subroutine dynamics_velocity(this, r, v, error)
+  !> Bead velocities v(3, N) at positions r(3, N), at time t of an integration (optional; a
+  !> hydrodynamic model that reuses work between the stages needs it).
+  subroutine dynamics_velocity(this, r, v, error, t)
     class(dynamics_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     real(wp), intent(out) :: v(:, :)
     type(error_t), allocatable, intent(out) :: error
+    real(wp), intent(in), optional :: t
     this%evaluations = this%evaluations + 1
     call this%forces%compute(r, this%f)
-    call this%model%prepare(r, error)
+    if (this%flow%has_strain) then
+      call this%model%velocities(r, this%f, this%u, error, this%flow%e, t)
+    else
+      call this%model%velocities(r, this%f, this%u, error, t=t)
+    end if
     if (allocated(error)) return
-    call this%model%apply_mobility(this%f, this%u)
     call this%flow%velocity(r, v)
     v = v + this%u
-    if (this%flow%has_strain) call this%model%add_strain_disturbance(this%flow%e, v)
   end subroutine dynamics_velocity
 
   !> The ode_system_t interface: dydt = velocity(y) (the system is autonomous).
@@ -69,7 +76,25 @@ contains
     real(wp), intent(in) :: y(:, :)
     real(wp), intent(out) :: dydt(:, :)
     type(error_t), allocatable, intent(out) :: error
-    call this%velocity(y, dydt, error)
+    call this%velocity(y, dydt, error, t)
   end subroutine dynamics_derivative
+
+  !> The stepper's hooks go to the hydrodynamic model (the one part that reuses work).
+  subroutine dynamics_step_begin(this, t, y, h)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: t, y(:, :), h
+    call this%model%step_begin(h)
+  end subroutine dynamics_step_begin
+
+  subroutine dynamics_step_accepted(this, t, y)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: t, y(:, :)
+    call this%model%step_accepted()
+  end subroutine dynamics_step_accepted
+
+  subroutine dynamics_step_rejected(this)
+    class(dynamics_t), intent(inout) :: this
+    call this%model%step_rejected()
+  end subroutine dynamics_step_rejected
 
 end module kf_dynamics

@@ -38,7 +38,8 @@ contains
         allocate (mp)
         eps_lub = params%eps_lub
         if (eps_lub < 0.0_wp) eps_lub = tolerance
-        call mp%init(params%order, params%lubrication, eps_lub, error)
+        call mp%init(params%order, params%lubrication, eps_lub, error, update=trim(params%update), &
+                     tolerance=tolerance)
         if (allocated(error)) return
         call move_alloc(mp, model)
       end block

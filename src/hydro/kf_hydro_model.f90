@@ -6,11 +6,27 @@
 !>
 !> The expensive work depends only on positions: `prepare(r)` (assemble, factorise), then any
 !> number of cheap `apply_mobility(f, u)` / `add_strain_disturbance(e, u)` calls.
+!>
+!> The dynamics asks for `velocities(r, f, u, error, e, t)` instead: by default the same three
+!> calls, but a model may reuse work across the stages and steps of the time integration,
+!> within an error budget. The time stepper's hooks reach the model through `step_begin`
+!> (with the trial step size, from which such a budget follows), `step_accepted` and
+!> `step_rejected`; `statistics` reports the work done.
 module kf_hydro_model
-  use kf_kinds, only: wp
+  use kf_kinds, only: wp, i8
   use kf_error, only: error_t
   implicit none
   private
+
+  !> Work counters of a model (all zero for a model that reuses nothing).
+  type, public :: hydro_stats_t
+    integer(i8) :: evaluations = 0     !< calls of velocities
+    integer(i8) :: refreshes = 0       !< exact computations of the many-body part
+    integer(i8) :: reused = 0          !< evaluations that reused an earlier many-body part
+    integer(i8) :: cg_iterations = 0   !< conjugate-gradient iterations of the reused evaluations
+    integer(i8) :: preconditioners = 0 !< factorisations of the preconditioner between refreshes
+    real(wp) :: max_error_ratio = 0.0_wp !< largest measured reuse error / error budget
+  end type hydro_stats_t
 
   type, abstract, public :: hydro_model_t
     integer :: n = 0   !< number of beads at the last prepare
@@ -20,6 +36,11 @@ module kf_hydro_model
     procedure(disturb_i), deferred :: add_strain_disturbance
     procedure(name_i), deferred :: name
     procedure :: mobility_matrix
+    procedure :: velocities
+    procedure :: step_begin
+    procedure :: step_accepted
+    procedure :: step_rejected
+    procedure :: statistics
   end type hydro_model_t
 
   abstract interface
@@ -71,5 +92,43 @@ contains
       end do
     end do
   end subroutine mobility_matrix
+
+  !> u = mu(r) f + C(r) : e (u is overwritten; no strain term when e is absent) at time t of
+  !> the integration (optional: a model that reuses work needs it). The default prepares at r
+  !> and applies: exact at every call.
+  subroutine velocities(this, r, f, u, error, e, t)
+    class(hydro_model_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :), f(:, :)
+    real(wp), intent(out) :: u(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), intent(in), optional :: e(3, 3), t
+    call this%prepare(r, error)
+    if (allocated(error)) return
+    call this%apply_mobility(f, u)
+    if (present(e)) call this%add_strain_disturbance(e, u)
+  end subroutine velocities
+
+  !> A trial step of size h begins (the default ignores it).
+  subroutine step_begin(this, h)
+    class(hydro_model_t), intent(inout) :: this
+    real(wp), intent(in) :: h
+  end subroutine step_begin
+
+  !> The step was accepted (the default ignores it).
+  subroutine step_accepted(this)
+    class(hydro_model_t), intent(inout) :: this
+  end subroutine step_accepted
+
+  !> The trial step was rejected (the default ignores it).
+  subroutine step_rejected(this)
+    class(hydro_model_t), intent(inout) :: this
+  end subroutine step_rejected
+
+  !> Work counters; zero for a model that reuses nothing.
+  function statistics(this) result(s)
+    class(hydro_model_t), intent(in) :: this
+    type(hydro_stats_t) :: s
+    s = hydro_stats_t()
+  end function statistics
 
 end module kf_hydro_model

@@ -211,6 +211,7 @@ contains
       h = this%dt
       last = t + h*(1.0_wp + 1.0e-12_wp) >= t_target
       if (last) h = t_target - t
+      call sys%step_begin(t, y, h)
       call sys%derivative(t, y, this%k1, error)
       if (allocated(error)) return
       this%ytmp = y + 0.5_wp*h*this%k1
@@ -271,6 +272,7 @@ contains
       h = dt_proposed
       last = t + h*(1.0_wp + 1.0e-12_wp) >= t_target
       if (last) h = t_target - t
+      call sys%step_begin(t, y, h)
 
       this%ytmp = y + h*a21*this%k1
       call sys%derivative(t + c2*h, this%ytmp, this%k2, error)
@@ -315,6 +317,7 @@ contains
       else if (err <= 1.0_wp) then
         n_bad = 0
         call accept_step(this, t, y, h, last, t_target, monitor)
+        call sys%step_accepted(t, y)
         this%k1 = this%k7
         this%t_fsal = t
         this%y_fsal = y
@@ -334,6 +337,7 @@ contains
         this%dt = min(this%dt, this%dt_max)
       else
         this%rejected = this%rejected + 1
+        call sys%step_rejected()
         fac = max(this%fac_min, this%safety*err**(-this%alpha))
         this%dt = h*min(1.0_wp, fac)
       end if

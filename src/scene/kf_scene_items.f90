@@ -70,6 +70,7 @@ contains
       call add_i(items, 'hydro.order', int(h%order, i8))
       call add_l(items, 'hydro.lubrication', h%lubrication)
       call add_r(items, 'hydro.eps_lub', h%eps_lub)
+      call add_s(items, 'hydro.update', h%update)
     end associate
     associate (g => sc%integrator)
       call add_s(items, 'integrator.method', g%method)

@@ -19,6 +19,7 @@ module kf_scene_read
   character(len=*), parameter :: flows = 'shear, linear, quiescent'
   character(len=*), parameter :: models = 'none, rpy, multipole'
   character(len=*), parameter :: methods = 'dopri45, rk4'
+  character(len=*), parameter :: updates = 'stage, adaptive'
 
 contains
 
@@ -127,11 +128,14 @@ contains
       integer :: order
       logical :: lubrication
       real(wp) :: eps_lub
-      namelist /hydro/ model, order, lubrication, eps_lub
+      character(len=name_len) :: update
+      namelist /hydro/ model, order, lubrication, eps_lub, update
       associate (p => sc%hydro)
         model = p%model; order = p%order; lubrication = p%lubrication; eps_lub = p%eps_lub
+        update = p%update
         read (text, nml=hydro, iostat=ios, iomsg=msg)
         p%model = model; p%order = order; p%lubrication = lubrication; p%eps_lub = eps_lub
+        p%update = update
       end associate
     end subroutine read_hydro
 
@@ -396,6 +400,9 @@ contains
       if (.not. (h%eps_lub < 0.5_wp)) then
         call bad(error, f, 'hydro', 'eps_lub', to_str(h%eps_lub), &
           'a number in [0, 0.5), or negative for the integration tolerance'); return
+      end if
+      if (.not. one_of(h%update, updates)) then
+        call bad(error, f, 'hydro', 'update', quoted(h%update), 'one of '//updates); return
       end if
     end associate
     associate (g => sc%integrator)

@@ -20,6 +20,7 @@ module kf_lubrication
   use kf_near_contact, only: singular_part, singular_weight, smoothstep
   use kf_pair_tensor, only: pair_tensors
   use kf_lubrication_data, only: lub_max_order, lub_cutoff, lub_n_grid, lubrication_table
+  use kf_pair_blocks, only: pair_blocks_t
   implicit none
   private
 
@@ -43,6 +44,7 @@ module kf_lubrication
     procedure :: cutoff
     procedure :: correction_functions
     procedure :: pair_correction
+    procedure :: pair_blocks
   end type lubrication_t
 
 contains
@@ -138,6 +140,26 @@ contains
     call this%correction_functions(max(r, 1.0_wp + this%eps_lub), df)
     call pair_tensors(df, dhat, dzeta, dxe)
   end subroutine pair_correction
+
+  !> The corrections of every pair of r(3, N) closer than the cutoff, as a list of pair blocks.
+  subroutine pair_blocks(this, r, blocks)
+    class(lubrication_t), intent(in) :: this
+    real(wp), intent(in) :: r(:, :)
+    type(pair_blocks_t), intent(inout) :: blocks
+    real(wp), pointer :: zeta(:, :), xe(:, :, :)
+    real(wp) :: d(3), rc2
+    integer :: i, j
+    rc2 = this%r_cut**2
+    call blocks%clear()
+    do i = 1, size(r, 2)
+      do j = i + 1, size(r, 2)
+        d = r(:, j) - r(:, i)
+        if (sum(d*d) >= rc2) cycle
+        call blocks%next_slot(i, j, zeta, xe)
+        call this%pair_correction(d, zeta, xe)
+      end do
+    end do
+  end subroutine pair_blocks
 
   !> Second derivatives of the cubic spline through y on a uniform grid of step h, clamped with
   !> zero slope at the first point and natural at the last.

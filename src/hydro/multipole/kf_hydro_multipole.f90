@@ -2,35 +2,93 @@
 !> truncated at order L, optionally with two-sphere lubrication corrections (HYDROLIB scheme,
 !> MULTIPOLE.md 13.3) and the BWE overlap rule.
 !>
-!> prepare(r) assembles and factorises the system and caches the translational mobility mu
-!> (3N x 3N) and the disturbance of free beads for the five basis strains; apply_mobility and
-!> add_strain_disturbance are then matrix-vector products.
+!> In parts: the many-body system (kf_multipole_system: assembly, p-moment elimination,
+!> Cholesky factorisation, then its friction zeta_L and strain coupling x_L), the lubrication
+!> corrections as a list of 12 x 12 pair blocks (kf_lubrication_pairs), and the corrected
+!> friction route zeta = zeta_L + sum dzeta, x = x_L + sum dx, U - U_inf = zeta^-1 (F + x:E).
+!>
+!> Two ways to get velocities, chosen once at set-up (`&hydro update`):
+!> * 'stage': `prepare(r)` at every call does all of the above and caches the 3N x 3N mobility
+!>   and the strain disturbances (also what `prepare`/`apply_mobility`/`mobility_matrix` do in
+!>   either mode). The reference.
+!> * 'adaptive': the many-body part zeta_L, x_L is computed exactly at a reference
+!>   configuration (a refresh) and reused at later configurations, while the lubrication
+!>   corrections are computed exactly at every call. Reuse uses the covariance of Stokes
+!>   flow: the current configuration is rotated onto the reference by the best rigid rotation
+!>   Q (kf_rigid_fit), forces and strain are rotated with it, the velocities rotated back, so
+!>   the rigid tumbling of the chain costs no accuracy; what is left is the deformation since
+!>   the refresh, D = max_i |Q^T (r_i - c) + c_ref - r_ref,i|. The corrected system
+!>   (zeta_L(ref) + sum dzeta(r)) U = b is solved by conjugate gradients preconditioned with the
+!>   Cholesky factor of zeta_L(ref) + sum dzeta at the refresh (re-factorised when CG needs more
+!>   than `cg_refactor_iterations`), to a velocity error below cg_fraction of the budget.
+!>   Refresh rule: the error of a reused many-body part grows with D; at every refresh after
+!>   the first, the velocities of the reused part at the new configuration are computed too
+!>   and compared with the exact ones, which measures the growth rate coef = err/D (max norms
+!>   over beads). A call refreshes when coef D exceeds the budget
+!>   budget_fraction * tolerance / h (h the trial step of the stepper): a velocity error below
+!>   it moves a bead by less than budget_fraction of the integration tolerance in one step.
+!>   Without a step size (calls outside a stepper) every call is exact.
 module kf_hydro_multipole
-  use kf_kinds, only: wp
+  use kf_kinds, only: wp, i8
   use kf_strings, only: to_str
-  use kf_blas, only: dgemv
+  use kf_blas, only: dgemv, dsymv, dpotrs
+  use kf_lapack, only: cholesky_factor, cholesky_invert
   use kf_error, only: error_t, fatal_error
-  use kf_hydro_model, only: hydro_model_t
+  use kf_hydro_model, only: hydro_model_t, hydro_stats_t
   use kf_multipole_system, only: multipole_system_t, strain_coefficients, strain_basis
   use kf_lubrication, only: lubrication_t
+  use kf_pair_blocks, only: pair_blocks_t
+  use kf_rigid_fit, only: best_rotation, centroid
   implicit none
   private
+
+  !> Names of the update modes (`&hydro update`), in the order of their codes.
+  character(len=*), parameter, public :: update_names = 'stage, adaptive'
+  !> Velocity error budget of a reused many-body part, as a fraction of tolerance / step size.
+  real(wp), parameter :: budget_fraction = 0.5_wp
+  !> Conjugate-gradient stopping error, as a fraction of the budget.
+  real(wp), parameter :: cg_fraction = 0.05_wp
+  !> Largest deformation D (units of d) over which a many-body part is reused.
+  real(wp), parameter :: max_deformation = 0.5_wp
+  !> Largest extrapolation weight |t - t_ref| / (t_ref - t_prev).
+  real(wp), parameter :: max_extrapolation = 3.0_wp
+  integer, parameter :: cg_max_iterations = 60
+  integer, parameter :: cg_refactor_iterations = 12
 
   !> Multipole model of order L with or without lubrication corrections.
   type, extends(hydro_model_t), public :: multipole_model_t
     integer :: order = 2
     logical :: lubrication = .false.
+    logical :: adaptive = .false.         !< update = 'adaptive'
     real(wp) :: eps_lub = 1.0e-4_wp      !< BWE shift: overlapping pairs are evaluated at 1 + eps_lub
+    real(wp) :: tolerance = 1.0e-4_wp    !< integration tolerance (units of d), for the budget
     type(multipole_system_t) :: sys
-    real(wp), allocatable :: mu(:, :)    !< 3N x 3N translational mobility
-    real(wp), allocatable :: dist(:, :)  !< 3N x 5 disturbance for the basis strains
-    real(wp), allocatable :: fbuf(:, :)  !< 3N x 2 work for apply_mobility
-    real(wp), allocatable :: d6(:, :)    !< 6N x 5 work (disturbance incl. rotations)
-    real(wp), allocatable :: dz(:, :), dx(:, :) !< summed pair corrections (6N x 6N, 6N x 5)
     type(lubrication_t) :: lub
     integer :: n_lub_pairs = 0           !< pairs corrected at the last prepare
     integer :: n_overlaps = 0            !< overlapping pairs (r <= 1) at the last prepare
     real(wp) :: t_lubrication = 0.0_wp   !< seconds in the lubrication part of the last prepare
+    type(pair_blocks_t), private :: pairs
+    real(wp), allocatable, private :: mu(:, :)    !< 3N x 3N translational mobility
+    real(wp), allocatable, private :: dist(:, :)  !< 3N x 5 disturbance for the basis strains
+    real(wp), allocatable, private :: zt(:, :), x6(:, :) !< 6N x 6N, 6N x 5 friction route work
+    real(wp), allocatable, private :: v3(:), w3(:)       !< 3N work
+    ! adaptive reuse
+    logical, private :: has_ref = .false.
+    real(wp), private :: c_ref(3) = 0.0_wp
+    real(wp), private :: h = 0.0_wp               !< trial step size of the stepper (0: none)
+    logical, private :: has_prev = .false.         !< a history (two refreshes) exists
+    real(wp), private :: t_ref = 0.0_wp, t_prev = 0.0_wp !< times of the last two refreshes
+    real(wp), private :: w = 0.0_wp                !< extrapolation weight of the current solve
+    real(wp), private :: coef1 = -1.0_wp           !< error / |t - t_ref| (< 0: unknown)
+    real(wp), private :: coef2 = -1.0_wp           !< error / |t - t_ref||t - t_prev| (< 0: unknown)
+    real(wp), allocatable, private :: r_ref(:, :) !< reference configuration
+    real(wp), allocatable, private :: zl(:, :)    !< zeta_L(ref), full storage
+    real(wp), allocatable, private :: xl(:, :)    !< x_L(ref), 6N x 5
+    real(wp), allocatable, private :: zh(:, :), xh(:, :) !< their change since the previous refresh
+    real(wp), allocatable, private :: pf(:, :)    !< Cholesky factor of the preconditioner
+    real(wp), allocatable, private :: rp(:, :), fp(:, :), us(:, :) !< rotated positions, forces; velocities
+    real(wp), allocatable, private :: b(:), x(:), rs(:), z(:), p(:), q(:), xs(:) !< 6N work
+    type(hydro_stats_t), private :: stats
   contains
     procedure :: init => multipole_init
     procedure :: prepare => multipole_prepare
@@ -39,23 +97,50 @@ module kf_hydro_multipole
     procedure :: name => multipole_name
     procedure :: mobility_matrix => multipole_mobility_matrix
     procedure :: friction_matrix => multipole_friction_matrix
+    procedure :: velocities => multipole_velocities
+    procedure :: step_begin => multipole_step_begin
+    procedure :: statistics => multipole_statistics
+    procedure :: reused_velocities => multipole_reused_velocities
   end type multipole_model_t
 
 contains
 
-  !> Order L (1..20), lubrication on/off, BWE shift eps_lub (0 < eps_lub < 0.5).
-  subroutine multipole_init(this, order, lubrication, eps_lub, error)
+  !> Order L (1..20), lubrication on/off, BWE shift eps_lub (0 < eps_lub < 0.5), update mode
+  !> ('stage', the default, or 'adaptive') and the integration tolerance (> 0, default 1e-4)
+  !> that sets the reuse budget.
+  subroutine multipole_init(this, order, lubrication, eps_lub, error, update, tolerance)
     class(multipole_model_t), intent(inout) :: this
     integer, intent(in) :: order
     logical, intent(in) :: lubrication
     real(wp), intent(in) :: eps_lub
     type(error_t), allocatable, intent(out) :: error
+    character(len=*), intent(in), optional :: update
+    real(wp), intent(in), optional :: tolerance
+    character(len=:), allocatable :: mode
+    real(wp) :: tol
 
     if (.not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) then
       call fatal_error(error, 'multipole: eps_lub = '//to_str(eps_lub, '(es12.4)')// &
                        ' not allowed (0 < eps_lub < 0.5)')
       return
     end if
+    mode = 'stage'
+    if (present(update)) mode = update
+    tol = 1.0e-4_wp
+    if (present(tolerance)) tol = tolerance
+    if (.not. tol > 0.0_wp) then
+      call fatal_error(error, 'multipole: tolerance = '//to_str(tol, '(es12.4)')//' not allowed (> 0)')
+      return
+    end if
+    select case (mode)
+    case ('stage')
+      this%adaptive = .false.
+    case ('adaptive')
+      this%adaptive = .true.
+    case default
+      call fatal_error(error, "multipole: update = '"//mode//"' is unknown (allowed: "//update_names//')')
+      return
+    end select
     if (lubrication) then
       call this%lub%init(order, eps_lub, error)
       if (allocated(error)) return
@@ -63,93 +148,121 @@ contains
     this%order = order
     this%lubrication = lubrication
     this%eps_lub = eps_lub
+    this%tolerance = tol
     this%n = 0
+    this%has_ref = .false.
+    this%has_prev = .false.
+    this%coef1 = -1.0_wp
+    this%coef2 = -1.0_wp
+    this%stats = hydro_stats_t()
     call this%sys%init(order, 1.0_wp + eps_lub, error)
   end subroutine multipole_init
 
-  !> Assemble and factorise for bead centres r(3, N); cache mu and the strain disturbances.
+  !> Work arrays for nb beads.
+  subroutine ensure_work(this, nb)
+    class(multipole_model_t), intent(inout) :: this
+    integer, intent(in) :: nb
+    if (allocated(this%zt)) then
+      if (size(this%zt, 1) == 6*nb) return
+      deallocate (this%mu, this%dist, this%zt, this%x6, this%v3, this%w3)
+      if (allocated(this%zl)) deallocate (this%zl, this%xl, this%zh, this%xh, this%pf, this%r_ref, this%rp, this%fp, this%us, &
+                                          this%b, this%x, this%rs, this%z, this%p, this%q, this%xs)
+    end if
+    allocate (this%mu(3*nb, 3*nb), this%dist(3*nb, 5), this%zt(6*nb, 6*nb), this%x6(6*nb, 5), &
+              this%v3(3*nb), this%w3(3*nb))
+    if (this%adaptive) then
+      allocate (this%zl(6*nb, 6*nb), this%xl(6*nb, 5), this%zh(6*nb, 6*nb), this%xh(6*nb, 5), &
+                this%pf(6*nb, 6*nb), this%r_ref(3, nb), &
+                this%rp(3, nb), this%fp(3, nb), this%us(3, nb))
+      allocate (this%b(6*nb), this%x(6*nb), this%rs(6*nb), this%z(6*nb), this%p(6*nb), this%q(6*nb), &
+                this%xs(6*nb))
+    end if
+    this%has_ref = .false.
+    this%has_prev = .false.
+  end subroutine ensure_work
+
+  !> Assemble and factorise for bead centres r(3, N); cache mu and the strain disturbances
+  !> (exact at r, in either update mode).
   subroutine multipole_prepare(this, r, error)
     class(multipole_model_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
-    integer :: nb
+    integer :: nb, j, i
 
     nb = size(r, 2)
-    if (nb /= this%n .or. .not. allocated(this%mu)) then
-      if (allocated(this%mu)) deallocate (this%mu, this%dist, this%fbuf, this%d6)
-      allocate (this%mu(3*nb, 3*nb), this%dist(3*nb, 5), this%fbuf(3*nb, 2), this%d6(6*nb, 5))
-      if (this%lubrication) then
-        if (allocated(this%dz)) deallocate (this%dz, this%dx)
-        allocate (this%dz(6*nb, 6*nb), this%dx(6*nb, 5))
-      end if
-    end if
+    call ensure_work(this, nb)
     this%n = 0
     call this%sys%factorise(r, error)
     if (allocated(error)) return
     this%n_overlaps = this%sys%n_clamped
-    if (this%lubrication) then
-      call lubrication_route(this, r, error)
-      if (allocated(error)) return
-    else
+    if (.not. this%lubrication) then
+      ! Schur route: the mobility directly from the factorised system.
       call this%sys%translational_mobility(this%mu)
-      call disturbance_translational(this)
+      call this%sys%strain_disturbance(this%x6)
+      do j = 1, nb
+        this%dist(3*j - 2:3*j, 1:5) = this%x6(6*j - 5:6*j - 3, 1:5)
+      end do
+      this%n = nb
+      return
     end if
+    call corrected_system(this, r, this%zt, this%x6, error)
+    if (allocated(error)) return
+    ! zt -> zeta^-1 (full), x6 -> zeta^-1 x: the translational blocks are mu and dist.
+    call solve_factored(this%zt, this%x6)
+    call cholesky_invert(this%zt, error, 'lubrication-corrected friction')
+    if (allocated(error)) return
+    do j = 1, nb
+      do i = 1, nb
+        this%mu(3*i - 2:3*i, 3*j - 2:3*j) = this%zt(6*i - 5:6*i - 3, 6*j - 5:6*j - 3)
+      end do
+      this%dist(3*j - 2:3*j, 1:5) = this%x6(6*j - 5:6*j - 3, 1:5)
+    end do
     this%n = nb
   end subroutine multipole_prepare
 
-  !> Friction route with the pair corrections of every pair closer than lub%cutoff():
-  !> zeta = zeta_L + sum dzeta, x = x_L + sum dxe:E (five basis strains).
-  subroutine lubrication_route(this, r, error)
+  !> For a factorised system at r: zeta = zeta_L + sum dzeta (Cholesky-factorised in place,
+  !> lower triangle) and x = x_L + sum dx for the basis strains; the pair list is left at r.
+  subroutine corrected_system(this, r, zeta, x, error)
     class(multipole_model_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
+    real(wp), intent(inout) :: zeta(:, :), x(:, :)
     type(error_t), allocatable, intent(out) :: error
-    real(wp) :: dzeta(12, 12), dxe(12, 3, 3), d(3), rc, bas(3, 3, 5)
-    integer :: i, j, k, nb, ii(12), a, b
-    integer(8) :: c0, c1, crate
+    real(wp) :: bas(3, 3, 5)
+    integer :: k
+    integer(i8) :: c0, c1, crate
 
+    call this%sys%friction_coupling(zeta, x, error)
+    if (allocated(error)) return
     call system_clock(c0, crate)
-    nb = size(r, 2)
-    rc = this%lub%cutoff()
-    do k = 1, 5
-      bas(:, :, k) = strain_basis(k)
-    end do
-    this%dz = 0.0_wp
-    this%dx = 0.0_wp
-    this%n_lub_pairs = 0
-    do i = 1, nb
-      do j = i + 1, nb
-        d = r(:, j) - r(:, i)
-        if (norm2(d) >= rc) cycle
-        call this%lub%pair_correction(d, dzeta, dxe)
-        this%n_lub_pairs = this%n_lub_pairs + 1
-        ii(1:6) = [(6*(i - 1) + k, k = 1, 6)]
-        ii(7:12) = [(6*(j - 1) + k, k = 1, 6)]
-        do b = 1, 12
-          do a = 1, 12
-            this%dz(ii(a), ii(b)) = this%dz(ii(a), ii(b)) + dzeta(a, b)
-          end do
-        end do
-        do k = 1, 5
-          do a = 1, 12
-            this%dx(ii(a), k) = this%dx(ii(a), k) + sum(dxe(a, :, :)*bas(:, :, k))
-          end do
-        end do
+    if (this%lubrication) then
+      do k = 1, 5
+        bas(:, :, k) = strain_basis(k)
       end do
-    end do
-    call this%sys%corrected(this%dz, this%dx, this%mu, this%dist, error)
+      call this%lub%pair_blocks(r, this%pairs)
+      call this%pairs%add_friction(zeta)
+      call this%pairs%add_strain_basis(bas, x)
+      this%n_lub_pairs = this%pairs%n_pairs()
+    end if
     call system_clock(c1)
     this%t_lubrication = real(c1 - c0, wp)/real(crate, wp)
-  end subroutine lubrication_route
+    call cholesky_factor(zeta, error, 'lubrication-corrected friction')
+  end subroutine corrected_system
 
-  !> The translational part of the system's free-sphere disturbance for the basis strains.
-  subroutine disturbance_translational(this)
-    class(multipole_model_t), intent(inout) :: this
-    integer :: i
-    call this%sys%strain_disturbance(this%d6)
-    do i = 1, this%sys%n
-      this%dist(3*i - 2:3*i, :) = this%d6(6*i - 5:6*i - 3, :)
-    end do
-  end subroutine disturbance_translational
+  !> b = a^-1 b for the Cholesky factor a (lower) and b with any number of columns.
+  subroutine solve_factored(a, b)
+    real(wp), intent(in) :: a(:, :)
+    real(wp), intent(inout) :: b(:, :)
+    integer :: info
+    call dpotrs('L', size(a, 1), size(b, 2), a, size(a, 1), b, size(b, 1), info)
+  end subroutine solve_factored
+
+  !> The same for one vector.
+  subroutine solve_vector(a, b)
+    real(wp), intent(in) :: a(:, :)
+    real(wp), intent(inout) :: b(:)
+    integer :: info
+    call dpotrs('L', size(a, 1), 1, a, size(a, 1), b, size(b), info)
+  end subroutine solve_vector
 
   !> u = mu f.
   subroutine multipole_apply(this, f, u)
@@ -158,9 +271,9 @@ contains
     real(wp), intent(out) :: u(:, :)
     integer :: n3
     n3 = 3*this%n
-    this%fbuf(:, 1) = reshape(f(:, 1:this%n), [n3])
-    call dgemv('N', n3, n3, 1.0_wp, this%mu, n3, this%fbuf(:, 1), 1, 0.0_wp, this%fbuf(:, 2), 1)
-    u(:, 1:this%n) = reshape(this%fbuf(:, 2), [3, this%n])
+    this%v3 = reshape(f(:, 1:this%n), [n3])
+    call dgemv('N', n3, n3, 1.0_wp, this%mu, n3, this%v3, 1, 0.0_wp, this%w3, 1)
+    u(:, 1:this%n) = reshape(this%w3, [3, this%n])
   end subroutine multipole_apply
 
   !> u = u + C:E for the symmetric traceless rate of strain e.
@@ -199,7 +312,332 @@ contains
     type(error_t), allocatable, intent(out) :: error
     call this%sys%grand_friction(zeta, error)
     if (allocated(error)) return
-    if (this%lubrication) zeta = zeta + this%dz
+    if (this%lubrication) call this%pairs%add_friction(zeta)
   end subroutine multipole_friction_matrix
+
+  !> The trial step size of the stepper, from which the reuse budget follows.
+  subroutine multipole_step_begin(this, h)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(in) :: h
+    this%h = h
+  end subroutine multipole_step_begin
+
+  !> Counters of the adaptive reuse (evaluations also in 'stage' mode).
+  function multipole_statistics(this) result(s)
+    class(multipole_model_t), intent(in) :: this
+    type(hydro_stats_t) :: s
+    s = this%stats
+  end function multipole_statistics
+
+  !> u = mu(r) f + C(r):e at time t, exact ('stage') or with the adaptive reuse of the
+  !> many-body part (which needs t and a step size from step_begin; else exact).
+  subroutine multipole_velocities(this, r, f, u, error, e, t)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :), f(:, :)
+    real(wp), intent(out) :: u(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), intent(in), optional :: e(3, 3), t
+    real(wp) :: ez(3, 3), qrot(3, 3), deform, budget, err, predicted, w, g
+    logical :: converged, had_prev
+
+    this%stats%evaluations = this%stats%evaluations + 1
+    ez = 0.0_wp
+    if (present(e)) ez = e
+    if (.not. this%adaptive) then
+      call this%prepare(r, error)
+      if (allocated(error)) return
+      call this%apply_mobility(f, u)
+      if (present(e)) call this%add_strain_disturbance(e, u)
+      return
+    end if
+    call ensure_work(this, size(r, 2))
+    budget = 0.0_wp
+    if (this%h > 0.0_wp .and. present(t)) budget = budget_fraction*this%tolerance/this%h
+    if (.not. this%has_ref .or. budget <= 0.0_wp) then
+      this%has_ref = .false.
+      this%has_prev = .false.
+      call refresh(this, r, f, ez, 0.0_wp, u, error)
+      if (present(t)) this%t_ref = t
+      return
+    end if
+    call best_rotation(this%r_ref, r, qrot, error)
+    if (allocated(error)) return
+    call align(this, r, qrot, deform)
+    w = 0.0_wp
+    if (this%has_prev) w = (t - this%t_ref)/(this%t_ref - this%t_prev)
+    g = growth(this, t, this%has_prev)
+    predicted = -1.0_wp
+    if (this%has_prev .and. this%coef2 >= 0.0_wp) predicted = this%coef2*g
+    if (.not. this%has_prev .and. this%coef1 >= 0.0_wp) predicted = this%coef1*g
+    if (predicted >= 0.0_wp .and. predicted <= budget .and. deform <= max_deformation .and. &
+        abs(w) <= max_extrapolation) then
+      call reused_solve(this, f, ez, qrot, w, budget, u, converged)
+      if (converged) then
+        this%stats%reused = this%stats%reused + 1
+        return
+      end if
+      call refresh(this, r, f, ez, t, u, error)
+      return
+    end if
+    ! Refresh; measure first the error of the reused part here, to calibrate the rule.
+    call reused_solve(this, f, ez, qrot, w, budget, this%us, converged)
+    had_prev = this%has_prev
+    call refresh(this, r, f, ez, t, u, error)
+    if (allocated(error)) return
+    if (.not. converged .or. g <= 0.0_wp) return
+    err = maxval(norm2(this%us - u, dim=1))
+    if (predicted > 0.0_wp) this%stats%max_error_ratio = max(this%stats%max_error_ratio, err/predicted)
+    if (had_prev) then
+      this%coef2 = max(err/g, 0.5_wp*this%coef2)
+    else
+      this%coef1 = max(err/g, 0.5_wp*this%coef1)
+    end if
+  end subroutine multipole_velocities
+
+  !> u from the many-body part of the last refresh as it is (no extrapolation, no refresh):
+  !> what the adaptive path returns when it reuses that part at r. For tests and measurements;
+  !> needs a refresh first (an adaptive velocities call), else returns an error.
+  subroutine multipole_reused_velocities(this, r, f, u, error, e)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :), f(:, :)
+    real(wp), intent(out) :: u(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), intent(in), optional :: e(3, 3)
+    real(wp) :: ez(3, 3), qrot(3, 3), deform
+    logical :: converged
+    if (.not. this%has_ref) then
+      call fatal_error(error, 'multipole: no reference to reuse (update = adaptive, after a velocities call)')
+      return
+    end if
+    if (size(r, 2) /= size(this%r_ref, 2)) then
+      call fatal_error(error, 'multipole: reused_velocities for another number of beads')
+      return
+    end if
+    ez = 0.0_wp
+    if (present(e)) ez = e
+    call best_rotation(this%r_ref, r, qrot, error)
+    if (allocated(error)) return
+    call align(this, r, qrot, deform)
+    call reused_solve(this, f, ez, qrot, 0.0_wp, 1.0e-6_wp*this%tolerance, u, converged)
+    if (.not. converged) call fatal_error(error, 'multipole: conjugate gradients did not converge')
+  end subroutine multipole_reused_velocities
+
+  !> The growth factor of the reuse error at time t: |t - t_ref| for a reused many-body part,
+  !> |t - t_ref| |t - t_prev| for one extrapolated from the last two refreshes (the error of
+  !> linear interpolation).
+  pure real(wp) function growth(this, t, extrapolated) result(g)
+    class(multipole_model_t), intent(in) :: this
+    real(wp), intent(in) :: t
+    logical, intent(in) :: extrapolated
+    g = abs(t - this%t_ref)
+    if (extrapolated) g = g*abs(t - this%t_prev)
+  end function growth
+
+  !> rp = Q^T (r - c) + c_ref, the configuration r rotated onto the reference, and its
+  !> deformation D = max_i |rp_i - r_ref,i|.
+  subroutine align(this, r, qrot, deform)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :), qrot(3, 3)
+    real(wp), intent(out) :: deform
+    real(wp) :: c(3)
+    integer :: i
+    c = centroid(r)
+    deform = 0.0_wp
+    do i = 1, size(r, 2)
+      this%rp(:, i) = matmul(transpose(qrot), r(:, i) - c) + this%c_ref
+      deform = max(deform, norm2(this%rp(:, i) - this%r_ref(:, i)))
+    end do
+  end subroutine align
+
+  !> Exact velocities at r, which becomes the reference: assemble and factorise the system,
+  !> keep zeta_L and x_L (and, when there was a reference, their change since it, rotated into
+  !> the new frame: the history for the extrapolation), factorise zeta_L + sum dzeta (the
+  !> preconditioner) and solve; t is the time of r.
+  subroutine refresh(this, r, f, e, t, u, error)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :), f(:, :), e(3, 3), t
+    real(wp), intent(out) :: u(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    real(wp) :: qrot(3, 3)
+    integer :: i
+    call this%sys%factorise(r, error)
+    if (allocated(error)) return
+    this%n_overlaps = this%sys%n_clamped
+    call this%sys%friction_coupling(this%zt, this%x6, error)
+    if (allocated(error)) return
+    if (this%has_ref) then
+      ! history: the new part minus the old one seen from the new frame
+      call best_rotation(this%r_ref, r, qrot, error)
+      if (allocated(error)) return
+      call rotate_friction(qrot, this%zl, this%zh)
+      call rotate_coupling(qrot, this%xl, this%xh)
+      this%zh = this%zt - this%zh
+      this%xh = this%x6 - this%xh
+      this%has_prev = .true.
+      this%t_prev = this%t_ref
+    end if
+    this%t_ref = t
+    this%zl = this%zt
+    this%xl = this%x6
+    this%r_ref = r
+    this%c_ref = centroid(r)
+    call factor_preconditioner(this, r, 0.0_wp, error)
+    if (allocated(error)) return
+    call right_hand_side(this, f, e, 0.0_wp)
+    this%x = this%b
+    call solve_vector(this%pf, this%x)
+    do i = 1, size(r, 2)
+      u(:, i) = this%x(6*i - 5:6*i - 3)
+    end do
+    this%has_ref = .true.
+    this%stats%refreshes = this%stats%refreshes + 1
+  end subroutine refresh
+
+  !> zo = Q zi Q^T blockwise: the friction of a configuration rotated by q (every 3 x 3
+  !> block of the 6N x 6N matrix, translations and rotations alike).
+  subroutine rotate_friction(q, zi, zo)
+    real(wp), intent(in) :: q(3, 3), zi(:, :)
+    real(wp), intent(out) :: zo(:, :)
+    integer :: a, b, nb3
+    nb3 = size(zi, 1)/3
+    do b = 1, nb3
+      do a = 1, nb3
+        zo(3*a - 2:3*a, 3*b - 2:3*b) = matmul(q, matmul(zi(3*a - 2:3*a, 3*b - 2:3*b), transpose(q)))
+      end do
+    end do
+  end subroutine rotate_friction
+
+  !> xo = the strain coupling (6N x 5, basis strains) of a configuration rotated by q:
+  !> x(Q r)[E] = Q x(r)[Q^T E Q] blockwise.
+  subroutine rotate_coupling(q, xi, xo)
+    real(wp), intent(in) :: q(3, 3), xi(:, :)
+    real(wp), intent(out) :: xo(:, :)
+    real(wp) :: m(5, 5), t(size(xi, 1), 5)
+    integer :: k, a
+    do k = 1, 5
+      m(:, k) = strain_coefficients(matmul(transpose(q), matmul(strain_basis(k), q)))
+    end do
+    t = matmul(xi, m)
+    do a = 1, size(xi, 1)/3
+      xo(3*a - 2:3*a, :) = matmul(q, t(3*a - 2:3*a, :))
+    end do
+  end subroutine rotate_coupling
+
+  !> pf = Cholesky factor of zeta_L(ref) + w zeta_hist + sum dzeta(rr); the pair list is left
+  !> at rr.
+  subroutine factor_preconditioner(this, rr, w, error)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(in) :: rr(:, :), w
+    type(error_t), allocatable, intent(out) :: error
+    if (w /= 0.0_wp) then
+      this%pf = this%zl + w*this%zh
+    else
+      this%pf = this%zl
+    end if
+    if (this%lubrication) then
+      call this%lub%pair_blocks(rr, this%pairs)
+      call this%pairs%add_friction(this%pf)
+      this%n_lub_pairs = this%pairs%n_pairs()
+    end if
+    call cholesky_factor(this%pf, error, 'lubrication-corrected friction')
+  end subroutine factor_preconditioner
+
+  !> b = [f_i; 0] + (x_L(ref) + w x_hist) : e + sum dx : e (the pair list at the current
+  !> configuration).
+  subroutine right_hand_side(this, f, e, w)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(in) :: f(:, :), e(3, 3), w
+    real(wp) :: c(5)
+    integer :: i, nb
+    nb = size(f, 2)
+    do i = 1, nb
+      this%b(6*i - 5:6*i - 3) = f(:, i)
+      this%b(6*i - 2:6*i) = 0.0_wp
+    end do
+    c = strain_coefficients(e)
+    call dgemv('N', 6*nb, 5, 1.0_wp, this%xl, 6*nb, c, 1, 1.0_wp, this%b, 1)
+    if (w /= 0.0_wp) call dgemv('N', 6*nb, 5, w, this%xh, 6*nb, c, 1, 1.0_wp, this%b, 1)
+    if (this%lubrication) call this%pairs%add_strain(e, this%b)
+  end subroutine right_hand_side
+
+  !> Velocities from the reused many-body part (extrapolated with weight w) at the aligned
+  !> configuration this%rp (rotation qrot): lubrication at rp, conjugate gradients on
+  !> (zeta_L(ref) + w zeta_hist + sum dzeta) U = b. `converged` is false when CG did not
+  !> reach the stopping error.
+  subroutine reused_solve(this, f, e, qrot, w, budget, u, converged)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(in) :: f(:, :), e(3, 3), qrot(3, 3), w, budget
+    real(wp), intent(inout) :: u(:, :)
+    logical, intent(out) :: converged
+    type(error_t), allocatable :: error
+    real(wp) :: qt(3, 3), rz, rz_new, alpha
+    integer :: i, nb, it
+
+    nb = size(f, 2)
+    qt = transpose(qrot)
+    do i = 1, nb
+      this%fp(:, i) = matmul(qt, f(:, i))
+    end do
+    if (this%lubrication) call this%lub%pair_blocks(this%rp, this%pairs)
+    call right_hand_side(this, this%fp, matmul(qt, matmul(e, qrot)), w)
+    this%w = w
+    ! Preconditioned CG from x = P^-1 b.
+    this%x = this%b
+    call solve_vector(this%pf, this%x)
+    call operator_apply(this, this%x, this%q)
+    this%rs = this%b - this%q
+    this%z = this%rs
+    call solve_vector(this%pf, this%z)
+    converged = largest_velocity(this%z, nb) <= cg_fraction*budget
+    this%p = this%z
+    rz = dot_product(this%rs, this%z)
+    it = 0
+    do while (.not. converged .and. it < cg_max_iterations)
+      it = it + 1
+      call operator_apply(this, this%p, this%q)
+      alpha = rz/dot_product(this%p, this%q)
+      this%x = this%x + alpha*this%p
+      this%rs = this%rs - alpha*this%q
+      this%z = this%rs
+      call solve_vector(this%pf, this%z)
+      converged = largest_velocity(this%z, nb) <= cg_fraction*budget
+      rz_new = dot_product(this%rs, this%z)
+      this%p = this%z + (rz_new/rz)*this%p
+      rz = rz_new
+    end do
+    this%stats%cg_iterations = this%stats%cg_iterations + it
+    if (.not. converged) return
+    do i = 1, nb
+      u(:, i) = matmul(qrot, this%x(6*i - 5:6*i - 3))
+    end do
+    if (it > cg_refactor_iterations) then
+      call factor_preconditioner(this, this%rp, w, error)
+      this%stats%preconditioners = this%stats%preconditioners + 1
+      if (allocated(error)) this%has_ref = .false.   ! refresh at the next call
+    end if
+  end subroutine reused_solve
+
+  !> y = (zeta_L(ref) + w zeta_hist + sum dzeta) x.
+  subroutine operator_apply(this, xv, y)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(in) :: xv(:)
+    real(wp), intent(out) :: y(:)
+    integer :: n6
+    n6 = size(xv)
+    call dsymv('L', n6, 1.0_wp, this%zl, n6, xv, 1, 0.0_wp, y, 1)
+    if (this%w /= 0.0_wp) call dsymv('L', n6, this%w, this%zh, n6, xv, 1, 1.0_wp, y, 1)
+    if (this%lubrication) call this%pairs%apply(xv, y)
+  end subroutine operator_apply
+
+  !> Largest translational velocity norm over beads of a 6N vector.
+  pure real(wp) function largest_velocity(v, nb) result(m)
+    real(wp), intent(in) :: v(:)
+    integer, intent(in) :: nb
+    integer :: i
+    m = 0.0_wp
+    do i = 1, nb
+      m = max(m, norm2(v(6*i - 5:6*i - 3)))
+    end do
+  end function largest_velocity
 
 end module kf_hydro_multipole

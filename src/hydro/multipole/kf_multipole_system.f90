@@ -20,7 +20,7 @@
 module kf_multipole_system
   use kf_kinds, only: wp
   use kf_strings, only: to_str
-  use kf_blas, only: dpotrf, dpotrs, dpotri, dtrsm, dgemm, dsyrk
+  use kf_blas, only: dpotrf, dpotri, dtrsm, dgemm, dsyrk
   use kf_constants, only: pi
   use kf_error, only: error_t, fatal_error
   use kf_multipole_blocks, only: multipole_layout_t, pair_block_grouped, fam_phi, fam_p
@@ -47,7 +47,6 @@ module kf_multipole_system
     real(wp), allocatable :: bq(:, :)    !< nqt x 5 work
     real(wp), allocatable :: d6(:, :)    !< 6N x 5 work
     real(wp), allocatable :: gr(:, :), y(:)
-    real(wp), allocatable :: zt(:, :), x6(:, :), t6(:, :) !< friction route work (6N x 6N, 6N x 5)
     complex(wp), allocatable :: ih(:, :)
     !> Seconds spent in the last assembly of the pair blocks and in the factorisation
     !> (p-moment elimination and Cholesky).
@@ -59,7 +58,7 @@ module kf_multipole_system
     procedure :: translational_mobility => system_translational_mobility
     procedure :: grand_friction => system_grand_friction
     procedure :: strain_disturbance => system_strain_disturbance
-    procedure :: corrected => system_corrected
+    procedure :: friction_coupling => system_friction_coupling
     procedure :: pindex => system_pindex
   end type multipole_system_t
 
@@ -134,7 +133,6 @@ contains
       this%nqt = 2*(h - 3)*nsph
       this%n6 = 6*nsph
       if (allocated(this%k)) deallocate (this%k, this%bp, this%w6, this%bq, this%d6)
-      if (allocated(this%zt)) deallocate (this%zt, this%x6, this%t6)
       allocate (this%k(this%nr, this%nr), this%bp(h*nsph, h*nsph), this%w6(this%n6, this%n6))
       allocate (this%bq(max(1, this%nqt), 5), this%d6(this%n6, 5))
     end if
@@ -404,58 +402,23 @@ contains
     end do
   end subroutine system_strain_disturbance
 
-  !> Friction route (MULTIPOLE.md 13.3): zeta = grand friction of the system plus `dzeta`
-  !> (6N x 6N), x = zeta_FE:E of the system for the five basis strains plus `dx` (6N x 5);
-  !> returns the translational mobility of torque-free spheres mu (3N x 3N) = translational
-  !> block of zeta^-1, and the disturbance (3N x 5) = translational part of zeta^-1 x.
-  !> Project units; dzeta and dx are in project units too.
-  subroutine system_corrected(this, dzeta, dx, mu, dist, error)
+  !> The many-body friction of the system and its strain coupling (MULTIPOLE.md 13.3), project
+  !> units, ordering [U_1, Omega_1, U_2, ...]: zeta (6N x 6N, full storage) = grand friction,
+  !> x (6N x 5) = zeta (U - U_inf) of free spheres for the five basis strains, so that
+  !> [F; T] = zeta [U - U_inf; Omega - Omega_inf] - x : E.
+  subroutine system_friction_coupling(this, zeta, x, error)
     class(multipole_system_t), intent(inout) :: this
-    real(wp), intent(in) :: dzeta(:, :), dx(:, :)
-    real(wp), intent(out) :: mu(:, :), dist(:, :)
+    real(wp), intent(out) :: zeta(:, :), x(:, :)
     type(error_t), allocatable, intent(out) :: error
-    integer :: info, i, j, n6
-
+    real(wp), allocatable :: free(:, :)
+    integer :: n6
     n6 = this%n6
-    if (.not. allocated(this%zt)) allocate (this%zt(n6, n6), this%x6(n6, 5), this%t6(n6, 5))
-    call this%grand_friction(this%zt, error)
+    call this%grand_friction(zeta, error)
     if (allocated(error)) return
-    call this%strain_disturbance(this%t6)
-    ! x = zeta (U - U_inf) of the free spheres (F = 0 in [F;T] = zeta (U - U_inf) - x).
-    call dgemm('N', 'N', n6, 5, n6, 1.0_wp, this%zt, n6, this%t6, n6, 0.0_wp, this%x6, n6)
-    this%zt = this%zt + dzeta
-    this%x6 = this%x6 + dx
-    call dpotrf('L', n6, this%zt, n6, info)
-    if (info /= 0) then
-      call fatal_error(error, 'Cholesky factorisation of the lubrication-corrected friction '// &
-                       'failed (dpotrf info = '//to_str(info)//')')
-      return
-    end if
-    call dpotrs('L', n6, 5, this%zt, n6, this%x6, n6, info)
-    if (info /= 0) then
-      call fatal_error(error, 'dpotrs failed on the lubrication-corrected friction')
-      return
-    end if
-    call dpotri('L', n6, this%zt, n6, info)
-    if (info /= 0) then
-      call fatal_error(error, 'inversion of the lubrication-corrected friction failed (dpotri info = '// &
-                       to_str(info)//')')
-      return
-    end if
-    do j = 1, this%n
-      do i = 1, this%n
-        if (i >= j) then
-          mu(3*i - 2:3*i, 3*j - 2:3*j) = this%zt(6*i - 5:6*i - 3, 6*j - 5:6*j - 3)
-        else
-          mu(3*i - 2:3*i, 3*j - 2:3*j) = transpose(this%zt(6*j - 5:6*j - 3, 6*i - 5:6*i - 3))
-        end if
-      end do
-      do i = 1, 3
-        mu(3*j - 3 + i, 3*j - 3 + i + 1:3*j) = mu(3*j - 3 + i + 1:3*j, 3*j - 3 + i)
-      end do
-      dist(3*j - 2:3*j, 1:5) = this%x6(6*j - 5:6*j - 3, 1:5)
-    end do
-  end subroutine system_corrected
+    allocate (free(n6, 5))
+    call this%strain_disturbance(free)
+    call dgemm('N', 'N', n6, 5, n6, 1.0_wp, zeta, n6, free, n6, 0.0_wp, x, n6)
+  end subroutine system_friction_coupling
 
   !> Basis strain k = 1..5: xx-zz, yy-zz, xy+yx, xz+zx, yz+zy.
   pure function strain_basis(k) result(e)

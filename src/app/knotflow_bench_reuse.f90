@@ -1,0 +1,316 @@
+!> knotflow-bench-reuse: accuracy and cost of the adaptive reuse of the multipole many-body
+!> part (`&hydro update = 'adaptive'`) against the exact solve at every stage ('stage'), on the
+!> study's model (multipole L = 2 + lubrication, BWE with eps_lub = tolerance, shear flow).
+!>
+!> Usage: knotflow-bench-reuse PART [options]
+!>   velocity   [--config C] [--t-end T] [--every K]: integrate with the adaptive path and, at
+!>              every K-th stage, compare its velocities with the exact ones at the same positions
+!>   trajectory [--config C] [--t-end T]: largest bead deviation at T between the two paths at
+!>              tolerance 1e-4, and of the exact path between tolerances 1e-4 and 1e-6
+!>   speed      [--config C] [--t-end T]: wall time of both paths to T and their ratio
+!>   scaling    [--t-end T]: adaptive wall time per unit time for random chains N = 50..400
+!> C: trefoil (N = 99, orientation c, A = 2.2; default), coil (inputs/configs/
+!> coil_candycane_A1.xyz, A = 1) or a coordinate file path (A = 1). Output: key = value lines.
+program knotflow_bench_reuse
+  use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
+  use kf_kinds, only: wp, i8
+  use kf_strings, only: to_str
+  use kf_error, only: error_t
+  use kf_scene, only: scene_t
+  use kf_chain_shapes, only: build_initial_chain
+  use kf_dynamics, only: dynamics_t
+  use kf_integrator, only: integrator_t
+  use kf_hydro_model, only: hydro_stats_t
+  use kf_reuse_check, only: checked_dynamics_t
+  use kf_hydro_multipole, only: multipole_model_t
+  use kf_accuracy, only: wall_seconds, max_bead_deviation, loglog_slope
+  implicit none
+
+  character(len=:), allocatable :: part, config
+  real(wp) :: t_end
+  integer :: every
+
+  call parse_arguments()
+  select case (part)
+  case ('velocity')
+    call run_velocity()
+  case ('trajectory')
+    call run_trajectory()
+  case ('speed')
+    call run_speed()
+  case ('scaling')
+    call run_scaling()
+  case ('rigid')
+    call run_rigid()
+  case default
+    call die("unknown part '"//part//"' (allowed: velocity, trajectory, speed, scaling)")
+  end select
+
+contains
+
+  subroutine die(message)
+    character(len=*), intent(in) :: message
+    write (error_unit, '(a)') 'knotflow-bench-reuse: error: '//message
+    error stop 2
+  end subroutine die
+
+  subroutine parse_arguments()
+    character(len=1024) :: arg, val
+    integer :: k, ios
+    if (command_argument_count() < 1) call die('usage: knotflow-bench-reuse velocity|trajectory|speed|scaling [options]')
+    call get_command_argument(1, arg)
+    part = trim(arg)
+    config = 'trefoil'
+    t_end = 10.0_wp
+    every = 1
+    k = 2
+    do while (k <= command_argument_count())
+      call get_command_argument(k, arg)
+      if (k + 1 > command_argument_count()) call die(trim(arg)//' needs a value')
+      call get_command_argument(k + 1, val)
+      select case (trim(arg))
+      case ('--config')
+        config = trim(val)
+      case ('--t-end')
+        read (val, *, iostat=ios) t_end
+        if (ios /= 0 .or. .not. t_end > 0.0_wp) call die('--t-end '//trim(val)//': expected a number > 0')
+      case ('--every')
+        read (val, *, iostat=ios) every
+        if (ios /= 0 .or. every < 1) call die('--every '//trim(val)//': expected an integer >= 1')
+      case default
+        call die('unknown option '//trim(arg))
+      end select
+      k = k + 2
+    end do
+  end subroutine parse_arguments
+
+  !> The study's model on configuration `name`, tolerance tol, with initial positions r.
+  subroutine study_scene(name, tol, update, scene, r)
+    character(len=*), intent(in) :: name, update
+    real(wp), intent(in) :: tol
+    type(scene_t), intent(out) :: scene
+    real(wp), allocatable, intent(out) :: r(:, :)
+    type(error_t), allocatable :: error
+    real(wp) :: rot(3, 3)
+    scene%hydro%model = 'multipole'
+    scene%hydro%order = 2
+    scene%hydro%lubrication = .true.
+    scene%hydro%update = update
+    scene%integrator%tolerance = tol
+    select case (name)
+    case ('trefoil')
+      scene%chain%shape = 'trefoil'
+      scene%chain%orientation = 'c'
+      scene%forces%bending_a = 2.2_wp
+    case ('coil')
+      scene%chain%shape = 'file'
+      scene%chain%coordinate_file = 'inputs/configs/coil_candycane_A1.xyz'
+      scene%forces%bending_a = 1.0_wp
+    case default
+      scene%chain%shape = 'file'
+      scene%chain%coordinate_file = name
+      scene%forces%bending_a = 1.0_wp
+    end select
+    call build_initial_chain(scene%chain, r, rot, error)
+    if (allocated(error)) call die(error%message)
+  end subroutine study_scene
+
+  subroutine print_stats(prefix, s)
+    character(len=*), intent(in) :: prefix
+    type(hydro_stats_t), intent(in) :: s
+    write (output_unit, '(a)') prefix//'evaluations = '//to_str(s%evaluations)
+    write (output_unit, '(a)') prefix//'refreshes = '//to_str(s%refreshes)
+    write (output_unit, '(a)') prefix//'reused = '//to_str(s%reused)
+    write (output_unit, '(a)') prefix//'cg_iterations = '//to_str(s%cg_iterations)
+    write (output_unit, '(a)') prefix//'preconditioners = '//to_str(s%preconditioners)
+    write (output_unit, '(a)') prefix//'max_error_ratio = '//to_str(s%max_error_ratio, '(es10.3)')
+  end subroutine print_stats
+
+  subroutine run_velocity()
+    type(scene_t) :: scene
+    type(checked_dynamics_t) :: sys
+    type(integrator_t) :: integ
+    type(error_t), allocatable :: error
+    real(wp), allocatable :: r(:, :)
+    real(wp) :: t, w0
+    call study_scene(config, 1.0e-4_wp, 'adaptive', scene, r)
+    call sys%init(scene, size(r, 2), error, every)
+    if (allocated(error)) call die(error%message)
+    call integ%init(scene%integrator, error)
+    if (allocated(error)) call die(error%message)
+    t = 0.0_wp
+    w0 = wall_seconds()
+    call integ%advance(sys, t, r, t_end, error)
+    if (allocated(error)) call die(error%message)
+    write (output_unit, '(a)') 'config = '//config
+    write (output_unit, '(a)') 't_end = '//to_str(t_end, '(g0.6)')
+    write (output_unit, '(a)') 'steps = '//to_str(integ%steps)//', rejected = '//to_str(integ%rejected)
+    write (output_unit, '(a)') 'checks = '//to_str(sys%checks)
+    write (output_unit, '(a)') 'velocity_rms_max = '//to_str(sys%max_rms, '(es10.3)')
+    write (output_unit, '(a)') 'velocity_rms_mean = '//to_str(sys%sum_rms/max(1_i8, sys%checks), '(es10.3)')
+    write (output_unit, '(a)') 'velocity_maxnorm_max = '//to_str(sys%max_max, '(es10.3)')
+    call print_stats('adaptive.', sys%fast%model%statistics())
+    write (output_unit, '(a)') 'wall_s = '//to_str(wall_seconds() - w0, '(f10.2)')
+  end subroutine run_velocity
+
+  !> Integrate the scene from r to t_end; wall seconds, steps and the model's statistics.
+  subroutine integrate(scene, r, wall, steps, stats)
+    type(scene_t), intent(in) :: scene
+    real(wp), intent(inout) :: r(:, :)
+    real(wp), intent(out) :: wall
+    integer(i8), intent(out) :: steps
+    type(hydro_stats_t), intent(out) :: stats
+    type(dynamics_t) :: dyn
+    type(integrator_t) :: integ
+    type(error_t), allocatable :: error
+    real(wp) :: t, w0
+    call dyn%init(scene, size(r, 2), error)
+    if (allocated(error)) call die(error%message)
+    call integ%init(scene%integrator, error)
+    if (allocated(error)) call die(error%message)
+    t = 0.0_wp
+    w0 = wall_seconds()
+    call integ%advance(dyn, t, r, t_end, error)
+    if (allocated(error)) call die(error%message)
+    wall = wall_seconds() - w0
+    steps = integ%steps
+    stats = dyn%model%statistics()
+  end subroutine integrate
+
+  subroutine run_trajectory()
+    type(scene_t) :: scene
+    real(wp), allocatable :: r_stage(:, :), r_adapt(:, :), r_fine(:, :)
+    real(wp) :: wall
+    integer(i8) :: steps
+    type(hydro_stats_t) :: stats
+    call study_scene(config, 1.0e-4_wp, 'stage', scene, r_stage)
+    call integrate(scene, r_stage, wall, steps, stats)
+    write (output_unit, '(a)') 'stage_tol1e-4: wall_s = '//to_str(wall, '(f10.2)')//', steps = '//to_str(steps)
+    call study_scene(config, 1.0e-4_wp, 'adaptive', scene, r_adapt)
+    call integrate(scene, r_adapt, wall, steps, stats)
+    write (output_unit, '(a)') 'adaptive_tol1e-4: wall_s = '//to_str(wall, '(f10.2)')//', steps = '//to_str(steps)
+    call print_stats('adaptive.', stats)
+    call study_scene(config, 1.0e-6_wp, 'stage', scene, r_fine)
+    scene%hydro%eps_lub = 1.0e-4_wp
+    call integrate(scene, r_fine, wall, steps, stats)
+    write (output_unit, '(a)') 'stage_tol1e-6: wall_s = '//to_str(wall, '(f10.2)')//', steps = '//to_str(steps)
+    write (output_unit, '(a)') 'config = '//config//', t_end = '//to_str(t_end, '(g0.6)')
+    write (output_unit, '(a)') 'deviation_adaptive_vs_stage = '// &
+      to_str(max_bead_deviation(r_adapt, r_stage), '(es10.3)')
+    write (output_unit, '(a)') 'deviation_stage_tol1e-4_vs_1e-6 = '// &
+      to_str(max_bead_deviation(r_stage, r_fine), '(es10.3)')
+  end subroutine run_trajectory
+
+  subroutine run_speed()
+    type(scene_t) :: scene
+    real(wp), allocatable :: r(:, :)
+    real(wp) :: wall_stage, wall_adapt
+    integer(i8) :: steps
+    type(hydro_stats_t) :: stats
+    write (output_unit, '(a)') 'config = '//config//', t_end = '//to_str(t_end, '(g0.6)')
+    call study_scene(config, 1.0e-4_wp, 'adaptive', scene, r)
+    call integrate(scene, r, wall_adapt, steps, stats)
+    write (output_unit, '(a)') 'adaptive: wall_s = '//to_str(wall_adapt, '(f10.2)')//', steps = '//to_str(steps)
+    call print_stats('adaptive.', stats)
+    call study_scene(config, 1.0e-4_wp, 'stage', scene, r)
+    call integrate(scene, r, wall_stage, steps, stats)
+    write (output_unit, '(a)') 'stage: wall_s = '//to_str(wall_stage, '(f10.2)')//', steps = '//to_str(steps)
+    write (output_unit, '(a)') 'ratio_stage_over_adaptive = '//to_str(wall_stage/wall_adapt, '(f8.2)')
+  end subroutine run_speed
+
+  subroutine run_rigid()
+    type(scene_t) :: scene
+    type(dynamics_t) :: fast, exact
+    type(error_t), allocatable :: error
+    real(wp), allocatable :: r(:, :), r2(:, :), v(:, :), vx(:, :)
+    real(wp) :: q(3, 3), ang, dr
+    integer :: i, k
+    call study_scene(config, 1.0e-4_wp, 'adaptive', scene, r)
+    call fast%init(scene, size(r, 2), error)
+    scene%hydro%update = 'stage'
+    call exact%init(scene, size(r, 2), error)
+    allocate (v(3, size(r, 2)), vx(3, size(r, 2)), r2(3, size(r, 2)))
+    call fast%step_begin(0.0_wp, r, 0.05_wp)
+    call fast%velocity(r, v, error)
+    do k = 1, 4
+      ang = 0.3_wp*k
+      q = reshape([cos(ang), sin(ang), 0.0_wp, -sin(ang), cos(ang), 0.0_wp, 0.0_wp, 0.0_wp, 1.0_wp], [3, 3])
+      dr = 1.0e-3_wp*(k - 1)
+      do i = 1, size(r, 2)
+        r2(:, i) = matmul(q, r(:, i)) + [1.0_wp, 2.0_wp, 3.0_wp] + dr*[sin(real(i, wp)), cos(real(3*i, wp)), 0.0_wp]
+      end do
+      call reused(fast, r2, v)
+      call exact%velocity(r2, vx, error)
+      write (output_unit, '(a,3es12.4)') 'rigid rotation angle, perturbation, max |v - v_exact| = ', ang, dr, &
+        maxval(norm2(v - vx, dim=1))
+    end do
+    ! bond-length perturbation only: each bond scaled by (1 + eps_k) from bead 1 on
+    do k = 1, 3
+      dr = 1.0e-3_wp*k
+      r2(:, 1) = r(:, 1)
+      do i = 2, size(r, 2)
+        r2(:, i) = r2(:, i - 1) + (r(:, i) - r(:, i - 1))*(1.0_wp + dr*sin(7.0_wp*i))
+      end do
+      call reused(fast, r2, v)
+      call exact%velocity(r2, vx, error)
+      write (output_unit, '(a,es12.4,a,es12.4,i5)') 'bond stretch ', dr, ' max |v - v_exact| = ', &
+        maxval(norm2(v - vx, dim=1)), maxloc(norm2(v - vx, dim=1))
+    end do
+    ! transverse perturbation only: bead i moved perpendicular to its bonds
+    do k = 1, 3
+      dr = 1.0e-2_wp*k
+      do i = 1, size(r, 2)
+        r2(:, i) = r(:, i) + dr*[sin(3.0_wp*i), cos(5.0_wp*i), sin(11.0_wp*i)]
+      end do
+      call reused(fast, r2, v)
+      call exact%velocity(r2, vx, error)
+      write (output_unit, '(a,es12.4,a,es12.4,i5)') 'random move ', dr, ' max |v - v_exact| = ', &
+        maxval(norm2(v - vx, dim=1)), maxloc(norm2(v - vx, dim=1))
+    end do
+    call print_stats('adaptive.', fast%model%statistics())
+  end subroutine run_rigid
+
+  !> Velocities from the adaptive model's last many-body part reused as it is at rr.
+  subroutine reused(fast, rr, vv)
+    type(dynamics_t), intent(inout) :: fast
+    real(wp), intent(in) :: rr(:, :)
+    real(wp), intent(out) :: vv(:, :)
+    type(error_t), allocatable :: error
+    real(wp), allocatable :: v0(:, :)
+    allocate (v0(3, size(rr, 2)))
+    call fast%forces%compute(rr, fast%f)
+    select type (m => fast%model)
+    type is (multipole_model_t)
+      call m%reused_velocities(rr, fast%f, vv, error, fast%flow%e)
+    end select
+    if (allocated(error)) call die(error%message)
+    call fast%flow%velocity(rr, v0)
+    vv = vv + v0
+  end subroutine reused
+
+  subroutine run_scaling()
+    integer, parameter :: sizes(4) = [50, 100, 200, 400]
+    type(scene_t) :: scene
+    type(error_t), allocatable :: error
+    real(wp), allocatable :: r(:, :)
+    real(wp) :: rot(3, 3), walls(size(sizes)), slope
+    integer(i8) :: steps
+    type(hydro_stats_t) :: stats
+    integer :: k
+    do k = 1, size(sizes)
+      call study_scene('trefoil', 1.0e-4_wp, 'adaptive', scene, r)
+      scene%chain%shape = 'random'
+      scene%chain%n_beads = sizes(k)
+      call build_initial_chain(scene%chain, r, rot, error)
+      if (allocated(error)) call die(error%message)
+      call integrate(scene, r, walls(k), steps, stats)
+      walls(k) = walls(k)/t_end
+      write (output_unit, '(a)') 'N = '//to_str(sizes(k))//': wall_s_per_time = '//to_str(walls(k), '(es10.3)')// &
+        ', steps = '//to_str(steps)//', refreshes = '//to_str(stats%refreshes)//', cg = '//to_str(stats%cg_iterations)
+    end do
+    call loglog_slope(real(sizes, wp), walls, slope, error)
+    if (allocated(error)) call die(error%message)
+    write (output_unit, '(a)') 'exponent = '//to_str(slope, '(f6.2)')
+  end subroutine run_scaling
+
+end program knotflow_bench_reuse

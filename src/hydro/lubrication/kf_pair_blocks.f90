@@ -1,0 +1,149 @@
+!> Pairwise friction terms as a list of pair blocks: for pairs (i, j) a 12 x 12 friction block
+!> (ordering [U_i, Omega_i, U_j, Omega_j] -> [F_i, T_i, F_j, T_j]) and a strain coupling
+!> xe(12, 3, 3) (delta x = xe : E), e.g. the lubrication corrections of one configuration
+!> (kf_lubrication's `pair_blocks`). The sum over pairs acts on 6N vectors ordered
+!> [U_1, Omega_1, U_2, ...]: as an operator (`apply`), added into a dense friction
+!> (`add_friction`), or as the strain right-hand side (`add_strain`, `add_strain_basis`).
+!> Never a dense 6N x 6N matrix of its own.
+module kf_pair_blocks
+  use kf_kinds, only: wp
+  implicit none
+  private
+
+  !> A list of pair blocks.
+  type, public :: pair_blocks_t
+    private
+    integer :: count = 0                     !< pairs in the list
+    integer, allocatable :: ij(:, :)         !< (2, capacity): the beads i < j
+    real(wp), allocatable :: zeta(:, :, :)   !< (12, 12, capacity)
+    real(wp), allocatable :: xe(:, :, :, :)  !< (12, 3, 3, capacity)
+  contains
+    procedure :: clear
+    procedure :: next_slot
+    procedure :: n_pairs
+    procedure :: pair
+    procedure :: apply
+    procedure :: add_friction
+    procedure :: add_strain
+    procedure :: add_strain_basis
+  end type pair_blocks_t
+
+contains
+
+  !> Empty the list (the storage is kept).
+  subroutine clear(this)
+    class(pair_blocks_t), intent(inout) :: this
+    this%count = 0
+  end subroutine clear
+
+  !> Append pair (i, j) and return its slot k: the caller fills block(k) and coupling(k)
+  !> through the pointers zeta and xe.
+  subroutine next_slot(this, i, j, zeta, xe)
+    class(pair_blocks_t), intent(inout), target :: this
+    integer, intent(in) :: i, j
+    real(wp), pointer, intent(out) :: zeta(:, :), xe(:, :, :)
+    if (.not. allocated(this%ij)) call grow(this, 64)
+    if (this%count == size(this%ij, 2)) call grow(this, 2*size(this%ij, 2))
+    this%count = this%count + 1
+    this%ij(:, this%count) = [i, j]
+    zeta => this%zeta(:, :, this%count)
+    xe => this%xe(:, :, :, this%count)
+  end subroutine next_slot
+
+  !> Enlarge the storage to `capacity` pairs, keeping the pairs held.
+  subroutine grow(this, capacity)
+    type(pair_blocks_t), intent(inout) :: this
+    integer, intent(in) :: capacity
+    integer, allocatable :: ij(:, :)
+    real(wp), allocatable :: zeta(:, :, :), xe(:, :, :, :)
+    allocate (ij(2, capacity), zeta(12, 12, capacity), xe(12, 3, 3, capacity))
+    if (this%count > 0) then
+      ij(:, 1:this%count) = this%ij(:, 1:this%count)
+      zeta(:, :, 1:this%count) = this%zeta(:, :, 1:this%count)
+      xe(:, :, :, 1:this%count) = this%xe(:, :, :, 1:this%count)
+    end if
+    call move_alloc(ij, this%ij)
+    call move_alloc(zeta, this%zeta)
+    call move_alloc(xe, this%xe)
+  end subroutine grow
+
+  !> Number of pairs in the list.
+  pure integer function n_pairs(this)
+    class(pair_blocks_t), intent(in) :: this
+    n_pairs = this%count
+  end function n_pairs
+
+  !> The beads (i, j) of pair k.
+  pure function pair(this, k) result(ij)
+    class(pair_blocks_t), intent(in) :: this
+    integer, intent(in) :: k
+    integer :: ij(2)
+    ij = this%ij(:, k)
+  end function pair
+
+  !> The 12 rows (or columns) of pair k in a 6N vector.
+  pure function rows(this, k) result(ii)
+    class(pair_blocks_t), intent(in) :: this
+    integer, intent(in) :: k
+    integer :: ii(12), c
+    do c = 1, 6
+      ii(c) = 6*(this%ij(1, k) - 1) + c
+      ii(6 + c) = 6*(this%ij(2, k) - 1) + c
+    end do
+  end function rows
+
+  !> y = y + (sum of the pair blocks) x for 6N vectors x, y.
+  subroutine apply(this, x, y)
+    class(pair_blocks_t), intent(in) :: this
+    real(wp), intent(in) :: x(:)
+    real(wp), intent(inout) :: y(:)
+    integer :: k, ii(12)
+    do k = 1, this%count
+      ii = rows(this, k)
+      y(ii) = y(ii) + matmul(this%zeta(:, :, k), x(ii))
+    end do
+  end subroutine apply
+
+  !> zeta = zeta + the pair blocks, for a dense 6N x 6N friction (full storage).
+  subroutine add_friction(this, zeta)
+    class(pair_blocks_t), intent(in) :: this
+    real(wp), intent(inout) :: zeta(:, :)
+    integer :: k, ii(12)
+    do k = 1, this%count
+      ii = rows(this, k)
+      zeta(ii, ii) = zeta(ii, ii) + this%zeta(:, :, k)
+    end do
+  end subroutine add_friction
+
+  !> b = b + (sum of the pair couplings) : e for the symmetric traceless rate of strain e.
+  subroutine add_strain(this, e, b)
+    class(pair_blocks_t), intent(in) :: this
+    real(wp), intent(in) :: e(3, 3)
+    real(wp), intent(inout) :: b(:)
+    integer :: k, ii(12), a, c
+    real(wp) :: x(12)
+    do k = 1, this%count
+      ii = rows(this, k)
+      x = 0.0_wp
+      do c = 1, 3
+        do a = 1, 3
+          x = x + this%xe(:, a, c, k)*e(a, c)
+        end do
+      end do
+      b(ii) = b(ii) + x
+    end do
+  end subroutine add_strain
+
+  !> x(6N, 5) = x + the pair couplings for the five basis strains of the rows of `basis`
+  !> (basis(:, :, k), k = 1..5).
+  subroutine add_strain_basis(this, basis, x)
+    class(pair_blocks_t), intent(in) :: this
+    real(wp), intent(in) :: basis(:, :, :)
+    real(wp), intent(inout) :: x(:, :)
+    integer :: k
+    do k = 1, size(x, 2)
+      call this%add_strain(basis(:, :, k), x(:, k))
+    end do
+  end subroutine add_strain_basis
+
+end module kf_pair_blocks
