@@ -1,6 +1,16 @@
-!> An autonomous or time-dependent ODE system dy/dt = f(t, y) for the integrators. The state is
+!> An autonomous or time-dependent ODE system dy/dt = f(t, y) for the time steppers. The state is
 !> a 2-D array y(3, N): bead positions, one column per bead (the error norm of the adaptive
-!> integrator is the largest Euclidean norm of a column).
+!> stepper is the largest Euclidean norm of a column).
+!>
+!> Besides the derivative, a system may override three hooks through which every stepper
+!> (kf_stepper) tells it where it is, so that it can reuse work between stages and steps:
+!>  - `step_begin(t, y, h)`: a trial step of size h from (t, y) begins; called before the stages
+!>    of the step (for dopri45 after the first-same-as-last stage at (t, y) is known);
+!>  - `step_accepted(t, y)`: the trial step was accepted; (t, y) is the new time and state;
+!>  - `step_rejected()`: the trial step was rejected (dopri45: error too large or non-finite);
+!>    the next trial starts again from the same (t, y).
+!> A step abandoned with an error (of the system, non-finite values in rk4) gets neither
+!> `step_accepted` nor `step_rejected`. The defaults do nothing.
 module kf_ode_system
   use kf_kinds, only: wp
   use kf_error, only: error_t
@@ -10,6 +20,12 @@ module kf_ode_system
   type, abstract, public :: ode_system_t
   contains
     procedure(derivative_i), deferred :: derivative
+    !> A trial step of size h from (t, y) begins.
+    procedure :: step_begin => ode_step_begin
+    !> The trial step was accepted: (t, y) is the new time and state.
+    procedure :: step_accepted => ode_step_accepted
+    !> The trial step was rejected.
+    procedure :: step_rejected => ode_step_rejected
   end type ode_system_t
 
   abstract interface
@@ -23,5 +39,29 @@ module kf_ode_system
       type(error_t), allocatable, intent(out) :: error
     end subroutine derivative_i
   end interface
+
+contains
+
+  ! The defaults do nothing: the associate blocks only reference the dummy arguments.
+
+  subroutine ode_step_begin(this, t, y, h)
+    class(ode_system_t), intent(inout) :: this
+    real(wp), intent(in) :: t, y(:, :), h
+    associate (unused_this => this, unused_t => t, unused_y => y, unused_h => h)
+    end associate
+  end subroutine ode_step_begin
+
+  subroutine ode_step_accepted(this, t, y)
+    class(ode_system_t), intent(inout) :: this
+    real(wp), intent(in) :: t, y(:, :)
+    associate (unused_this => this, unused_t => t, unused_y => y)
+    end associate
+  end subroutine ode_step_accepted
+
+  subroutine ode_step_rejected(this)
+    class(ode_system_t), intent(inout) :: this
+    associate (unused_this => this)
+    end associate
+  end subroutine ode_step_rejected
 
 end module kf_ode_system
