@@ -11,7 +11,8 @@ program knotflow_bench_diagnostics
   use kf_scene, only: scene_t
   use kf_chain_shapes, only: build_initial_chain
   use kf_dynamics, only: dynamics_t
-  use kf_integrator, only: integrator_t
+  use kf_stepper, only: stepper_t
+  use kf_stepper_factory, only: make_stepper
   use kf_run_diagnostics, only: run_diagnostics_t
   implicit none
 
@@ -69,7 +70,7 @@ contains
     real(wp), intent(out) :: t_eval, t_diag
     type(error_t), allocatable, intent(out) :: error
     type(dynamics_t) :: dyn
-    type(integrator_t) :: integ
+    class(stepper_t), allocatable :: integ
     type(run_diagnostics_t) :: diag
     real(wp), allocatable :: r(:, :), v(:, :), y_old(:, :)
     real(wp) :: rot(3, 3), t, t_old, s_eval(21), s_diag(21), t0, checksum
@@ -78,14 +79,14 @@ contains
     if (allocated(error)) return
     n = size(r, 2)
     call dyn%init(sc, n, error)
-    if (.not. allocated(error)) call integ%init(sc%integrator, error)
+    if (.not. allocated(error)) call make_stepper(sc%integrator, integ, error)
     if (allocated(error)) return
     t = 0.0_wp
     call integ%advance(dyn, t, r, 5.0_wp, error)
     if (allocated(error)) return
     y_old = r
     t_old = t
-    call integ%advance(dyn, t, r, t + integ%dt, error)
+    call integ%advance(dyn, t, r, t + integ%dt(), error)
     if (allocated(error)) return
     call diag%init(n, sc%chain%bond_length)
     call diag%start(t_old, y_old)
@@ -121,7 +122,7 @@ contains
     real(wp), intent(out) :: wall
     type(error_t), allocatable, intent(out) :: error
     type(dynamics_t) :: dyn
-    type(integrator_t) :: integ
+    class(stepper_t), allocatable :: integ
     type(run_diagnostics_t) :: diag
     real(wp), allocatable :: r(:, :)
     real(wp) :: rot(3, 3), t, t0
@@ -130,7 +131,7 @@ contains
     if (allocated(error)) return
     n = size(r, 2)
     call dyn%init(sc, n, error)
-    if (.not. allocated(error)) call integ%init(sc%integrator, error)
+    if (.not. allocated(error)) call make_stepper(sc%integrator, integ, error)
     if (allocated(error)) return
     t = 0.0_wp
     t0 = wall_seconds()

@@ -19,7 +19,8 @@ program knotflow_bench_reuse
   use kf_scene, only: scene_t
   use kf_chain_shapes, only: build_initial_chain
   use kf_dynamics, only: dynamics_t
-  use kf_integrator, only: integrator_t
+  use kf_stepper, only: stepper_t
+  use kf_stepper_factory, only: make_stepper
   use kf_hydro_model, only: hydro_stats_t
   use kf_reuse_check, only: checked_dynamics_t
   use kf_hydro_multipole, only: multipole_model_t
@@ -129,14 +130,14 @@ contains
   subroutine run_velocity()
     type(scene_t) :: scene
     type(checked_dynamics_t) :: sys
-    type(integrator_t) :: integ
+    class(stepper_t), allocatable :: integ
     type(error_t), allocatable :: error
     real(wp), allocatable :: r(:, :)
     real(wp) :: t, w0
     call study_scene(config, 1.0e-4_wp, 'adaptive', scene, r)
     call sys%init(scene, size(r, 2), error, every)
     if (allocated(error)) call die(error%message)
-    call integ%init(scene%integrator, error)
+    call make_stepper(scene%integrator, integ, error)
     if (allocated(error)) call die(error%message)
     t = 0.0_wp
     w0 = wall_seconds()
@@ -144,7 +145,7 @@ contains
     if (allocated(error)) call die(error%message)
     write (output_unit, '(a)') 'config = '//config
     write (output_unit, '(a)') 't_end = '//to_str(t_end, '(g0.6)')
-    write (output_unit, '(a)') 'steps = '//to_str(integ%steps)//', rejected = '//to_str(integ%rejected)
+    write (output_unit, '(a)') 'steps = '//to_str(integ%steps())//', rejected = '//to_str(integ%rejected())
     write (output_unit, '(a)') 'checks = '//to_str(sys%checks)
     write (output_unit, '(a)') 'velocity_rms_max = '//to_str(sys%max_rms, '(es10.3)')
     write (output_unit, '(a)') 'velocity_rms_mean = '//to_str(sys%sum_rms/max(1_i8, sys%checks), '(es10.3)')
@@ -161,19 +162,19 @@ contains
     integer(i8), intent(out) :: steps
     type(hydro_stats_t), intent(out) :: stats
     type(dynamics_t) :: dyn
-    type(integrator_t) :: integ
+    class(stepper_t), allocatable :: integ
     type(error_t), allocatable :: error
     real(wp) :: t, w0
     call dyn%init(scene, size(r, 2), error)
     if (allocated(error)) call die(error%message)
-    call integ%init(scene%integrator, error)
+    call make_stepper(scene%integrator, integ, error)
     if (allocated(error)) call die(error%message)
     t = 0.0_wp
     w0 = wall_seconds()
     call integ%advance(dyn, t, r, t_end, error)
     if (allocated(error)) call die(error%message)
     wall = wall_seconds() - w0
-    steps = integ%steps
+    steps = integ%steps()
     stats = dyn%model%statistics()
   end subroutine integrate
 

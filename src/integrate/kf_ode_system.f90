@@ -1,9 +1,16 @@
-!> An autonomous or time-dependent ODE system dy/dt = f(t, y) for the integrators. The state is
+!> An autonomous or time-dependent ODE system dy/dt = f(t, y) for the time steppers. The state is
 !> a 2-D array y(3, N): bead positions, one column per bead (the error norm of the adaptive
-!> integrator is the largest Euclidean norm of a column).
+!> stepper is the largest Euclidean norm of a column).
 !>
-!> The steppers tell the system where each step begins and whether it was accepted or
-!> rejected, so that a system can reuse work across stages and steps; the defaults do nothing.
+!> Besides the derivative, a system may override three hooks through which every stepper
+!> (kf_stepper) tells it where it is, so that it can reuse work between stages and steps:
+!>  - `step_begin(t, y, h)`: a trial step of size h from (t, y) begins; called before the stages
+!>    of the step (for dopri45 after the first-same-as-last stage at (t, y) is known);
+!>  - `step_accepted(t, y)`: the trial step was accepted; (t, y) is the new time and state;
+!>  - `step_rejected()`: the trial step was rejected (dopri45: error too large or non-finite);
+!>    the next trial starts again from the same (t, y).
+!> A step abandoned with an error (of the system, non-finite values in rk4) gets neither
+!> `step_accepted` nor `step_rejected`. The defaults do nothing.
 module kf_ode_system
   use kf_kinds, only: wp
   use kf_error, only: error_t
@@ -13,9 +20,12 @@ module kf_ode_system
   type, abstract, public :: ode_system_t
   contains
     procedure(derivative_i), deferred :: derivative
-    procedure :: step_begin
-    procedure :: step_accepted
-    procedure :: step_rejected
+    !> A trial step of size h from (t, y) begins.
+    procedure :: step_begin => ode_step_begin
+    !> The trial step was accepted: (t, y) is the new time and state.
+    procedure :: step_accepted => ode_step_accepted
+    !> The trial step was rejected.
+    procedure :: step_rejected => ode_step_rejected
   end type ode_system_t
 
   abstract interface
@@ -32,21 +42,26 @@ module kf_ode_system
 
 contains
 
-  !> A trial step of size h starts from (t, y).
-  subroutine step_begin(this, t, y, h)
+  ! The defaults do nothing: the associate blocks only reference the dummy arguments.
+
+  subroutine ode_step_begin(this, t, y, h)
     class(ode_system_t), intent(inout) :: this
     real(wp), intent(in) :: t, y(:, :), h
-  end subroutine step_begin
+    associate (unused_this => this, unused_t => t, unused_y => y, unused_h => h)
+    end associate
+  end subroutine ode_step_begin
 
-  !> The step ending at (t, y) was accepted.
-  subroutine step_accepted(this, t, y)
+  subroutine ode_step_accepted(this, t, y)
     class(ode_system_t), intent(inout) :: this
     real(wp), intent(in) :: t, y(:, :)
-  end subroutine step_accepted
+    associate (unused_this => this, unused_t => t, unused_y => y)
+    end associate
+  end subroutine ode_step_accepted
 
-  !> The last trial step was rejected.
-  subroutine step_rejected(this)
+  subroutine ode_step_rejected(this)
     class(ode_system_t), intent(inout) :: this
-  end subroutine step_rejected
+    associate (unused_this => this)
+    end associate
+  end subroutine ode_step_rejected
 
 end module kf_ode_system

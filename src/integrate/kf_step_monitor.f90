@@ -1,4 +1,4 @@
-!> A hook into the time integrators: `integrator_t%advance` calls `on_step` of an optional
+!> A hook into the time steppers: `stepper_t%advance` (kf_stepper) calls `on_step` of an optional
 !> monitor after every accepted step, with the configurations before and after the step.
 !> Rejected trial steps are never shown. A monitor only observes: it cannot change the step.
 module kf_step_monitor

@@ -11,6 +11,11 @@
 !>   extendible along the frame axis.
 !> - /checkpoint/{time, positions (N, 3), dt, steps, rejected, nframes}: the state of the last
 !>   frame, rewritten with every frame.
+!> - /checkpoint/stepper/{reals float64, ints int64} (1-D) with the group attribute `name` (the
+!>   &integrator method): the time stepper's whole state as exported by its `get_state`
+!>   (kf_stepper), rewritten with every frame when the caller passes it to `append_frame` and
+!>   returned by `open_resume`. Files written before it existed have none: they resume from
+!>   /checkpoint/{dt, steps, rejected} alone.
 !> - With run diagnostics (kf_run_diagnostics; `enable_diagnostics` after `create`):
 !>   /frames/diagnostics/{strand_passages, overlap_episodes} int64 (cumulative since t = 0),
 !>   overlapping_pairs int32, min_distance and max_bond_strain float64 (of the frame's
@@ -76,6 +81,14 @@ module kf_case_file
     procedure, private :: add_str, add_i4, add_i8, add_real, add_logical, add_real1, add_real2
     procedure, private :: push
   end type attribute_list_t
+
+  !> The state of the time stepper in the checkpoint: the plain arrays of its `get_state` and
+  !> the name of its method. Unallocated components: no stepper state.
+  type, public :: stepper_checkpoint_t
+    character(len=:), allocatable :: name
+    real(wp), allocatable :: reals(:)
+    integer(i8), allocatable :: ints(:)
+  end type stepper_checkpoint_t
 
   !> An open case file being written by the simulation.
   type, public :: case_file_t
@@ -345,7 +358,9 @@ contains
   !> rewrite /checkpoint with this state and flush the file. A file with diagnostics
   !> (`enable_diagnostics`) needs `diagnostics`, the run's monitor after the frame's last step:
   !> its per-frame values, run totals (root attributes) and state (checkpoint) are written too.
-  subroutine append_frame(this, t, r, shape, steps, rejected, dt, error, diagnostics)
+  !> `stepper`, the time stepper's state after the frame's last step, goes to
+  !> /checkpoint/stepper.
+  subroutine append_frame(this, t, r, shape, steps, rejected, dt, error, diagnostics, stepper)
     class(case_file_t), intent(inout) :: this
     real(wp), intent(in) :: t
     real(wp), intent(in) :: r(:, :)
@@ -354,6 +369,7 @@ contains
     real(wp), intent(in) :: dt
     type(error_t), allocatable, intent(out) :: error
     type(run_diagnostics_t), intent(in), optional :: diagnostics
+    type(stepper_checkpoint_t), intent(in), optional :: stepper
     real(wp), allocatable :: rc(:, :)
     if (.not. this%file%is_open()) then
       call fatal_error(error, 'case file: append_frame on a file that is not open')
@@ -374,6 +390,12 @@ contains
     if (this%nframes > 0 .and. .not. t > this%last_time) then
       call fatal_error(error, "case file '"//this%file%name()//"': frame time does not increase")
       return
+    end if
+    if (present(stepper)) then
+      if (.not. (allocated(stepper%name) .and. allocated(stepper%reals) .and. allocated(stepper%ints))) then
+        call fatal_error(error, "case file '"//this%file%name()//"': append_frame got an incomplete stepper state")
+        return
+      end if
     end if
     rc = r
     call h5_append(this%file, '/frames/time', t, error)
@@ -401,6 +423,7 @@ contains
     if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/dt', dt, error)
     if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/steps', steps, error)
     if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/rejected', rejected, error)
+    if (present(stepper) .and. .not. allocated(error)) call write_stepper(this%file, stepper, error)
     ! nframes last: a checkpoint is only trusted up to the frame count written with it.
     if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/nframes', this%nframes, error)
     if (allocated(error)) return
@@ -447,26 +470,41 @@ contains
     if (.not. allocated(error)) call h5_write(file, '/checkpoint/diagnostics/ongoing', ongoing, error)
   end subroutine write_diagnostics
 
+  !> The time stepper's state in /checkpoint/stepper.
+  subroutine write_stepper(file, stepper, error)
+    type(h5_file_t), intent(in) :: file
+    type(stepper_checkpoint_t), intent(in) :: stepper
+    type(error_t), allocatable, intent(out) :: error
+    call h5_write(file, '/checkpoint/stepper/reals', stepper%reals, error)
+    if (.not. allocated(error)) call h5_write(file, '/checkpoint/stepper/ints', stepper%ints, error)
+    if (.not. allocated(error)) call h5_write_attr(file, '/checkpoint/stepper', 'name', stepper%name, error)
+  end subroutine write_stepper
+
   !> Open an existing case file to continue it: read /checkpoint, truncate every /frames
-  !> dataset to the checkpoint's nframes, set status 'running' and return the state.
-  !> On error the file is closed again.
-  subroutine open_resume(this, path, r, t, dt, steps, rejected, nframes, error)
+  !> dataset to the checkpoint's nframes, set status 'running' and return the state. `stepper`
+  !> returns /checkpoint/stepper, with unallocated components when the file has none (written
+  !> before the steppers saved their state). On error the file is closed again.
+  subroutine open_resume(this, path, r, t, dt, steps, rejected, nframes, error, stepper)
     class(case_file_t), intent(inout) :: this
     character(len=*), intent(in) :: path
     real(wp), allocatable, intent(out) :: r(:, :)
     real(wp), intent(out) :: t, dt
     integer(i8), intent(out) :: steps, rejected, nframes
     type(error_t), allocatable, intent(out) :: error
-    call resume(this, path, r, t, dt, steps, rejected, nframes, error)
+    type(stepper_checkpoint_t), intent(out), optional :: stepper
+    type(stepper_checkpoint_t) :: state
+    call resume(this, path, r, t, dt, steps, rejected, nframes, state, error)
     if (allocated(error)) call this%close()
+    if (present(stepper) .and. .not. allocated(error)) stepper = state
   end subroutine open_resume
 
-  subroutine resume(this, path, r, t, dt, steps, rejected, nframes, error)
+  subroutine resume(this, path, r, t, dt, steps, rejected, nframes, stepper, error)
     class(case_file_t), intent(inout) :: this
     character(len=*), intent(in) :: path
     real(wp), allocatable, intent(out) :: r(:, :)
     real(wp), intent(out) :: t, dt
     integer(i8), intent(out) :: steps, rejected, nframes
+    type(stepper_checkpoint_t), intent(out) :: stepper
     type(error_t), allocatable, intent(out) :: error
     integer(i4) :: n_beads
     integer(i8) :: length
@@ -503,6 +541,12 @@ contains
     if (nframes < 1) then
       call fatal_error(error, "case file '"//path//"': checkpoint has no frames")
       return
+    end if
+    if (h5_exists(this%file, '/checkpoint/stepper/ints')) then
+      call h5_read(this%file, '/checkpoint/stepper/reals', stepper%reals, error)
+      if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/stepper/ints', stepper%ints, error)
+      if (.not. allocated(error)) call h5_read_attr(this%file, '/checkpoint/stepper', 'name', stepper%name, error)
+      if (allocated(error)) return
     end if
     this%diagnostics = h5_exists(this%file, trim(diag_sets(1)))
     n_sets = size(frame_real_sets) + size(other_sets)

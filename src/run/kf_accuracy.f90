@@ -9,7 +9,8 @@ module kf_accuracy
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: scene_t
   use kf_dynamics, only: dynamics_t
-  use kf_integrator, only: integrator_t
+  use kf_stepper, only: stepper_t
+  use kf_stepper_factory, only: make_stepper
   implicit none
   private
 
@@ -203,12 +204,12 @@ contains
     type(error_t), allocatable, intent(out) :: error
     real(wp), intent(in), optional :: t_skip
     type(dynamics_t) :: dyn
-    type(integrator_t) :: integ
+    class(stepper_t), allocatable :: integ
     type(run_stats_t) :: skipped
     real(wp) :: t, t0
     call dyn%init(scene, size(r, 2), error)
     if (allocated(error)) return
-    call integ%init(scene%integrator, error)
+    call make_stepper(scene%integrator, integ, error)
     if (allocated(error)) return
     t = 0.0_wp
     t0 = wall_seconds()
@@ -220,15 +221,15 @@ contains
       call integ%advance(dyn, t, r, t_skip, error)
       if (allocated(error)) return
       skipped%wall = wall_seconds() - t0
-      skipped%steps = integ%steps
-      skipped%rejected = integ%rejected
-      skipped%evaluations = integ%evaluations
+      skipped%steps = integ%steps()
+      skipped%rejected = integ%rejected()
+      skipped%evaluations = integ%evaluations()
     end if
     call integ%advance(dyn, t, r, t_end, error)
     stats%wall = wall_seconds() - t0 - skipped%wall
-    stats%steps = integ%steps - skipped%steps
-    stats%rejected = integ%rejected - skipped%rejected
-    stats%evaluations = integ%evaluations - skipped%evaluations
+    stats%steps = integ%steps() - skipped%steps
+    stats%rejected = integ%rejected() - skipped%rejected
+    stats%evaluations = integ%evaluations() - skipped%evaluations
   end subroutine integrate_timed
 
 end module kf_accuracy

@@ -5,15 +5,16 @@ module kf_case_runner
   use, intrinsic :: iso_fortran_env, only: int64
   use kf_kinds, only: wp, i8
   use kf_strings, only: to_str, to_str_short
-  use kf_error, only: error_t
+  use kf_error, only: error_t, fatal_error
   use kf_scene, only: scene_t
   use kf_scene_items, only: scene_item_t, scene_items, scene_text, item_string, item_integer, &
                             item_real, item_logical, item_real_array
   use kf_chain_shapes, only: build_initial_chain
   use kf_dynamics, only: dynamics_t
-  use kf_integrator, only: integrator_t
+  use kf_stepper, only: stepper_t
+  use kf_stepper_factory, only: make_stepper
   use kf_shape, only: shape_t, compute_shape
-  use kf_case_file, only: case_file_t, case_file_status
+  use kf_case_file, only: case_file_t, case_file_status, stepper_checkpoint_t
   use kf_run_diagnostics, only: run_diagnostics_t
   use kf_fs, only: remove_file
   implicit none
@@ -49,7 +50,8 @@ contains
     type(error_t), allocatable :: error
     type(case_file_t) :: file
     type(dynamics_t) :: dyn
-    type(integrator_t) :: integ
+    class(stepper_t), allocatable :: integ
+    type(stepper_checkpoint_t) :: saved
     type(shape_t) :: obs
     type(run_diagnostics_t), allocatable :: diag   !< allocated only with diagnostics: else absent
     real(wp), allocatable :: r(:, :)
@@ -75,7 +77,7 @@ contains
       message = 'already finished ('//path//')'
       return
     else if (state == 'running') then
-      call file%open_resume(path, r, t, dt, steps, rejected, nframes, error)
+      call file%open_resume(path, r, t, dt, steps, rejected, nframes, error, saved)
       if (.not. allocated(error)) then
         if (file%scene_text() /= scene_text(sc) .and. .not. is_pre_diagnostics(file%scene_text(), sc)) then
           call file%close()
@@ -105,7 +107,8 @@ contains
       end if
     end if
     call dyn%init(sc, size(r, 2), error)
-    if (.not. allocated(error)) call integ%init(sc%integrator, error)
+    if (.not. allocated(error)) call make_stepper(sc%integrator, integ, error)
+    if (.not. allocated(error) .and. resumed) call restore_stepper(error)
     if (allocated(error)) then
       if (resumed) call file%close()
       status = case_failed
@@ -127,10 +130,8 @@ contains
       end if
     end if
 
+    saved%name = trim(sc%integrator%method)
     if (resumed) then
-      integ%dt = dt
-      integ%steps = steps
-      integ%rejected = rejected
       call report('case '//name//': resuming at t = '//to_str_short(t)//' from its checkpoint ('// &
                   to_str(nframes)//' frames)')
     else
@@ -147,7 +148,8 @@ contains
       call compute_shape(r, obs, error)
       if (.not. allocated(error)) then
         if (with_diag) call diag%start(t, r)
-        call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt, error, diag)
+        call integ%get_state(saved%reals, saved%ints)
+        call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt(), error, diag, saved)
       end if
       if (allocated(error)) then
         call fail(error%message)
@@ -169,7 +171,8 @@ contains
       end if
       call compute_shape(r, obs, error)
       if (.not. allocated(error)) then
-        call file%append_frame(t, r, obs, integ%steps, integ%rejected, integ%dt, error, diag)
+        call integ%get_state(saved%reals, saved%ints)
+        call file%append_frame(t, r, obs, integ%steps(), integ%rejected(), integ%dt(), error, diag, saved)
       end if
       if (allocated(error)) then
         call fail(error%message)
@@ -191,10 +194,27 @@ contains
     end if
     status = case_ok
     call system_clock(clock_now)
-    message = to_str(integ%steps)//' steps ('//to_str(integ%rejected)//' rejected), '// &
+    message = to_str(integ%steps())//' steps ('//to_str(integ%rejected())//' rejected), '// &
               to_str_short(real(clock_now - clock0, wp)/rate)//' s'
 
   contains
+
+    !> The stepper's state from the checkpoint: the whole state when the file has it, else
+    !> (files written before) the step size and step counts.
+    subroutine restore_stepper(err)
+      type(error_t), allocatable, intent(out) :: err
+      if (allocated(saved%ints)) then
+        if (saved%name /= trim(sc%integrator%method)) then
+          call fatal_error(err, path//": the checkpoint holds the state of stepper '"//saved%name// &
+            "', not of '"//trim(sc%integrator%method)//"'")
+          return
+        end if
+        call integ%set_state(saved%reals, saved%ints, err)
+      else
+        call integ%set_basic_state(dt, steps, rejected, err)
+      end if
+      if (allocated(err)) err%message = path//': '//err%message
+    end subroutine restore_stepper
 
     subroutine fail(reason)
       character(len=*), intent(in) :: reason
@@ -211,7 +231,7 @@ contains
       elapsed = real(clock_now - clock0, wp)/rate
       eta = elapsed*(sc%integrator%t_end - t)/max(t - t_start, tiny(1.0_wp))
       line = 'case '//name//': t = '//to_str_short(t)//' / '//to_str_short(sc%integrator%t_end)//', dt = '// &
-             to_str_short(integ%dt)//', steps = '//to_str(integ%steps)//' ('//to_str(integ%rejected)// &
+             to_str_short(integ%dt())//', steps = '//to_str(integ%steps())//' ('//to_str(integ%rejected())// &
              ' rejected), elapsed '//to_str_short(elapsed)//' s, ETA '//to_str_short(eta)//' s'
     end function progress_line
 

@@ -9,7 +9,12 @@
    the few episodes the different step times after the restart can add or remove).
    While the first run is alive, a second run into the same directory is refused with exit
    status 2 and leaves its case file alone; after the kill the lock is gone (the resume runs).
-2. A case that cannot finish (max_steps too small) is reported with its reason: exit status 3,
+   The checkpoint holds the time stepper's whole state (/checkpoint/stepper): with a system
+   without hidden state the resumed run is the uninterrupted one exactly.
+2. A checkpoint written before the steppers saved their state (no /checkpoint/stepper: removed
+   here from a killed run) still resumes, from /checkpoint/{dt, steps, rejected}, and finishes
+   with every frame, close to the uninterrupted run.
+3. A case that cannot finish (max_steps too small) is reported with its reason: exit status 3,
    status 'failed: ...' in the case file and 'FAILED' in the summary.
 Usage: check_resume.py KNOTFLOW WORKDIR
 """
@@ -124,6 +129,27 @@ assert abs(tot_res["overlap_max_duration"] - tot_ref["overlap_max_duration"]) < 
 assert abs(tot_res["overlap_mean_duration"] - tot_ref["overlap_mean_duration"]) < 0.05, (tot_res, tot_ref)
 print("diagnostics after the resume: " + ", ".join(
     "%s %s (uninterrupted %s)" % (k, tot_res[k], tot_ref[k]) for k in DIAG_ATTRS))
+
+legacy = scene("legacy")
+proc = subprocess.Popen([exe, legacy], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+for line in proc.stdout:
+    if ": t = 15.000 /" in line:
+        break
+proc.send_signal(signal.SIGKILL)
+proc.wait()
+with h5py.File(os.path.join(work, "legacy", "c.h5"), "r+") as h:
+    assert "checkpoint/stepper/reals" in h and "checkpoint/stepper/ints" in h
+    assert h["checkpoint/stepper"].attrs["name"] in (b"dopri45", "dopri45")
+    del h["checkpoint/stepper"]
+again = subprocess.run([exe, legacy], capture_output=True, text=True, timeout=600)
+assert again.returncode == 0, again.stderr
+assert "resuming" in again.stdout, again.stdout
+status, t, r = frames("legacy")
+assert status in (b"finished", "finished")
+assert np.array_equal(t, t_ref), (t, t_ref)
+dev_legacy = np.abs(r - r_ref).max()
+assert dev_legacy < 1e-2, dev_legacy
+print("resumed without the stepper state: max deviation from the uninterrupted run %.2e" % dev_legacy)
 
 bad = scene("failing", extra=", max_steps = 50")
 run = subprocess.run([exe, bad], capture_output=True, text=True, timeout=600)
