@@ -113,6 +113,7 @@ module kf_case_file
     procedure :: enable_diagnostics
     procedure :: has_diagnostics
     procedure :: restore_diagnostics
+    procedure :: read_counter
     !> Write one more root attribute (same kinds as `attribute_list_t%add`).
     generic :: write_attribute => write_attr_str, write_attr_i4, write_attr_i8, write_attr_real, &
       write_attr_logical, write_attr_real1, write_attr_real2
@@ -637,6 +638,17 @@ contains
     type(error_t), allocatable, intent(out) :: error
     call h5_write_attr(this%file, '/', name, value, error)
   end subroutine write_attr_i4
+
+  !> The int64 root attribute `name`, or 0 when the file does not have it.
+  subroutine read_counter(this, name, value, error)
+    class(case_file_t), intent(inout) :: this
+    character(len=*), intent(in) :: name
+    integer(i8), intent(out) :: value
+    type(error_t), allocatable, intent(out) :: error
+    value = 0
+    if (.not. h5_attr_exists(this%file, '/', name)) return
+    call h5_read_attr(this%file, '/', name, value, error)
+  end subroutine read_counter
 
   subroutine write_attr_i8(this, name, value, error)
     class(case_file_t), intent(inout) :: this

@@ -11,6 +11,7 @@ module kf_case_runner
                             item_real, item_logical, item_real_array
   use kf_chain_shapes, only: build_initial_chain
   use kf_dynamics, only: dynamics_t
+  use kf_hydro_model, only: hydro_stats_t
   use kf_stepper, only: stepper_t
   use kf_stepper_factory, only: make_stepper
   use kf_shape, only: shape_t, compute_shape
@@ -30,6 +31,10 @@ module kf_case_runner
   end interface
 
   public :: run_case, case_path, report_i
+
+  !> Root attributes of the hydrodynamic model's counters, in the order of hydro_stats_t.
+  character(len=*), parameter :: hydro_counters(4) = [character(len=20) :: 'hydro.evaluations', &
+    'hydro.refreshes', 'hydro.reused', 'hydro.cg_iterations']
 
 contains
 
@@ -52,6 +57,7 @@ contains
     type(dynamics_t) :: dyn
     class(stepper_t), allocatable :: integ
     type(stepper_checkpoint_t) :: saved
+    integer(i8) :: hydro_base(4)   !< hydro counters of the run before a resume
     type(shape_t) :: obs
     type(run_diagnostics_t), allocatable :: diag   !< allocated only with diagnostics: else absent
     real(wp), allocatable :: r(:, :)
@@ -64,6 +70,7 @@ contains
 
     path = case_path(sc)
     name = trim(sc%output%case_name)
+    hydro_base = 0
     call case_file_status(path, state, error)
     if (allocated(error)) then
       status = case_failed
@@ -132,6 +139,13 @@ contains
 
     saved%name = trim(sc%integrator%method)
     if (resumed) then
+      call read_hydro_counters(error)
+      if (allocated(error)) then
+        call file%close()
+        status = case_failed
+        message = error%message
+        return
+      end if
       call report('case '//name//': resuming at t = '//to_str_short(t)//' from its checkpoint ('// &
                   to_str(nframes)//' frames)')
     else
@@ -174,6 +188,7 @@ contains
         call integ%get_state(saved%reals, saved%ints)
         call file%append_frame(t, r, obs, integ%steps(), integ%rejected(), integ%dt(), error, diag, saved)
       end if
+      if (.not. allocated(error)) call write_hydro_counters(error)
       if (allocated(error)) then
         call fail(error%message)
         return
@@ -198,6 +213,30 @@ contains
               to_str_short(real(clock_now - clock0, wp)/rate)//' s'
 
   contains
+
+    !> The counters of the hydrodynamic model (kf_hydro_model's hydro_stats_t) as root
+    !> attributes hydro.{evaluations, refreshes, reused, cg_iterations}, cumulative over resumes.
+    subroutine write_hydro_counters(err)
+      type(error_t), allocatable, intent(out) :: err
+      type(hydro_stats_t) :: st
+      integer(i8) :: c(4)
+      integer :: k
+      st = dyn%model%statistics()
+      c = hydro_base + [st%evaluations, st%refreshes, st%reused, st%cg_iterations]
+      do k = 1, 4
+        call file%write_attribute(trim(hydro_counters(k)), c(k), err)
+        if (allocated(err)) return
+      end do
+    end subroutine write_hydro_counters
+
+    subroutine read_hydro_counters(err)
+      type(error_t), allocatable, intent(out) :: err
+      integer :: k
+      do k = 1, 4
+        call file%read_counter(trim(hydro_counters(k)), hydro_base(k), err)
+        if (allocated(err)) return
+      end do
+    end subroutine read_hydro_counters
 
     !> The stepper's state from the checkpoint: the whole state when the file has it, else
     !> (files written before) the step size and step counts.
@@ -228,11 +267,15 @@ contains
     function progress_line() result(line)
       character(len=:), allocatable :: line
       real(wp) :: elapsed, eta
+      type(hydro_stats_t) :: st
       elapsed = real(clock_now - clock0, wp)/rate
       eta = elapsed*(sc%integrator%t_end - t)/max(t - t_start, tiny(1.0_wp))
       line = 'case '//name//': t = '//to_str_short(t)//' / '//to_str_short(sc%integrator%t_end)//', dt = '// &
              to_str_short(integ%dt())//', steps = '//to_str(integ%steps())//' ('//to_str(integ%rejected())// &
              ' rejected), elapsed '//to_str_short(elapsed)//' s, ETA '//to_str_short(eta)//' s'
+      st = dyn%model%statistics()
+      if (st%reused > 0) line = line//', hydro: '//to_str(hydro_base(2) + st%refreshes)//' refreshes, '// &
+        to_str(hydro_base(3) + st%reused)//' reused, '//to_str(hydro_base(4) + st%cg_iterations)//' CG iterations'
     end function progress_line
 
   end subroutine run_case
