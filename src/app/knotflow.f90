@@ -18,6 +18,7 @@ program knotflow
   use kf_comm, only: comm_t, comm_init, comm_finalize
   use kf_task_farm, only: run_task_farm, task_result_t, task_ok, task_failed, task_skipped
   use kf_exit, only: exit_program
+  use kf_blas_threads, only: allowed_cpus, load_average, blas_threads_for, set_blas_threads
   implicit none
 
   type(comm_t) :: comm
@@ -26,7 +27,8 @@ program knotflow
   type(task_result_t), allocatable :: results(:)
   character(len=:), allocatable :: scene_file, directory
   logical :: dry_run
-  integer :: me, nfailed
+  integer :: me, nfailed, threads
+  logical :: threads_set
 
   call comm_init(comm, error)
   if (allocated(error)) call die(error%message, 2)
@@ -60,6 +62,14 @@ program knotflow
     call h5_finalize()
     call comm_finalize(error)
     stop
+  end if
+
+  ! Idle CPUs for the BLAS of a run with one rank on its node (kf_blas_threads).
+  threads = blas_threads_for(allowed_cpus(), comm%ranks_on_node(), load_average())
+  call set_blas_threads(threads, threads_set)
+  if (me == 0 .and. threads_set .and. threads > 1) then
+    write (output_unit, '(a)') 'knotflow: '//to_str(threads)//' BLAS threads per rank'
+    flush (output_unit)
   end if
 
   call run_task_farm(comm, sw%n_cases(), run_one, results, error, progress)

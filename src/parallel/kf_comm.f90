@@ -15,7 +15,7 @@ module kf_comm
     MPI_Win_allocate, MPI_Win_free, MPI_Win_lock, MPI_Win_unlock, MPI_Fetch_and_op, &
     MPI_INTEGER, MPI_INTEGER8, MPI_DOUBLE_PRECISION, MPI_LOGICAL, MPI_CHARACTER, MPI_BYTE, &
     MPI_SUM, MPI_MAX, MPI_MIN, MPI_BOR, MPI_INFO_NULL, MPI_LOCK_SHARED, MPI_LOCK_EXCLUSIVE, &
-    MPI_ADDRESS_KIND, MPI_IN_PLACE
+    MPI_ADDRESS_KIND, MPI_IN_PLACE, MPI_Comm_split_type, MPI_COMM_TYPE_SHARED, MPI_Comm_free
   implicit none
   private
 
@@ -30,6 +30,7 @@ module kf_comm
     procedure :: size => comm_size
     procedure :: barrier => comm_barrier
     procedure :: abort => comm_abort
+    procedure :: ranks_on_node => comm_ranks_on_node
     !> Broadcast from rank `root` (default 0): integer, int64, real(wp), logical, string
     !> (allocatable; its length travels with it).
     generic :: bcast => bcast_int, bcast_i8, bcast_real, bcast_logical, bcast_str
@@ -115,6 +116,19 @@ contains
     call MPI_Comm_size(this%comm, comm_size, ierr)
     if (ierr /= 0) comm_size = -1
   end function comm_size
+
+  !> Number of ranks of this communicator on this rank's node (shared memory); 1 on failure.
+  integer function comm_ranks_on_node(this) result(n)
+    class(comm_t), intent(in) :: this
+    type(MPI_Comm) :: node
+    integer :: ierr
+    n = 1
+    call MPI_Comm_split_type(this%comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, node, ierr)
+    if (ierr /= 0) return
+    call MPI_Comm_size(node, n, ierr)
+    if (ierr /= 0) n = 1
+    call MPI_Comm_free(node, ierr)
+  end function comm_ranks_on_node
 
   subroutine comm_barrier(this, error)
     class(comm_t), intent(in) :: this

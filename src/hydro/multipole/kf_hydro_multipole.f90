@@ -45,7 +45,7 @@ module kf_hydro_multipole
   !> Names of the update modes (`&hydro update`), in the order of their codes.
   character(len=*), parameter, public :: update_names = 'stage, adaptive'
   !> Velocity error budget of a reused many-body part, as a fraction of tolerance / step size.
-  real(wp), parameter :: budget_fraction = 0.5_wp
+  real(wp), parameter :: budget_fraction = 0.25_wp
   !> Conjugate-gradient stopping error, as a fraction of the budget.
   real(wp), parameter :: cg_fraction = 0.05_wp
   !> Largest deformation D (units of d) over which a many-body part is reused.

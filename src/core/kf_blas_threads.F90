@@ -1,0 +1,128 @@
+!> Threads of the BLAS/LAPACK library for one case, chosen once by the program (issue: both
+!> cores for one case when a run has fewer cases than cores). Only OpenBLAS can be told at run
+!> time (openblas_set_num_threads, detected by CMake); with another BLAS nothing changes.
+!>
+!> The rule (`blas_threads_for`): more than one thread only for a run with one rank on its node
+!> (`knotflow scene.nml`, `mpirun -n 1`, a batch task with several CPUs), because the other ranks
+!> of a run occupy the remaining CPUs, computing or waiting in MPI (Open MPI polls while it
+!> waits); then the CPUs this process may run on (its affinity mask, from /proc/self/status on
+!> Linux; 1 where unknown) less those busy at start-up (the 1-minute load average, rounded),
+!> at least 1. Threads that must share a busy CPU slow a BLAS call down several-fold (measured:
+!> 4x for a 2-thread factorisation with the other core busy), hence the load. A sweep that keeps
+!> every core busy keeps 1 thread per rank. An explicit OPENBLAS_NUM_THREADS > 1 in the
+!> environment is the user's choice and is left alone.
+module kf_blas_threads
+#ifdef KNOTFLOW_HAVE_OPENBLAS_THREADS
+  use, intrinsic :: iso_c_binding, only: c_int
+#endif
+  implicit none
+  private
+
+  public :: allowed_cpus, cpu_list_count, load_average, blas_threads_for, set_blas_threads
+
+contains
+
+  !> Number of CPUs in this process's affinity mask (Cpus_allowed_list of /proc/self/status),
+  !> or 1 when it cannot be read.
+  integer function allowed_cpus() result(n)
+    character(len=4096) :: line
+    integer :: unit, ios, k
+    n = 1
+    open (newunit=unit, file='/proc/self/status', action='read', status='old', iostat=ios)
+    if (ios /= 0) return
+    do
+      read (unit, '(a)', iostat=ios) line
+      if (ios /= 0) exit
+      k = index(line, 'Cpus_allowed_list:')
+      if (k == 1) then
+        n = max(1, cpu_list_count(adjustl(line(19:))))
+        exit
+      end if
+    end do
+    close (unit)
+  end function allowed_cpus
+
+  !> Number of CPUs in a list such as "0-3,8,10-11" (0 if it cannot be parsed).
+  pure integer function cpu_list_count(text) result(n)
+    character(len=*), intent(in) :: text
+    integer :: p, q, dash, a, b, ios
+    character(len=len(text)) :: item
+    n = 0
+    p = 1
+    do while (p <= len_trim(text))
+      q = index(text(p:), ',')
+      if (q == 0) then
+        item = text(p:len_trim(text))
+        p = len_trim(text) + 1
+      else
+        item = text(p:p + q - 2)
+        p = p + q
+      end if
+      dash = index(item, '-')
+      if (dash > 0) then
+        read (item(:dash - 1), *, iostat=ios) a
+        if (ios /= 0) then
+          n = 0
+          return
+        end if
+        read (item(dash + 1:), *, iostat=ios) b
+      else
+        read (item, *, iostat=ios) a
+        b = a
+      end if
+      if (ios /= 0 .or. b < a) then
+        n = 0
+        return
+      end if
+      n = n + b - a + 1
+    end do
+  end function cpu_list_count
+
+  !> The 1-minute load average (first field of /proc/loadavg), or 0 when it cannot be read.
+  real function load_average() result(load)
+    integer :: unit, ios
+    load = 0.0
+    open (newunit=unit, file='/proc/loadavg', action='read', status='old', iostat=ios)
+    if (ios /= 0) return
+    read (unit, *, iostat=ios) load
+    if (ios /= 0) load = 0.0
+    close (unit)
+  end function load_average
+
+  !> BLAS threads for a rank with `cpus` CPUs in its affinity mask, `ranks_on_node` ranks of
+  !> its run on the node and the given load average at start-up (the rule above).
+  pure integer function blas_threads_for(cpus, ranks_on_node, load) result(threads)
+    integer, intent(in) :: cpus, ranks_on_node
+    real, intent(in) :: load
+    threads = 1
+    if (ranks_on_node == 1) threads = max(1, cpus - nint(load))
+  end function blas_threads_for
+
+  !> Ask the BLAS library for `threads` threads; `applied` is false when it cannot be told (not
+  !> OpenBLAS) or the environment sets OPENBLAS_NUM_THREADS > 1 (left to the user).
+  subroutine set_blas_threads(threads, applied)
+    integer, intent(in) :: threads
+    logical, intent(out) :: applied
+#ifdef KNOTFLOW_HAVE_OPENBLAS_THREADS
+    interface
+      subroutine openblas_set_num_threads(n) bind(c, name='openblas_set_num_threads')
+        import :: c_int
+        integer(c_int), value :: n
+      end subroutine openblas_set_num_threads
+    end interface
+    character(len=32) :: env
+    integer :: status, given, ios
+    applied = .false.
+    call get_environment_variable('OPENBLAS_NUM_THREADS', env, status=status)
+    if (status == 0) then
+      read (env, *, iostat=ios) given
+      if (ios == 0 .and. given > 1) return
+    end if
+    call openblas_set_num_threads(int(max(1, threads), c_int))
+    applied = .true.
+#else
+    applied = .false.
+#endif
+  end subroutine set_blas_threads
+
+end module kf_blas_threads
