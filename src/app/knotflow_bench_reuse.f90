@@ -9,8 +9,12 @@
 !>              tolerance 1e-4, and of the exact path between tolerances 1e-4 and 1e-6
 !>   speed      [--config C] [--t-end T]: wall time of both paths to T and their ratio
 !>   scaling    [--t-end T]: adaptive wall time per unit time for random chains N = 50..400
+!>   overlaps   [--config C] [--t-end T] [--eps-lub E]: BWE overlap statistics (run
+!>              diagnostics) of both paths
+!>   rigid      [--config C]: the reused part at rigidly moved and at deformed configurations
 !> C: trefoil (N = 99, orientation c, A = 2.2; default), coil (inputs/configs/
-!> coil_candycane_A1.xyz, A = 1) or a coordinate file path (A = 1). Output: key = value lines.
+!> coil_candycane_A1.xyz, A = 1) or a coordinate file path (A = 1). Output: `key = value` lines
+!> (read by knotflow-accuracy-report --reuse).
 program knotflow_bench_reuse
   use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
   use kf_kinds, only: wp, i8
@@ -24,11 +28,12 @@ program knotflow_bench_reuse
   use kf_hydro_model, only: hydro_stats_t
   use kf_reuse_check, only: checked_dynamics_t
   use kf_hydro_multipole, only: multipole_model_t
+  use kf_run_diagnostics, only: run_diagnostics_t
   use kf_accuracy, only: wall_seconds, max_bead_deviation, loglog_slope
   implicit none
 
   character(len=:), allocatable :: part, config
-  real(wp) :: t_end
+  real(wp) :: t_end, eps_lub
   integer :: every
 
   call parse_arguments()
@@ -43,6 +48,8 @@ program knotflow_bench_reuse
     call run_scaling()
   case ('rigid')
     call run_rigid()
+  case ('overlaps')
+    call run_overlaps()
   case default
     call die("unknown part '"//part//"' (allowed: velocity, trajectory, speed, scaling)")
   end select
@@ -64,6 +71,7 @@ contains
     config = 'trefoil'
     t_end = 10.0_wp
     every = 1
+    eps_lub = -1.0_wp
     k = 2
     do while (k <= command_argument_count())
       call get_command_argument(k, arg)
@@ -75,6 +83,10 @@ contains
       case ('--t-end')
         read (val, *, iostat=ios) t_end
         if (ios /= 0 .or. .not. t_end > 0.0_wp) call die('--t-end '//trim(val)//': expected a number > 0')
+      case ('--eps-lub')
+        read (val, *, iostat=ios) eps_lub
+        if (ios /= 0 .or. .not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) &
+          call die('--eps-lub '//trim(val)//': expected a number in (0, 0.5)')
       case ('--every')
         read (val, *, iostat=ios) every
         if (ios /= 0 .or. every < 1) call die('--every '//trim(val)//': expected an integer >= 1')
@@ -97,6 +109,7 @@ contains
     scene%hydro%order = 2
     scene%hydro%lubrication = .true.
     scene%hydro%update = update
+    scene%hydro%eps_lub = eps_lub
     scene%integrator%tolerance = tol
     select case (name)
     case ('trefoil')
@@ -115,6 +128,25 @@ contains
     call build_initial_chain(scene%chain, r, rot, error)
     if (allocated(error)) call die(error%message)
   end subroutine study_scene
+
+  !> The part, configuration, t_end, the load average and the BLAS threads (environment).
+  subroutine header()
+    character(len=128) :: text
+    integer :: unit, ios, status
+    write (output_unit, '(a)') 'part = '//part
+    write (output_unit, '(a)') 'config = '//config
+    write (output_unit, '(a)') 't_end = '//to_str(t_end, '(g0.6)')
+    text = 'unknown'
+    open (newunit=unit, file='/proc/loadavg', action='read', status='old', iostat=ios)
+    if (ios == 0) then
+      read (unit, '(a)', iostat=ios) text
+      close (unit)
+    end if
+    write (output_unit, '(a)') 'loadavg_start = '//trim(text)
+    call get_environment_variable('OPENBLAS_NUM_THREADS', text, status=status)
+    if (status /= 0) text = 'unset'
+    write (output_unit, '(a)') 'openblas_num_threads = '//trim(text)
+  end subroutine header
 
   subroutine print_stats(prefix, s)
     character(len=*), intent(in) :: prefix
@@ -143,10 +175,11 @@ contains
     w0 = wall_seconds()
     call integ%advance(sys, t, r, t_end, error)
     if (allocated(error)) call die(error%message)
-    write (output_unit, '(a)') 'config = '//config
-    write (output_unit, '(a)') 't_end = '//to_str(t_end, '(g0.6)')
-    write (output_unit, '(a)') 'steps = '//to_str(integ%steps())//', rejected = '//to_str(integ%rejected())
+    call header()
+    write (output_unit, '(a)') 'steps = '//to_str(integ%steps())
+    write (output_unit, '(a)') 'rejected = '//to_str(integ%rejected())
     write (output_unit, '(a)') 'checks = '//to_str(sys%checks)
+    write (output_unit, '(a)') 'every = '//to_str(every)
     write (output_unit, '(a)') 'velocity_rms_max = '//to_str(sys%max_rms, '(es10.3)')
     write (output_unit, '(a)') 'velocity_rms_mean = '//to_str(sys%sum_rms/max(1_i8, sys%checks), '(es10.3)')
     write (output_unit, '(a)') 'velocity_maxnorm_max = '//to_str(sys%max_max, '(es10.3)')
@@ -184,18 +217,21 @@ contains
     real(wp) :: wall
     integer(i8) :: steps
     type(hydro_stats_t) :: stats
+    call header()
     call study_scene(config, 1.0e-4_wp, 'stage', scene, r_stage)
     call integrate(scene, r_stage, wall, steps, stats)
-    write (output_unit, '(a)') 'stage_tol1e-4: wall_s = '//to_str(wall, '(f10.2)')//', steps = '//to_str(steps)
+    write (output_unit, '(a)') 'stage.wall_s = '//to_str(wall, '(f10.2)')
+    write (output_unit, '(a)') 'stage.steps = '//to_str(steps)
     call study_scene(config, 1.0e-4_wp, 'adaptive', scene, r_adapt)
     call integrate(scene, r_adapt, wall, steps, stats)
-    write (output_unit, '(a)') 'adaptive_tol1e-4: wall_s = '//to_str(wall, '(f10.2)')//', steps = '//to_str(steps)
+    write (output_unit, '(a)') 'adaptive.wall_s = '//to_str(wall, '(f10.2)')
+    write (output_unit, '(a)') 'adaptive.steps = '//to_str(steps)
     call print_stats('adaptive.', stats)
     call study_scene(config, 1.0e-6_wp, 'stage', scene, r_fine)
-    scene%hydro%eps_lub = 1.0e-4_wp
+    if (eps_lub < 0.0_wp) scene%hydro%eps_lub = 1.0e-4_wp
     call integrate(scene, r_fine, wall, steps, stats)
-    write (output_unit, '(a)') 'stage_tol1e-6: wall_s = '//to_str(wall, '(f10.2)')//', steps = '//to_str(steps)
-    write (output_unit, '(a)') 'config = '//config//', t_end = '//to_str(t_end, '(g0.6)')
+    write (output_unit, '(a)') 'stage_tol1e-6.wall_s = '//to_str(wall, '(f10.2)')
+    write (output_unit, '(a)') 'stage_tol1e-6.steps = '//to_str(steps)
     write (output_unit, '(a)') 'deviation_adaptive_vs_stage = '// &
       to_str(max_bead_deviation(r_adapt, r_stage), '(es10.3)')
     write (output_unit, '(a)') 'deviation_stage_tol1e-4_vs_1e-6 = '// &
@@ -208,14 +244,16 @@ contains
     real(wp) :: wall_stage, wall_adapt
     integer(i8) :: steps
     type(hydro_stats_t) :: stats
-    write (output_unit, '(a)') 'config = '//config//', t_end = '//to_str(t_end, '(g0.6)')
+    call header()
     call study_scene(config, 1.0e-4_wp, 'adaptive', scene, r)
     call integrate(scene, r, wall_adapt, steps, stats)
-    write (output_unit, '(a)') 'adaptive: wall_s = '//to_str(wall_adapt, '(f10.2)')//', steps = '//to_str(steps)
+    write (output_unit, '(a)') 'adaptive.wall_s = '//to_str(wall_adapt, '(f10.2)')
+    write (output_unit, '(a)') 'adaptive.steps = '//to_str(steps)
     call print_stats('adaptive.', stats)
     call study_scene(config, 1.0e-4_wp, 'stage', scene, r)
     call integrate(scene, r, wall_stage, steps, stats)
-    write (output_unit, '(a)') 'stage: wall_s = '//to_str(wall_stage, '(f10.2)')//', steps = '//to_str(steps)
+    write (output_unit, '(a)') 'stage.wall_s = '//to_str(wall_stage, '(f10.2)')
+    write (output_unit, '(a)') 'stage.steps = '//to_str(steps)
     write (output_unit, '(a)') 'ratio_stage_over_adaptive = '//to_str(wall_stage/wall_adapt, '(f8.2)')
   end subroutine run_speed
 
@@ -226,6 +264,7 @@ contains
     real(wp), allocatable :: r(:, :), r2(:, :), v(:, :), vx(:, :)
     real(wp) :: q(3, 3), ang, dr
     integer :: i, k
+    call header()
     call study_scene(config, 1.0e-4_wp, 'adaptive', scene, r)
     call fast%init(scene, size(r, 2), error)
     scene%hydro%update = 'stage'
@@ -242,8 +281,9 @@ contains
       end do
       call reused(fast, r2, v)
       call exact%velocity(r2, vx, error)
-      write (output_unit, '(a,3es12.4)') 'rigid rotation angle, perturbation, max |v - v_exact| = ', ang, dr, &
-        maxval(norm2(v - vx, dim=1))
+      write (output_unit, '(a)') 'rigid'//to_str(k)//'.angle = '//to_str(ang, '(f6.3)')
+      write (output_unit, '(a)') 'rigid'//to_str(k)//'.perturbation = '//to_str(dr, '(es10.3)')
+      write (output_unit, '(a)') 'rigid'//to_str(k)//'.max_error = '//to_str(maxval(norm2(v - vx, dim=1)), '(es10.3)')
     end do
     ! bond-length perturbation only: each bond scaled by (1 + eps_k) from bead 1 on
     do k = 1, 3
@@ -254,8 +294,8 @@ contains
       end do
       call reused(fast, r2, v)
       call exact%velocity(r2, vx, error)
-      write (output_unit, '(a,es12.4,a,es12.4,i5)') 'bond stretch ', dr, ' max |v - v_exact| = ', &
-        maxval(norm2(v - vx, dim=1)), maxloc(norm2(v - vx, dim=1))
+      write (output_unit, '(a)') 'stretch'//to_str(k)//'.amplitude = '//to_str(dr, '(es10.3)')
+      write (output_unit, '(a)') 'stretch'//to_str(k)//'.max_error = '//to_str(maxval(norm2(v - vx, dim=1)), '(es10.3)')
     end do
     ! transverse perturbation only: bead i moved perpendicular to its bonds
     do k = 1, 3
@@ -265,11 +305,50 @@ contains
       end do
       call reused(fast, r2, v)
       call exact%velocity(r2, vx, error)
-      write (output_unit, '(a,es12.4,a,es12.4,i5)') 'random move ', dr, ' max |v - v_exact| = ', &
-        maxval(norm2(v - vx, dim=1)), maxloc(norm2(v - vx, dim=1))
+      write (output_unit, '(a)') 'move'//to_str(k)//'.amplitude = '//to_str(dr, '(es10.3)')
+      write (output_unit, '(a)') 'move'//to_str(k)//'.max_error = '//to_str(maxval(norm2(v - vx, dim=1)), '(es10.3)')
     end do
     call print_stats('adaptive.', fast%model%statistics())
   end subroutine run_rigid
+
+  !> BWE overlap statistics of both paths (the run diagnostics at every accepted step).
+  subroutine run_overlaps()
+    character(len=8), parameter :: paths(2) = [character(len=8) :: 'stage', 'adaptive']
+    type(scene_t) :: scene
+    type(dynamics_t) :: dyn
+    type(run_diagnostics_t) :: diag
+    class(stepper_t), allocatable :: integ
+    type(error_t), allocatable :: error
+    real(wp), allocatable :: r(:, :)
+    real(wp) :: t, w0
+    integer :: k
+    character(len=:), allocatable :: p
+    call header()
+    do k = 1, 2
+      p = trim(paths(k))
+      call study_scene(config, 1.0e-4_wp, p, scene, r)
+      call dyn%init(scene, size(r, 2), error)
+      if (allocated(error)) call die(error%message)
+      call make_stepper(scene%integrator, integ, error)
+      if (allocated(error)) call die(error%message)
+      call diag%init(size(r, 2), scene%chain%bond_length)
+      t = 0.0_wp
+      call diag%start(t, r)
+      w0 = wall_seconds()
+      call integ%advance(dyn, t, r, t_end, error, diag)
+      if (allocated(error)) call die(error%message)
+      write (output_unit, '(a)') p//'.wall_s = '//to_str(wall_seconds() - w0, '(f10.2)')
+      write (output_unit, '(a)') p//'.steps = '//to_str(integ%steps())
+      write (output_unit, '(a)') p//'.overlap_episodes = '//to_str(diag%overlap_episodes)
+      write (output_unit, '(a)') p//'.completed_episodes = '//to_str(diag%completed_episodes)
+      write (output_unit, '(a)') p//'.mean_duration = '//to_str(diag%mean_duration(), '(f10.4)')
+      write (output_unit, '(a)') p//'.max_duration = '//to_str(diag%duration_max, '(f10.4)')
+      write (output_unit, '(a)') p//'.max_overlapping_pairs = '//to_str(diag%max_overlapping_pairs)
+      write (output_unit, '(a)') p//'.strand_passages = '//to_str(diag%strand_passages)
+      write (output_unit, '(a)') p//'.min_distance = '//to_str(diag%min_distance(), '(f10.5)')
+      if (k == 2) call print_stats('adaptive.', dyn%model%statistics())
+    end do
+  end subroutine run_overlaps
 
   !> Velocities from the adaptive model's last many-body part reused as it is at rr.
   subroutine reused(fast, rr, vv)
@@ -298,6 +377,7 @@ contains
     integer(i8) :: steps
     type(hydro_stats_t) :: stats
     integer :: k
+    call header()
     do k = 1, size(sizes)
       call study_scene('trefoil', 1.0e-4_wp, 'adaptive', scene, r)
       scene%chain%shape = 'random'
@@ -306,12 +386,16 @@ contains
       if (allocated(error)) call die(error%message)
       call integrate(scene, r, walls(k), steps, stats)
       walls(k) = walls(k)/t_end
-      write (output_unit, '(a)') 'N = '//to_str(sizes(k))//': wall_s_per_time = '//to_str(walls(k), '(es10.3)')// &
-        ', steps = '//to_str(steps)//', refreshes = '//to_str(stats%refreshes)//', cg = '//to_str(stats%cg_iterations)
+      write (output_unit, '(a)') 'N'//to_str(sizes(k))//'.wall_s_per_time = '//to_str(walls(k), '(es10.3)')
+      write (output_unit, '(a)') 'N'//to_str(sizes(k))//'.steps = '//to_str(steps)
+      write (output_unit, '(a)') 'N'//to_str(sizes(k))//'.evaluations = '//to_str(stats%evaluations)
+      write (output_unit, '(a)') 'N'//to_str(sizes(k))//'.refreshes = '//to_str(stats%refreshes)
     end do
     call loglog_slope(real(sizes, wp), walls, slope, error)
     if (allocated(error)) call die(error%message)
     write (output_unit, '(a)') 'exponent = '//to_str(slope, '(f6.2)')
+    write (output_unit, '(a)') 'exponent_n_min = '//to_str(sizes(1))
+    write (output_unit, '(a)') 'exponent_n_max = '//to_str(sizes(size(sizes)))
   end subroutine run_scaling
 
 end program knotflow_bench_reuse

@@ -418,7 +418,7 @@ contains
     call best_rotation(this%r_ref, r, qrot, error)
     if (allocated(error)) return
     call align(this, r, qrot, deform)
-    call reused_solve(this, f, ez, qrot, 0.0_wp, 1.0e-6_wp*this%tolerance, u, converged)
+    call reused_solve(this, f, ez, qrot, 0.0_wp, 1.0e-3_wp*this%tolerance, u, converged)
     if (.not. converged) call fatal_error(error, 'multipole: conjugate gradients did not converge')
   end subroutine multipole_reused_velocities
 

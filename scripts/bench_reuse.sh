@@ -1,0 +1,78 @@
+#!/usr/bin/env bash
+# Accuracy and cost of the adaptive reuse of the multipole many-body part (&hydro update =
+# 'adaptive') against the exact solve at every stage ('stage'): knotflow-bench-reuse on the
+# study's model (L = 2 + lubrication, BWE), one core, into $KNOTFLOW_REUSE_OUT (default
+# build/accuracy/reuse), then the section between the reuse markers of docs/accuracy.md.
+# A science command (about 1.5 h of one core), not a test.
+#
+#   bash scripts/bench_reuse.sh [part ...]     parts: velocity trajectory speed overlaps
+#                                              scaling profile case (default: all but case)
+#   case: the whole reference trefoil case (N = 99, t_end = 1000) with the adaptive path
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
+cd "$KF_ROOT"
+kf_ensure_system_packages
+kf_ensure_python
+kf_build "$KF_ROOT/build" Release knotflow-bench-reuse knotflow
+
+exe="$KF_ROOT/build/src/app/knotflow-bench-reuse"
+out="${KNOTFLOW_REUSE_OUT:-$KF_ROOT/build/accuracy/reuse}"
+mkdir -p "$out"
+parts=("$@")
+[ "${#parts[@]}" -eq 0 ] && parts=(velocity trajectory speed overlaps scaling profile)
+export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
+
+bench() {  # bench NAME ARGS...: one measurement into $out/NAME.txt
+  local name="$1"; shift
+  kf_log "knotflow-bench-reuse $* > $out/$name.txt"
+  "$exe" "$@" > "$out/$name.txt.part"
+  echo "loadavg_end = $(cat /proc/loadavg 2>/dev/null || echo unknown)" >> "$out/$name.txt.part"
+  mv "$out/$name.txt.part" "$out/$name.txt"
+}
+
+for part in "${parts[@]}"; do
+  case "$part" in
+    velocity)
+      bench velocity_trefoil velocity --config trefoil --t-end 10
+      bench velocity_coil velocity --config coil --t-end 4
+      bench velocity_collapse velocity --config inputs/configs/candycane_A1_t250.xyz --t-end 60 --every 4 ;;
+    trajectory) bench trajectory_trefoil trajectory --config trefoil --t-end 10 ;;
+    speed) bench speed_trefoil speed --config trefoil --t-end 50 ;;
+    overlaps)
+      bench overlaps_coil_eps1e-2 overlaps --config coil --t-end 4 --eps-lub 1e-2
+      bench overlaps_coil_eps1e-4 overlaps --config coil --t-end 4 --eps-lub 1e-4 ;;
+    scaling) bench scaling scaling --t-end 1 ;;
+    profile) bench profile_trefoil rigid --config trefoil ;;
+    case)
+      dir="$out/case"
+      rm -rf "$dir"; mkdir -p "$dir"
+      sed -e "s|@DIR@|$dir|" > "$dir/trefoil.nml" <<'NML'
+&chain
+  shape = 'trefoil', orientation = 'c'
+/
+&forces
+  bending_a = 2.2
+/
+&hydro
+  model = 'multipole', order = 2, lubrication = .true., update = 'adaptive'
+/
+&integrator
+  t_end = 1000.0, tolerance = 1.0e-4
+/
+&output
+  directory = '@DIR@', case_name = 'trefoil_A2.20_orc', progress_interval = 300
+/
+NML
+      kf_log "the whole reference case (taskset: one core): $dir"
+      start=$(date +%s)
+      load0=$(cat /proc/loadavg)
+      taskset -c 0 "$KF_ROOT/build/knotflow" "$dir/trefoil.nml" | tee "$dir/log.txt"
+      { echo "part = case"; echo "config = trefoil"; echo "t_end = 1000";
+        echo "loadavg_start = $load0"; echo "wall_s = $(( $(date +%s) - start ))";
+        echo "loadavg_end = $(cat /proc/loadavg)"; } > "$out/case_trefoil.txt" ;;
+    *) kf_die "unknown part '$part' (velocity trajectory speed overlaps scaling profile case)" ;;
+  esac
+done
+
+kf_log "knotflow-accuracy-report --reuse $out --markdown docs/accuracy.md"
+"$KF_PY" -m knotflow_tools.accuracy --reuse "$out" --markdown "$KF_ROOT/docs/accuracy.md"
