@@ -9,6 +9,11 @@ module kf_lapack
 
   public :: cholesky_factor, cholesky_solve, cholesky_invert, symmetric_eigen
 
+  !> Solve A X = B (B a matrix or a vector) given the factor from cholesky_factor.
+  interface cholesky_solve
+    module procedure cholesky_solve_matrix, cholesky_solve_vector
+  end interface cholesky_solve
+
 contains
 
   !> Cholesky factorisation A = L L^T in place (lower triangle; the upper one is left untouched).
@@ -29,12 +34,20 @@ contains
   end subroutine cholesky_factor
 
   !> Solve A X = B given the factor from cholesky_factor; B is overwritten by X.
-  subroutine cholesky_solve(factor, b)
+  subroutine cholesky_solve_matrix(factor, b)
     real(wp), intent(in) :: factor(:, :)
     real(wp), intent(inout) :: b(:, :)
     integer :: info
     call dpotrs('L', size(factor, 1), size(b, 2), factor, size(factor, 1), b, size(b, 1), info)
-  end subroutine cholesky_solve
+  end subroutine cholesky_solve_matrix
+
+  !> The same for one right-hand side b.
+  subroutine cholesky_solve_vector(factor, b)
+    real(wp), intent(in) :: factor(:, :)
+    real(wp), intent(inout) :: b(:)
+    integer :: info
+    call dpotrs('L', size(factor, 1), 1, factor, size(factor, 1), b, size(b), info)
+  end subroutine cholesky_solve_vector
 
   !> Inverse of an SPD matrix from its Cholesky factor; returns the full symmetric inverse.
   subroutine cholesky_invert(a, error, what)

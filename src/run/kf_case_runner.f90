@@ -127,8 +127,9 @@ contains
       allocate (diag)
       call diag%init(size(r, 2), sc%chain%bond_length)
     end if
-    if (resumed .and. with_diag) then
-      call file%restore_diagnostics(diag, error)
+    if (resumed) then
+      if (with_diag) call file%restore_diagnostics(diag, error)
+      if (.not. allocated(error)) call read_hydro_counters(error)
       if (allocated(error)) then
         call file%close()
         status = case_failed
@@ -139,13 +140,6 @@ contains
 
     saved%name = trim(sc%integrator%method)
     if (resumed) then
-      call read_hydro_counters(error)
-      if (allocated(error)) then
-        call file%close()
-        status = case_failed
-        message = error%message
-        return
-      end if
       call report('case '//name//': resuming at t = '//to_str_short(t)//' from its checkpoint ('// &
                   to_str(nframes)//' frames)')
     else

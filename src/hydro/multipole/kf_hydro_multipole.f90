@@ -31,8 +31,8 @@
 module kf_hydro_multipole
   use kf_kinds, only: wp, i8
   use kf_strings, only: to_str
-  use kf_blas, only: dgemv, dsymv, dpotrs
-  use kf_lapack, only: cholesky_factor, cholesky_invert
+  use kf_blas, only: dgemv, dsymv
+  use kf_lapack, only: cholesky_factor, cholesky_solve, cholesky_invert
   use kf_error, only: error_t, fatal_error
   use kf_hydro_model, only: hydro_model_t, hydro_stats_t
   use kf_multipole_system, only: multipole_system_t, strain_coefficients, strain_basis
@@ -208,7 +208,7 @@ contains
     call corrected_system(this, r, this%zt, this%x6, error)
     if (allocated(error)) return
     ! zt -> zeta^-1 (full), x6 -> zeta^-1 x: the translational blocks are mu and dist.
-    call solve_factored(this%zt, this%x6)
+    call cholesky_solve(this%zt, this%x6)
     call cholesky_invert(this%zt, error, 'lubrication-corrected friction')
     if (allocated(error)) return
     do j = 1, nb
@@ -247,22 +247,6 @@ contains
     this%t_lubrication = real(c1 - c0, wp)/real(crate, wp)
     call cholesky_factor(zeta, error, 'lubrication-corrected friction')
   end subroutine corrected_system
-
-  !> b = a^-1 b for the Cholesky factor a (lower) and b with any number of columns.
-  subroutine solve_factored(a, b)
-    real(wp), intent(in) :: a(:, :)
-    real(wp), intent(inout) :: b(:, :)
-    integer :: info
-    call dpotrs('L', size(a, 1), size(b, 2), a, size(a, 1), b, size(b, 1), info)
-  end subroutine solve_factored
-
-  !> The same for one vector.
-  subroutine solve_vector(a, b)
-    real(wp), intent(in) :: a(:, :)
-    real(wp), intent(inout) :: b(:)
-    integer :: info
-    call dpotrs('L', size(a, 1), 1, a, size(a, 1), b, size(b), info)
-  end subroutine solve_vector
 
   !> u = mu f.
   subroutine multipole_apply(this, f, u)
@@ -485,7 +469,7 @@ contains
     if (allocated(error)) return
     call right_hand_side(this, f, e, 0.0_wp)
     this%x = this%b
-    call solve_vector(this%pf, this%x)
+    call cholesky_solve(this%pf, this%x)
     do i = 1, size(r, 2)
       u(:, i) = this%x(6*i - 5:6*i - 3)
     end do
@@ -583,11 +567,11 @@ contains
     this%w = w
     ! Preconditioned CG from x = P^-1 b.
     this%x = this%b
-    call solve_vector(this%pf, this%x)
+    call cholesky_solve(this%pf, this%x)
     call operator_apply(this, this%x, this%q)
     this%rs = this%b - this%q
     this%z = this%rs
-    call solve_vector(this%pf, this%z)
+    call cholesky_solve(this%pf, this%z)
     converged = largest_velocity(this%z, nb) <= cg_fraction*budget
     this%p = this%z
     rz = dot_product(this%rs, this%z)
@@ -599,7 +583,7 @@ contains
       this%x = this%x + alpha*this%p
       this%rs = this%rs - alpha*this%q
       this%z = this%rs
-      call solve_vector(this%pf, this%z)
+      call cholesky_solve(this%pf, this%z)
       converged = largest_velocity(this%z, nb) <= cg_fraction*budget
       rz_new = dot_product(this%rs, this%z)
       this%p = this%z + (rz_new/rz)*this%p
