@@ -166,6 +166,7 @@ contains
     type(error_t), allocatable :: error
     real(wp), allocatable :: r(:, :)
     real(wp) :: t, w0
+    call header()
     call study_scene(config, 1.0e-4_wp, 'adaptive', scene, r)
     call sys%init(scene, size(r, 2), error, every)
     if (allocated(error)) call die(error%message)
@@ -175,7 +176,6 @@ contains
     w0 = wall_seconds()
     call integ%advance(sys, t, r, t_end, error)
     if (allocated(error)) call die(error%message)
-    call header()
     write (output_unit, '(a)') 'steps = '//to_str(integ%steps())
     write (output_unit, '(a)') 'rejected = '//to_str(integ%rejected())
     write (output_unit, '(a)') 'checks = '//to_str(sys%checks)
