@@ -24,6 +24,7 @@ module kf_multipole_system
   use kf_constants, only: pi
   use kf_error, only: error_t, fatal_error
   use kf_multipole_blocks, only: multipole_layout_t, pair_block_grouped, fam_phi, fam_p
+  use kf_multipole_index, only: multipole_index_t
   use kf_solid_harmonics, only: irregular_harmonics
   implicit none
   private
@@ -33,13 +34,13 @@ module kf_multipole_system
   !> The factorised N-sphere system.
   type, public :: multipole_system_t
     type(multipole_layout_t) :: lay
+    type(multipole_index_t) :: idx   !< where the unknowns sit in K, B and P
     real(wp) :: min_distance = 1.0_wp   !< pairs with |d| < min_distance are evaluated there
     integer :: n = 0        !< number of spheres
     integer :: nr = 0       !< size of K (phi and chi unknowns), 2 N L(L+2)
     integer :: nqt = 0      !< unknowns of K outside P (they come first)
     integer :: n6 = 0       !< 6N
     integer :: n_clamped = 0 !< pairs closer than min_distance at the last factorise
-    integer :: kmap(3) = [2, 3, 1] !< P component (1..3 = real q 0..2) of Cartesian x, y, z
     real(wp) :: scal(6) = 0.0_wp !< moment_hat = scal(c) * Cartesian force/torque component c
     real(wp), allocatable :: k(:, :)     !< K, then its Cholesky factor (lower triangle)
     real(wp), allocatable :: bp(:, :)    !< phi <- p couplings (rows phi, columns p)
@@ -97,11 +98,7 @@ contains
   pure integer function system_pindex(this, i, c) result(p)
     class(multipole_system_t), intent(in) :: this
     integer, intent(in) :: i, c
-    if (c <= 3) then
-      p = 3*(i - 1) + this%kmap(c)
-    else
-      p = 3*this%n + 3*(i - 1) + this%kmap(c - 3)
-    end if
+    p = this%idx%p_index(i, c)
   end function system_pindex
 
   !> Assemble the scaled real system for centres r(3, N), eliminate the p-moments and
@@ -110,7 +107,7 @@ contains
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
-    integer :: nsph, h, nb, i, j, x, yr, n, q, info, na, nc, nphi, np, cs, t, pc
+    integer :: nsph, h, i, j, x, yr, n, q, info, na, nc, nphi, np, cs, t, pc
     integer :: lo(5), hi(5), ks(4, 2), bs(4, 2), ps(2)
     integer(8) :: c0, c1, c2, crate
     real(wp) :: d(3), dist
@@ -126,87 +123,88 @@ contains
     end if
     call system_clock(c0, crate)
     h = this%lay%h
-    nb = this%lay%nb
     if (nsph /= this%n .or. .not. allocated(this%k)) then
       this%n = nsph
-      this%nr = 2*h*nsph
-      this%nqt = 2*(h - 3)*nsph
-      this%n6 = 6*nsph
+      call this%idx%init(h, nsph)
+      this%nr = this%idx%nr()
+      this%nqt = this%idx%nqt()
+      this%n6 = this%idx%n6()
       if (allocated(this%k)) deallocate (this%k, this%bp, this%w6, this%bq, this%d6)
       allocate (this%k(this%nr, this%nr), this%bp(h*nsph, h*nsph), this%w6(this%n6, this%n6))
       allocate (this%bq(max(1, this%nqt), 5), this%d6(this%n6, 5))
     end if
-    na = (h - 3)*nsph
-    nc = 3*nsph
-    nphi = h*nsph
-    np = h*nsph
-    ! Grouped local runs: 1 phi n>=2, 2 chi n>=2, 3 phi1, 4 chi1, 5 p.
-    lo = [1, h - 2, 2*h - 5, 2*h - 2, 2*h + 1]
-    hi = [h - 3, 2*h - 6, 2*h - 3, 2*h, 3*h]
+    associate (idx => this%idx)
+      na = (h - 3)*nsph      ! rows of B in run 1
+      nc = 3*nsph            ! rows of B in run 3
+      nphi = h*nsph
+      np = h*nsph
+      lo = idx%lo
+      hi = idx%hi
 
-    this%n_clamped = 0
-    do i = 1, nsph
-      call starts(i, ks(:, 1), bs(:, 1), ps(1))
-      do x = 1, 4
-        do yr = x, 4
-          this%k(ks(yr, 1):ks(yr, 1) + hi(yr) - lo(yr), ks(x, 1):ks(x, 1) + hi(x) - lo(x)) = 0.0_wp
-        end do
-      end do
-      do t = 1, 2*h
-        pc = kpos(t, ks(:, 1))
-        this%k(pc, pc) = 1.0_wp
-      end do
-      this%bp(bs(1, 1):bs(1, 1) + hi(1) - lo(1), ps(1):ps(1) + h - 1) = 0.0_wp
-      this%bp(bs(3, 1):bs(3, 1) + 2, ps(1):ps(1) + h - 1) = 0.0_wp
-      do n = 1, this%lay%order
-        do q = 0, 2*n
-          t = this%lay%grp(this%lay%index(n, fam_phi, q))
-          pc = this%lay%grp(this%lay%index(n, fam_p, q))
-          this%bp(bpos(t, bs(:, 1)), ps(1) + pc - lo(5)) = -this%lay%cn(n)
-        end do
-      end do
-    end do
-
-    do i = 1, nsph
-      call starts(i, ks(:, 1), bs(:, 1), ps(1))
-      do j = i + 1, nsph
-        call starts(j, ks(:, 2), bs(:, 2), ps(2))
-        ! Receiver j (rows), source i (columns).
-        d = r(:, j) - r(:, i)
-        dist = norm2(d)
-        if (dist <= 0.0_wp) then
-          call fatal_error(error, 'multipole system: spheres '//to_str(i)//' and '//to_str(j)//' coincide')
-          this%n = 0
-          return
-        end if
-        if (dist < this%min_distance) then
-          d = d*(this%min_distance/dist)
-          this%n_clamped = this%n_clamped + 1
-        end if
-        call irregular_harmonics(d, 2*this%lay%order, this%ih)
-        call pair_block_grouped(this%lay, d, this%ih, this%y, this%gr)
+      this%n_clamped = 0
+      do i = 1, nsph
+        call starts(i, ks(:, 1), bs(:, 1), ps(1))
         do x = 1, 4
-          if (hi(x) < lo(x)) cycle
-          do yr = 1, 4
-            if (hi(yr) < lo(yr)) cycle
-            if (yr >= x) then
-              this%k(ks(yr, 2):ks(yr, 2) + hi(yr) - lo(yr), ks(x, 1):ks(x, 1) + hi(x) - lo(x)) = &
-                this%gr(lo(yr):hi(yr), lo(x):hi(x))
-            else
-              this%k(ks(x, 1):ks(x, 1) + hi(x) - lo(x), ks(yr, 2):ks(yr, 2) + hi(yr) - lo(yr)) = &
-                transpose(this%gr(lo(yr):hi(yr), lo(x):hi(x)))
-            end if
+          do yr = x, 4
+            this%k(ks(yr, 1):ks(yr, 1) + hi(yr) - lo(yr), ks(x, 1):ks(x, 1) + hi(x) - lo(x)) = 0.0_wp
           end do
         end do
-        do x = 1, 3, 2
-          if (hi(x) < lo(x)) cycle
-          this%bp(bs(x, 2):bs(x, 2) + hi(x) - lo(x), ps(1):ps(1) + h - 1) = &
-            this%gr(lo(x):hi(x), lo(5):hi(5))
-          this%bp(bs(x, 1):bs(x, 1) + hi(x) - lo(x), ps(2):ps(2) + h - 1) = &
-            transpose(this%gr(lo(5):hi(5), lo(x):hi(x)))
+        do t = 1, 2*h
+          pc = idx%k_row(t, i)
+          this%k(pc, pc) = 1.0_wp
+        end do
+        this%bp(bs(1, 1):bs(1, 1) + hi(1) - lo(1), ps(1):ps(1) + h - 1) = 0.0_wp
+        this%bp(bs(3, 1):bs(3, 1) + 2, ps(1):ps(1) + h - 1) = 0.0_wp
+        do n = 1, this%lay%order
+          do q = 0, 2*n
+            t = this%lay%grp(this%lay%index(n, fam_phi, q))
+            pc = this%lay%grp(this%lay%index(n, fam_p, q))
+            this%bp(idx%b_row(t, i), ps(1) + pc - lo(5)) = -this%lay%cn(n)
+          end do
         end do
       end do
-    end do
+
+      do i = 1, nsph
+        call starts(i, ks(:, 1), bs(:, 1), ps(1))
+        do j = i + 1, nsph
+          call starts(j, ks(:, 2), bs(:, 2), ps(2))
+          ! Receiver j (rows), source i (columns).
+          d = r(:, j) - r(:, i)
+          dist = norm2(d)
+          if (dist <= 0.0_wp) then
+            call fatal_error(error, 'multipole system: spheres '//to_str(i)//' and '//to_str(j)//' coincide')
+            this%n = 0
+            return
+          end if
+          if (dist < this%min_distance) then
+            d = d*(this%min_distance/dist)
+            this%n_clamped = this%n_clamped + 1
+          end if
+          call irregular_harmonics(d, 2*this%lay%order, this%ih)
+          call pair_block_grouped(this%lay, d, this%ih, this%y, this%gr)
+          do x = 1, 4
+            if (hi(x) < lo(x)) cycle
+            do yr = 1, 4
+              if (hi(yr) < lo(yr)) cycle
+              if (yr >= x) then
+                this%k(ks(yr, 2):ks(yr, 2) + hi(yr) - lo(yr), ks(x, 1):ks(x, 1) + hi(x) - lo(x)) = &
+                  this%gr(lo(yr):hi(yr), lo(x):hi(x))
+              else
+                this%k(ks(x, 1):ks(x, 1) + hi(x) - lo(x), ks(yr, 2):ks(yr, 2) + hi(yr) - lo(yr)) = &
+                  transpose(this%gr(lo(yr):hi(yr), lo(x):hi(x)))
+              end if
+            end do
+          end do
+          do x = 1, 3, 2
+            if (hi(x) < lo(x)) cycle
+            this%bp(bs(x, 2):bs(x, 2) + hi(x) - lo(x), ps(1):ps(1) + h - 1) = &
+              this%gr(lo(x):hi(x), lo(5):hi(5))
+            this%bp(bs(x, 1):bs(x, 1) + hi(x) - lo(x), ps(2):ps(2) + h - 1) = &
+              transpose(this%gr(lo(5):hi(5), lo(x):hi(x)))
+          end do
+        end do
+      end do
+    end associate
 
     call system_clock(c1)
     ! Exact elimination of the p-moments (their block is the identity): K_phiphi -= B B^T.
@@ -235,39 +233,19 @@ contains
 
   contains
 
-    !> Global starts of the runs of sphere s in K (ksv), in the rows of B (bsv), p column (psv).
+    !> Starts of the runs of sphere s in K (ksv), in the rows of B (bsv) and its p column (psv).
     pure subroutine starts(s, ksv, bsv, psv)
       integer, intent(in) :: s
       integer, intent(out) :: ksv(4), bsv(4), psv
-      ksv(1) = (h - 3)*(s - 1) + 1
-      ksv(2) = (h - 3)*nsph + (h - 3)*(s - 1) + 1
-      ksv(3) = 2*(h - 3)*nsph + 3*(s - 1) + 1
-      ksv(4) = 2*(h - 3)*nsph + 3*nsph + 3*(s - 1) + 1
-      bsv = 0
-      bsv(1) = (h - 3)*(s - 1) + 1
-      bsv(3) = (h - 3)*nsph + 3*(s - 1) + 1
-      psv = h*(s - 1) + 1
-    end subroutine starts
-
-    !> Position in K of grouped local index g (1..2h) given the run starts.
-    pure integer function kpos(g, ksv)
-      integer, intent(in) :: g, ksv(4)
       integer :: rr
-      do rr = 4, 1, -1
-        if (g >= lo(rr)) exit
+      do rr = 1, 4
+        ksv(rr) = this%idx%k_start(rr, s)
       end do
-      kpos = ksv(rr) + g - lo(rr)
-    end function kpos
-
-    !> Row of B of grouped phi index g given the run starts.
-    pure integer function bpos(g, bsv)
-      integer, intent(in) :: g, bsv(4)
-      if (g >= lo(3)) then
-        bpos = bsv(3) + g - lo(3)
-      else
-        bpos = bsv(1) + g - lo(1)
-      end if
-    end function bpos
+      bsv = 0
+      bsv(1) = this%idx%b_start(1, s)
+      bsv(3) = this%idx%b_start(3, s)
+      psv = this%idx%p_start(s)
+    end subroutine starts
 
   end subroutine system_factorise
 
@@ -387,7 +365,7 @@ contains
     do i = 1, this%n
       do q = 0, 4
         t = this%lay%index(2, fam_phi, q)
-        this%bq((this%lay%h - 3)*(i - 1) + q + 1, :) = this%lay%sigma_real(t)*y(q + 1, :)
+        this%bq(this%idx%strain_row(i, q), :) = this%lay%sigma_real(t)*y(q + 1, :)
       end do
     end do
     call dtrsm('L', 'L', 'N', 'N', this%nqt, 5, 1.0_wp, this%k, this%nr, this%bq, this%nqt)
