@@ -66,10 +66,12 @@ NML
       kf_log "the whole reference case (taskset: one core): $dir"
       start=$(date +%s)
       load0=$(cat /proc/loadavg)
-      taskset -c 0 "$KF_ROOT/build/knotflow" "$dir/trefoil.nml" | tee "$dir/log.txt"
+      status=finished
+      taskset -c 0 "$KF_ROOT/build/knotflow" "$dir/trefoil.nml" | tee "$dir/log.txt" || status=failed
       { echo "part = case"; echo "config = trefoil"; echo "t_end = 1000";
         echo "loadavg_start = $load0"; echo "wall_s = $(( $(date +%s) - start ))";
-        echo "loadavg_end = $(cat /proc/loadavg)"; } > "$out/case_trefoil.txt" ;;
+        echo "loadavg_end = $(cat /proc/loadavg)";
+        echo "status = $status (see $dir/log.txt)"; } > "$out/case_trefoil.txt" ;;
     *) kf_die "unknown part '$part' (velocity trajectory speed overlaps scaling profile case)" ;;
   esac
 done

@@ -454,8 +454,9 @@ def reuse_section(runs: dict) -> str:
         out += ["### One reference case, measured", "",
                 "The whole trefoil case (N = 99, A = 2.2, orientation c, t_end = 1000, tolerance "
                 "1e-4) with the adaptive path on one core: **%s s** (load at the start %s, at "
-                "the end %s)." % (ca.get("wall_s"), ca.get("loadavg_start"),
-                                  ca.get("loadavg_end")), ""]
+                "the end %s)%s." % (ca.get("wall_s"), ca.get("loadavg_start"),
+                                    ca.get("loadavg_end"),
+                                    "; status: " + ca["status"] if "status" in ca else ""), ""]
     return "\n".join(out)
 
 
