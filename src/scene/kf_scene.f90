@@ -45,7 +45,7 @@ module kf_scene
     integer :: order = 2                            !< multipole order L
     logical :: lubrication = .true.                 !< multipole: lubrication corrections
     real(wp) :: eps_lub = -1.0_wp                   !< BWE overlap shift; < 0 means the tolerance
-    character(len=name_len) :: update = 'stage'     !< multipole: stage (exact every stage) | adaptive
+    character(len=name_len) :: update = 'adaptive'  !< multipole: adaptive (reuse, the default) | stage (exact every stage)
   end type hydro_params_t
 
   !> &integrator: time stepping.
