@@ -10,6 +10,7 @@ import os
 from .analysis import analyze_case
 from .io import read_case
 from .plot import MODE_NAMES, plot_case
+from .xdmf import write_xdmf, xdmf_path
 
 
 def find_case_files(sweep_dir) -> list:
@@ -53,13 +54,15 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
                          "A": None, "orientation": None, "status": f"unreadable: {exc}",
                          "final_kf": None, "final_state": "-", "transitions": "-",
                          "events": 0, "unknot_then_knot": False, "mode": "-",
-                         "strand_passages": None, "overlap_episodes": None, "figures": []})
+                         "strand_passages": None, "overlap_episodes": None, "figures": [],
+                         "xdmf": None})
             continue
         if case.nframes == 0:
             ana = None
         else:
             ana = analyze_case(case, closures=closures, stride=stride, seed=seed)
         figs = plot_case(case, ana, figdir, movie=movie) if ana is not None else []
+        xdmf_file = _xdmf_beside(path, outdir)
         kinds = [e.kind for e in ana.events] if ana else []
         utk = any(kinds[k] == "unknot" and "knot" in kinds[k + 1:] for k in range(len(kinds)))
         rows.append({
@@ -73,6 +76,7 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
             "strand_passages": _total(case, "strand_passages"),
             "overlap_episodes": _total(case, "overlap_episodes"),
             "figures": [os.path.relpath(f, outdir) for f in figs],
+            "xdmf": os.path.relpath(xdmf_file, outdir) if xdmf_file else None,
         })
     summary_name, summary = _read_summary(sweep_dir)
     md = _markdown(sweep_dir, rows, summary_name, summary)
@@ -82,6 +86,21 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
         fh.write(_html(sweep_dir, rows, summary_name, summary))
     return {"rows": rows, "md": os.path.join(outdir, "report.md"),
             "html": os.path.join(outdir, "report.html")}
+
+
+def _xdmf_beside(path, outdir):
+    """Write the case's XDMF file beside it (in the report directory if that fails)."""
+    try:
+        return write_xdmf(path)
+    except OSError:
+        pass
+    except (KeyError, ValueError):
+        return None
+    try:
+        alt = os.path.join(outdir, os.path.basename(xdmf_path(path)))
+        return write_xdmf(path, alt)
+    except (OSError, KeyError, ValueError):
+        return None
 
 
 def _total(case, name):
@@ -142,9 +161,12 @@ def _markdown(sweep_dir, rows, summary_name, summary) -> str:
         out += ["", f"## Sweep summary ({summary_name})", "", "```", summary.rstrip(), "```"]
     out += ["", "## Figures", ""]
     for r in rows:
-        if r["figures"]:
+        if r["figures"] or r["xdmf"]:
             out.append(f"### {r['name']}")
             out.append("")
+            if r["xdmf"]:
+                out += [f"ParaView / VisIt: open [{os.path.basename(r['xdmf'])}]({r['xdmf']})"
+                        " (XDMF, points into the case file)", ""]
             for f in r["figures"]:
                 if f.endswith(".png") or f.endswith(".gif"):
                     out.append(f"![{os.path.basename(f)}]({f})")
@@ -183,8 +205,12 @@ def _html(sweep_dir, rows, summary_name, summary) -> str:
         out.append(f"<h2>Sweep summary ({e(summary_name)})</h2><pre>{e(summary)}</pre>")
     out.append("<h2>Figures</h2>")
     for r in rows:
-        if r["figures"]:
+        if r["figures"] or r["xdmf"]:
             out.append(f"<h3>{e(str(r['name']))}</h3>")
+            if r["xdmf"]:
+                out.append(f"<p>ParaView / VisIt: open <a href='{e(r['xdmf'])}'>"
+                           f"{e(os.path.basename(r['xdmf']))}</a> (XDMF, points into the case"
+                           " file)</p>")
             for f in r["figures"]:
                 if f.endswith(".png") or f.endswith(".gif"):
                     out.append(f"<img src='{e(f)}' alt='{e(os.path.basename(f))}'>")
