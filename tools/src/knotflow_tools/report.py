@@ -40,8 +40,10 @@ def _state_name(state) -> str:
 
 
 def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
-                 movie: bool = False) -> dict:
-    """Analyse every case of sweep_dir and write report/report.md and report/report.html."""
+                 movie: bool = True, movie_max_frames: int = 40, viewer: bool = True) -> dict:
+    """Analyse every case of sweep_dir and write report/report.md and report/report.html,
+    with a movie of each case (at most ``movie_max_frames`` frames, 640 x 360), an XDMF file
+    beside each case file and (``viewer``) an interactive 3-D viewer per case in the HTML."""
     outdir = os.path.join(sweep_dir, "report")
     figdir = os.path.join(outdir, "figures")
     os.makedirs(figdir, exist_ok=True)
@@ -61,7 +63,8 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
             ana = None
         else:
             ana = analyze_case(case, closures=closures, stride=stride, seed=seed)
-        figs = plot_case(case, ana, figdir, movie=movie) if ana is not None else []
+        figs = plot_case(case, ana, figdir, movie=movie, movie_max_frames=movie_max_frames,
+                         movie_size=(640, 360)) if ana is not None else []
         xdmf_file = _xdmf_beside(path, outdir)
         kinds = [e.kind for e in ana.events] if ana else []
         utk = any(kinds[k] == "unknot" and "knot" in kinds[k + 1:] for k in range(len(kinds)))
@@ -170,6 +173,8 @@ def _markdown(sweep_dir, rows, summary_name, summary) -> str:
             for f in r["figures"]:
                 if f.endswith(".png") or f.endswith(".gif"):
                     out.append(f"![{os.path.basename(f)}]({f})")
+                elif f.endswith(".mp4"):
+                    out.append(f"- movie: [{os.path.basename(f)}]({f})")
                 else:
                     out.append(f"- [{os.path.basename(f)}]({f})")
             out.append("")
@@ -214,6 +219,10 @@ def _html(sweep_dir, rows, summary_name, summary) -> str:
             for f in r["figures"]:
                 if f.endswith(".png") or f.endswith(".gif"):
                     out.append(f"<img src='{e(f)}' alt='{e(os.path.basename(f))}'>")
+                elif f.endswith(".mp4"):
+                    out.append(f"<video controls preload='metadata' width='640' src='{e(f)}'>"
+                               f"</video><p>movie: <a href='{e(f)}'>{e(os.path.basename(f))}"
+                               "</a></p>")
                 else:
                     out.append(f"<p><a href='{e(f)}'>{e(os.path.basename(f))}</a></p>")
     out.append("</body></html>")
