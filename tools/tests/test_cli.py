@@ -99,5 +99,5 @@ def test_report_on_sweep(tmp_path):
     movies = sorted(f for f in figs if f.startswith("A1_a_movie"))
     assert movies and movies[0] in html
     # ParaView-ready XDMF beside each case file, linked from the report
-    assert (sweep / "A1_a.xdmf").is_file() and (sweep / "A2_b.xdmf").is_file()
-    assert "[A1_a.xdmf](../A1_a.xdmf)" in md and "href='../A2_b.xdmf'" in html
+    assert (sweep / "A1_a.xdmf2").is_file() and (sweep / "A2_b.xdmf2").is_file()
+    assert "[A1_a.xdmf2](../A1_a.xdmf2)" in md and "href='../A2_b.xdmf2'" in html

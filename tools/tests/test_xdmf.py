@@ -41,13 +41,13 @@ def test_xdmf_points_into_the_case_file(tmp_path):
     io.write_knots(path, [0, 2, 4], [0.0, 4.0, 8.0], [0.9, 0.5, 0.0],
                    np.zeros((3, 10)), ["3_1", "3_1", "0_1"], 10, 1)
     out = xdmf.write_xdmf(path)
-    assert out == str(tmp_path / "c1.xdmf")
+    assert out == str(tmp_path / "c1.xdmf2")
     root = ET.parse(out).getroot()
     # no data copied: inline items are integer lists (connectivity, bead index, slab bounds)
     for item in root.iter("DataItem"):
         if item.get("Format") == "XML":
             assert item.get("NumberType") == "Int" and "." not in item.text
-    assert root.get("Version") == "3.0"
+    assert root.get("Version") == "2.0"
     steps = root.find("Domain/Grid").findall("Grid")
     assert len(steps) == 5
     n = frames.shape[1]
@@ -120,3 +120,64 @@ def test_xdmf_read_by_vtk(tmp_path):
         assert vtk_to_numpy(fd.GetArray("time"))[0] == times[k]
         assert vtk_to_numpy(fd.GetArray("kf"))[0] == (0.1 if k == 5 else 0.8)
         assert fd.GetArray("rg") is not None and fd.GetArray("close_pairs") is not None
+
+
+_PARAVIEW_SCRIPT = r"""
+import json, sys
+from paraview.simple import OpenDataFile
+from paraview import servermanager as sm
+r = OpenDataFile(sys.argv[1])          # the reader ParaView picks for the file name
+out = {"reader": r.GetXMLName(), "steps": list(r.TimestepValues), "frames": []}
+for t in out["steps"]:
+    r.UpdatePipeline(t)
+    d = sm.Fetch(r)
+    if d.IsA("vtkMultiBlockDataSet"):
+        d = d.GetBlock(0)
+    fd = d.GetFieldData()
+    out["frames"].append({
+        "points": d.GetNumberOfPoints(), "cells": d.GetNumberOfCells(),
+        "cell_type": d.GetCellType(0), "cell_points": d.GetCell(0).GetNumberOfPoints(),
+        "xyz": [list(d.GetPoint(i)) for i in range(d.GetNumberOfPoints())],
+        "bead_last": d.GetPointData().GetArray("bead").GetValue(d.GetNumberOfPoints() - 1),
+        "kf": fd.GetArray("kf").GetValue(0), "rg": fd.GetArray("rg").GetValue(0)})
+print("RESULT" + json.dumps(out))
+"""
+
+
+def _paraview_python():
+    import shutil
+    import subprocess
+    for exe in ("pvpython", "/usr/bin/python3"):
+        path = shutil.which(exe)
+        if path and subprocess.run([path, "-c", "import paraview.simple"],
+                                   capture_output=True).returncode == 0:
+            return path
+    return None
+
+
+def test_xdmf_opened_by_paraview(tmp_path):
+    """ParaView itself (pvpython, or Debian's python3-paraview) opens <case>.xdmf2."""
+    import json
+    import subprocess
+    py = _paraview_python()
+    if py is None:
+        pytest.skip("ParaView's Python not found (Debian: apt-get install python3-paraview): "
+                    "XDMF not opened by ParaView")
+    frames = unknotting_trefoil_frames(3)
+    path = write_case(tmp_path / "p.h5", frames, time=[0.0, 0.5, 1.0])
+    io.write_knots(path, [0, 2], [0.0, 1.0], [0.75, 0.25], np.zeros((2, 10)), ["3_1", "0_1"],
+                   10, 1)
+    script = tmp_path / "pv.py"
+    script.write_text(_PARAVIEW_SCRIPT)
+    env = dict(os.environ, PYTHONPATH="", PYTHONNOUSERSITE="1")
+    run = subprocess.run([py, str(script), xdmf.write_xdmf(path)], capture_output=True,
+                         text=True, env=env, timeout=300)
+    lines = [ln for ln in run.stdout.splitlines() if ln.startswith("RESULT")]
+    assert run.returncode == 0 and lines, run.stderr[-2000:]
+    out = json.loads(lines[0][6:])
+    assert out["reader"] == "XdmfReader" and out["steps"] == [0.0, 0.5, 1.0]
+    n = frames.shape[1]
+    for k, fr in enumerate(out["frames"]):
+        assert (fr["points"], fr["cells"], fr["cell_type"], fr["cell_points"]) == (n, 1, 4, n)
+        assert np.allclose(fr["xyz"], frames[k]) and fr["bead_last"] == n - 1
+        assert fr["kf"] == (0.25 if k == 2 else 0.75)

@@ -1,6 +1,9 @@
-"""XDMF (3.0) description of a case file, for ParaView, VisIt and other XDMF readers.
+"""XDMF description of a case file, for ParaView and VisIt.
 
-The XDMF file is plain XML written beside the case file.  It copies no data: every time step
+The XDMF file (``<case>.xdmf2``, XDMF 2 as read by ParaView's "Xdmf Reader" and VisIt's Xdmf
+plugin) is plain XML written beside the case file.  The suffix ``.xdmf2`` makes ParaView open
+it with its "Xdmf Reader" without asking: ParaView's Xdmf3 readers (5.11) do not read
+``HyperSlab`` items (they abort or return no points).  It copies no data: every time step
 is a hyperslab of ``/frames/positions`` (one frame, all beads) and every per-frame value a
 one-element hyperslab of its ``/frames/...`` dataset, read from the case file by the viewer.
 Only the fixed integer lists (the polyline connectivity and the bead index) are written inline.
@@ -24,7 +27,7 @@ import xml.etree.ElementTree as ET
 import h5py
 import numpy as np
 
-XDMF_SUFFIX = ".xdmf"
+XDMF_SUFFIX = ".xdmf2"
 
 # numpy dtype kind + size -> (XDMF NumberType, Precision)
 _NUMBER_TYPES = {("f", 8): ("Float", "8"), ("f", 4): ("Float", "4"),
@@ -33,7 +36,7 @@ _NUMBER_TYPES = {("f", 8): ("Float", "8"), ("f", 4): ("Float", "4"),
 
 
 def xdmf_path(case_path) -> str:
-    """The XDMF file written beside a case file: ``<case>.xdmf`` (``.h5`` replaced)."""
+    """The XDMF file written beside a case file: ``<case>.xdmf2`` (``.h5`` replaced)."""
     base = str(case_path)
     for ext in (".h5", ".hdf5"):
         if base.endswith(ext):
@@ -127,7 +130,7 @@ def build_xdmf(case_path, out_path=None) -> ET.ElementTree:
     case_path = os.path.abspath(str(case_path))
     out_path = os.path.abspath(out_path or xdmf_path(case_path))
     href = os.path.relpath(case_path, os.path.dirname(out_path))
-    root = ET.Element("Xdmf", Version="3.0")
+    root = ET.Element("Xdmf", Version="2.0")
     domain = ET.SubElement(root, "Domain")
     with h5py.File(case_path, "r") as f:
         pos = f["frames/positions"]
@@ -178,7 +181,7 @@ def build_xdmf(case_path, out_path=None) -> ET.ElementTree:
 
 
 def write_xdmf(case_path, out_path=None) -> str:
-    """Write the XDMF file of a case file (default: beside it, ``<case>.xdmf``); returns its
+    """Write the XDMF file of a case file (default: beside it, ``<case>.xdmf2``); returns its
     path.  Re-run it after the case file gained frames or /analysis."""
     out_path = out_path or xdmf_path(case_path)
     tree = build_xdmf(case_path, out_path)
@@ -198,12 +201,12 @@ def main(argv=None) -> int:
     import sys
     p = argparse.ArgumentParser(
         prog="knotflow-xdmf",
-        description="Write an XDMF file beside each case file (ParaView, VisIt: File > Open "
-                    "<case>.xdmf, 'Xdmf3 Reader'); it points into the case file, copying no "
-                    "data.")
+        description="Write an XDMF file <case>.xdmf2 beside each case file for ParaView "
+                    "(File > Open: its 'Xdmf Reader') and VisIt (open as type Xdmf); it points "
+                    "into the case file, copying no data.")
     p.add_argument("cases", nargs="+", help="HDF5 case files")
     p.add_argument("--out", default=None,
-                   help="output file (only with one case file; default <case>.xdmf)")
+                   help="output file (only with one case file; default <case>.xdmf2)")
     args = p.parse_args(argv)
     if args.out and len(args.cases) != 1:
         print("knotflow-xdmf: error: --out needs exactly one case file", file=sys.stderr)
