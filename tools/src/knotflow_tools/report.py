@@ -57,7 +57,7 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
                          "final_kf": None, "final_state": "-", "transitions": "-",
                          "events": 0, "unknot_then_knot": False, "mode": "-",
                          "strand_passages": None, "overlap_episodes": None, "figures": [],
-                         "xdmf": None})
+                         "xdmf": None, "viewer": None})
             continue
         if case.nframes == 0:
             ana = None
@@ -66,6 +66,10 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
         figs = plot_case(case, ana, figdir, movie=movie, movie_max_frames=movie_max_frames,
                          movie_size=(640, 360)) if ana is not None else []
         xdmf_file = _xdmf_beside(path, outdir)
+        view = None
+        if viewer and ana is not None:
+            from .viewer import viewer_html
+            view = viewer_html(case, kf=(ana.time, ana.kf), div_id=f"viewer-{len(rows)}")
         kinds = [e.kind for e in ana.events] if ana else []
         utk = any(kinds[k] == "unknot" and "knot" in kinds[k + 1:] for k in range(len(kinds)))
         rows.append({
@@ -80,6 +84,7 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
             "overlap_episodes": _total(case, "overlap_episodes"),
             "figures": [os.path.relpath(f, outdir) for f in figs],
             "xdmf": os.path.relpath(xdmf_file, outdir) if xdmf_file else None,
+            "viewer": view,
         })
     summary_name, summary = _read_summary(sweep_dir)
     md = _markdown(sweep_dir, rows, summary_name, summary)
@@ -162,7 +167,9 @@ def _markdown(sweep_dir, rows, summary_name, summary) -> str:
         out.append("(no cases with both forces.bending_a and chain.orientation)")
     if summary is not None:
         out += ["", f"## Sweep summary ({summary_name})", "", "```", summary.rstrip(), "```"]
-    out += ["", "## Figures", ""]
+    out += ["", "## Figures", "",
+            "report.html has an interactive 3-D view of each case (rotate, zoom, time slider).",
+            ""]
     for r in rows:
         if r["figures"] or r["xdmf"]:
             out.append(f"### {r['name']}")
@@ -183,7 +190,11 @@ def _markdown(sweep_dir, rows, summary_name, summary) -> str:
 
 def _html(sweep_dir, rows, summary_name, summary) -> str:
     e = html.escape
-    out = ["<!DOCTYPE html><html><head><meta charset='utf-8'>",
+    plotly_js = ""
+    if any(r.get("viewer") for r in rows):
+        from .viewer import plotly_js_tag
+        plotly_js = plotly_js_tag()
+    out = ["<!DOCTYPE html><html><head><meta charset='utf-8'>", plotly_js,
            f"<title>knotflow sweep report: {e(str(sweep_dir))}</title>",
            "<style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}"
            "td,th{border:1px solid #999;padding:3px 8px}img{max-width:900px;display:block;"
@@ -210,8 +221,13 @@ def _html(sweep_dir, rows, summary_name, summary) -> str:
         out.append(f"<h2>Sweep summary ({e(summary_name)})</h2><pre>{e(summary)}</pre>")
     out.append("<h2>Figures</h2>")
     for r in rows:
-        if r["figures"] or r["xdmf"]:
+        if r["figures"] or r["xdmf"] or r.get("viewer"):
             out.append(f"<h3>{e(str(r['name']))}</h3>")
+            if r.get("viewer"):
+                out.append("<p>Interactive 3-D view: drag to rotate, scroll to zoom, move the "
+                           "time slider; the title gives the frame's time and k<sub>f</sub>."
+                           "</p>")
+                out.append(f"<div class='viewer'>{r['viewer']}</div>")
             if r["xdmf"]:
                 out.append(f"<p>ParaView / VisIt: open <a href='{e(r['xdmf'])}'>"
                            f"{e(os.path.basename(r['xdmf']))}</a> (XDMF, points into the case"
