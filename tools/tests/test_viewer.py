@@ -31,6 +31,9 @@ def test_viewer_figure(tmp_path):
     assert [f.name for f in fig.frames] == ["0", "2", "4", "6", "8"]
     assert "k<sub>f</sub> = 0.900" in fig.frames[0].layout.title.text
     assert "frame 8, t = 10, k<sub>f</sub> = 0.050" in fig.frames[-1].layout.title.text
+    # frames between analysed ones: k_f of the latest analysed frame, with its time
+    assert fig.frames[1].layout.title.text.endswith("frame 2, t = 2.5, k<sub>f</sub> = 0.900 "
+                                                    "(at t = 0)")
     scene = fig.layout.scene
     assert scene.aspectmode == "cube"
     assert tuple(scene.xaxis.range) == tuple(scene.yaxis.range) == tuple(scene.zaxis.range)

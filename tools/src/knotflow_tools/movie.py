@@ -175,12 +175,6 @@ class MovieFigure:
         r = self.case.positions[fi]
         return r - r.mean(axis=0)
 
-    def _kf_at(self, t):
-        if self.kf is None or not len(self.kf[0]):
-            return None
-        k = int(np.searchsorted(self.kf[0], t, side="right")) - 1
-        return float(self.kf[1][max(k, 0)])
-
     def draw(self, fi: int) -> None:
         r = self._centred(fi)
         self.l1.set_data_3d(*r[: self.h + 1].T)
@@ -189,8 +183,10 @@ class MovieFigure:
         t = float(self.case.time[fi])
         for m in self.markers:
             m.set_xdata([t, t])
-        kf = self._kf_at(t)
-        kf_text = f",  $k_f$ = {kf:.2f}" if kf is not None else ""
+        kf_text = ""
+        if self.kf is not None and len(self.kf[0]):
+            from .viewer import kf_label
+            kf_text = ",  " + kf_label(self.kf, t, sub="$_f$")
         self.title.set_text(f"{self.case.name}: frame {fi}, t = {t:.4g}{kf_text}")
 
     def close(self):

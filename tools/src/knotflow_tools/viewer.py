@@ -28,18 +28,27 @@ def plotly_js_tag() -> str:
     return "<script type='text/javascript'>" + get_plotlyjs() + "</script>"
 
 
-def _kf_at(kf, t):
+def kf_at(kf, t):
+    """(k_f, its time) of the latest analysed frame at or before time t, or None."""
     if kf is None or not len(kf[0]):
         return None
     k = int(np.searchsorted(kf[0], t, side="right")) - 1
-    return float(kf[1][k]) if k >= 0 else None
+    return (float(kf[1][k]), float(kf[0][k])) if k >= 0 else None
+
+
+def kf_label(kf, t, sub="<sub>f</sub>") -> str:
+    """'k_f = 0.830', with '(at t = ...)' when it comes from an earlier analysed frame."""
+    found = kf_at(kf, t)
+    if found is None:
+        return f"k{sub}: not analysed"
+    value, tk = found
+    at = "" if abs(tk - t) <= 1e-9 * max(1.0, abs(t)) else f" (at t = {tk:.4g})"
+    return f"k{sub} = {value:.3f}{at}"
 
 
 def _title(case, fi, kf):
     t = float(case.time[fi])
-    v = _kf_at(kf, t)
-    kf_text = f"k<sub>f</sub> = {v:.3f}" if v is not None else "k<sub>f</sub>: not analysed"
-    return f"{_html.escape(case.name)}: frame {fi}, t = {t:.4g}, {kf_text}"
+    return f"{_html.escape(case.name)}: frame {fi}, t = {t:.4g}, {kf_label(kf, t)}"
 
 
 def viewer_figure(case: Case, kf=None, max_frames: int = VIEWER_MAX_FRAMES):
