@@ -2,6 +2,7 @@
 
 import io as _io
 import json
+import os
 import shutil
 import subprocess
 
@@ -86,3 +87,30 @@ def test_movie_command(tmp_path, capsys):
         assert int(info["nb_read_frames"]) == 3 and duration == pytest.approx(1.0, abs=0.05)
     assert movie.main([str(path), "--stride", "0"]) == 2
     assert "stride" in capsys.readouterr().err
+
+
+def test_knot_core_highlight(tmp_path):
+    frames = unknotting_trefoil_frames(6)
+    path = write_case(tmp_path / "k.h5", frames)
+    n = frames.shape[1]
+    mat = np.full((n, n), np.nan)
+    mat[0, n - 1] = 1.0
+    mat[5, 40] = 0.9                              # the shortest knotted subchain
+    mat[6, 20] = 0.2
+    io.write_knot_matrix(path, 2, mat, 10, 10, 2.0)
+    case = io.read_case(path)
+    assert movie.knot_cores(case) == {2: (5, 40)}
+    mf = movie.MovieFigure(case, range(6), cores=movie.knot_cores(case), width=320, height=200)
+    try:
+        assert mf.core_at(1) is None and mf.core_at(2) == (5, 40, 2) and mf.core_at(5)
+        mf.draw(1)
+        assert len(mf.core.get_data_3d()[0]) == 0
+        mf.draw(4)
+        r = case.positions[4] - case.positions[4].mean(axis=0)
+        assert np.allclose(np.array(mf.core.get_data_3d()).T, r[5:41])
+        assert "knot core: beads 5-40 (knot matrix of frame 2)" in mf.title.get_text()
+    finally:
+        mf.close()
+    out = movie.render_movie(case, tmp_path / "k.gif", frames=[1, 3], width=160, height=120,
+                             knot_core=True, progress=False)
+    assert os.path.getsize(out) > 1000

@@ -2,8 +2,9 @@
 
 The chain is drawn with equal axis scales (a cube of fixed size about the centre of mass, so
 the zoom does not change during the movie), the first half of the beads blue and the second
-orange (the study's colouring), the first bead a black square, and arrows marking the flow
-direction x and the vorticity direction y.  Beside it: k_f(t) (when known) and the shape panels
+orange (the study's colouring), the first bead a black square, arrows marking the flow
+direction x and the vorticity direction y, and optionally the knot core of the stored knot
+matrices as a grey band.  Beside it: k_f(t) (when known) and the shape panels
 (R_g and the semi-axes a, b, c; the angles theta and phi), each with a marker at the frame's
 time.  MP4 (H.264, yuv420p) is written with ffmpeg when it is on PATH; otherwise, or with
 ``fmt="gif"``, an animated GIF with Pillow.
@@ -109,15 +110,17 @@ class MovieFigure:
     """The movie's figure; ``draw(fi)`` updates it to frame fi."""
 
     def __init__(self, case: Case, frames, kf=None, width: int = 960, height: int = 540,
-                 elev: float = 20.0, azim: float = -60.0, dpi: int = 100):
+                 elev: float = 20.0, azim: float = -60.0, dpi: int = 100, cores=None):
         self.case = case
+        self.cores = dict(sorted((cores or {}).items()))
         self.frames = list(frames)
         self.dpi = dpi
         self.fig = plt.figure(figsize=(width / dpi, height / dpi), dpi=dpi)
         obs = observables_of(case)
         t = case.time
+        top = 0.86 if self.cores else 0.93           # room for a two-line title
         gs = self.fig.add_gridspec(3, 2, width_ratios=(1.25, 1.0), left=0.0, right=0.97,
-                                   top=0.93, bottom=0.1, hspace=0.35, wspace=0.12)
+                                   top=top, bottom=0.1, hspace=0.35, wspace=0.12)
         ax3 = self.fig.add_subplot(gs[:, 0], projection="3d")
         self.ax3 = ax3
         self.half = _cube(case.positions, self.frames)
@@ -137,6 +140,7 @@ class MovieFigure:
         (self.l1,) = ax3.plot(*r[: self.h + 1].T, "-o", ms=2.0, lw=1.4, color=COL_FIRST)
         (self.l2,) = ax3.plot(*r[self.h:].T, "-o", ms=2.0, lw=1.4, color=COL_SECOND)
         (self.b0,) = ax3.plot(*r[:1].T, "s", ms=4.5, color="k")
+        (self.core,) = ax3.plot([], [], [], "-", lw=7, color="0.15", alpha=0.35, zorder=0)
         self.title = self.fig.suptitle("", fontsize=9)
         self.markers = []
         panels = []
@@ -175,11 +179,26 @@ class MovieFigure:
         r = self.case.positions[fi]
         return r - r.mean(axis=0)
 
+    def core_at(self, fi: int):
+        """(i, j, matrix frame) of the knot core of the latest stored knot matrix at or before
+        frame fi, or None (no matrix yet, or unknotted)."""
+        found = None
+        for mf, core in self.cores.items():
+            if mf > fi:
+                break
+            found = (core[0], core[1], mf) if core is not None else None
+        return found
+
     def draw(self, fi: int) -> None:
         r = self._centred(fi)
         self.l1.set_data_3d(*r[: self.h + 1].T)
         self.l2.set_data_3d(*r[self.h:].T)
         self.b0.set_data_3d(*r[:1].T)
+        core = self.core_at(fi)
+        if core is not None:
+            self.core.set_data_3d(*r[core[0]: core[1] + 1].T)
+        else:
+            self.core.set_data_3d([], [], [])
         t = float(self.case.time[fi])
         for m in self.markers:
             m.set_xdata([t, t])
@@ -187,20 +206,31 @@ class MovieFigure:
         if self.kf is not None and len(self.kf[0]):
             from .viewer import kf_label
             kf_text = ",  " + kf_label(self.kf, t, sub="$_f$")
-        self.title.set_text(f"{self.case.name}: frame {fi}, t = {t:.4g}{kf_text}")
+        core_text = (f"\nknot core: beads {core[0]}-{core[1]} (knot matrix of frame {core[2]})"
+                     if core is not None else "")
+        self.title.set_text(f"{self.case.name}: frame {fi}, t = {t:.4g}{kf_text}{core_text}")
 
     def close(self):
         plt.close(self.fig)
 
 
+def knot_cores(case: Case) -> dict:
+    """Stored knot matrix frame -> its knot core (i, j), or None when no subchain is knotted."""
+    from .knots import knot_core
+    return {int(fi): knot_core(mat) for fi, mat in case.knot_matrices.items()}
+
+
 def render_movie(case: Case, out, frames=None, kf=None, fps: int = 10, width: int = 960,
                  height: int = 540, elev: float = 20.0, azim: float = -60.0,
-                 fmt: str | None = None, progress: bool = True, stream=None) -> str:
+                 fmt: str | None = None, progress: bool = True, stream=None,
+                 knot_core: bool = False) -> str:
     """Render the movie of ``frames`` (default: all) to ``out``; returns the written path.
 
     ``kf`` is ``(time, kf)`` of the analysed frames (or None: no k_f panel).  ``fmt`` is
     ``"mp4"`` or ``"gif"``; by default the suffix of ``out`` decides, and MP4 falls back to GIF
-    (suffix changed) when ffmpeg is missing."""
+    (suffix changed) when ffmpeg is missing.  ``knot_core``: highlight the knot core (shortest
+    knotted subchain) of the latest stored knot matrix (``/analysis/knot_matrix``) at or before
+    each frame."""
     from matplotlib import animation
     frames = list(range(case.nframes)) if frames is None else list(frames)
     if not frames:
@@ -218,7 +248,8 @@ def render_movie(case: Case, out, frames=None, kf=None, fps: int = 10, width: in
         fmt = "gif"
     out = f"{base}.{fmt}"
     width, height = _even(width), _even(height)
-    mf = MovieFigure(case, frames, kf=kf, width=width, height=height, elev=elev, azim=azim)
+    mf = MovieFigure(case, frames, kf=kf, width=width, height=height, elev=elev, azim=azim,
+                     cores=knot_cores(case) if knot_core else None)
     if fmt == "mp4":
         writer = animation.FFMpegWriter(fps=fps, codec="libx264",
                                         extra_args=["-pix_fmt", "yuv420p", "-preset", "fast"])
@@ -278,6 +309,9 @@ def main(argv=None) -> int:
     p.add_argument("--closures", type=int, default=0,
                    help="without /analysis: compute k_f on the movie frames with this many "
                         "closures (default 0: no k_f panel)")
+    p.add_argument("--knot-core", action="store_true",
+                   help="highlight the knot core of the latest stored knot matrix at or before "
+                        "each frame (/analysis/knot_matrix)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = p.parse_args(argv)
     try:
@@ -290,7 +324,8 @@ def main(argv=None) -> int:
         out = args.out or (os.path.splitext(args.case)[0] + (".gif" if args.gif else ".mp4"))
         path = render_movie(case, out, frames, kf=kf, fps=args.fps, width=args.width,
                             height=args.height, elev=args.elev, azim=args.azim,
-                            fmt="gif" if args.gif else None, progress=not args.no_progress)
+                            fmt="gif" if args.gif else None, progress=not args.no_progress,
+                            knot_core=args.knot_core)
     except (OSError, KeyError, ValueError, RuntimeError) as exc:
         print(f"knotflow-movie: error: {exc}", file=sys.stderr)
         return 2

@@ -163,7 +163,7 @@ def make_movie(case: Case, out_base, stride: int = 1, fps: int = 10, kf=None,
     from .movie import movie_frames, render_movie
     frames = movie_frames(case.nframes, stride=max(1, stride), max_frames=max_frames)
     return render_movie(case, f"{out_base}.mp4", frames, kf=kf, fps=fps, width=width,
-                        height=height, progress=progress)
+                        height=height, progress=progress, knot_core=True)
 
 
 def plot_case(case: Case, ana: CaseAnalysis, outdir, movie: bool = False,
