@@ -114,3 +114,18 @@ def test_knot_core_highlight(tmp_path):
     out = movie.render_movie(case, tmp_path / "k.gif", frames=[1, 3], width=160, height=120,
                              knot_core=True, progress=False)
     assert os.path.getsize(out) > 1000
+
+
+def test_report_survives_a_failing_movie(tmp_path, monkeypatch, capsys):
+    from knotflow_tools import report
+    sweep = tmp_path / "sweep"
+    sweep.mkdir()
+    write_case(sweep / "f.h5", unknotting_trefoil_frames(3))
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("ffmpeg exploded")
+
+    monkeypatch.setattr(movie, "render_movie", broken)
+    res = report.build_report(str(sweep), closures=5, viewer=False)
+    assert not any("movie" in f for f in res["rows"][0]["figures"])
+    assert "movie of f not written: ffmpeg exploded" in capsys.readouterr().err

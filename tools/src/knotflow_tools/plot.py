@@ -177,9 +177,14 @@ def plot_case(case: Case, ana: CaseAnalysis, outdir, movie: bool = False,
         files.append(plot_knot_matrix(mat, f"{base}_knot_matrix_{fi}.png",
                                       f"{case.name}: knot matrix, frame {fi}"))
     if movie:
-        files.append(make_movie(case, f"{base}_movie", stride=movie_stride,
-                                kf=(ana.time, ana.kf), max_frames=movie_max_frames,
-                                width=movie_size[0], height=movie_size[1]))
+        import subprocess
+        import sys
+        try:
+            files.append(make_movie(case, f"{base}_movie", stride=movie_stride,
+                                    kf=(ana.time, ana.kf), max_frames=movie_max_frames,
+                                    width=movie_size[0], height=movie_size[1]))
+        except (OSError, RuntimeError, ValueError, subprocess.CalledProcessError) as exc:
+            print(f"knotflow: movie of {case.name} not written: {exc}", file=sys.stderr)
     return files
 
 

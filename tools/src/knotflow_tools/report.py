@@ -6,6 +6,7 @@ import glob
 import html
 import json
 import os
+import sys
 
 from .analysis import analyze_case
 from .io import read_case
@@ -68,8 +69,12 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
         xdmf_file = _xdmf_beside(path, outdir)
         view = None
         if viewer and ana is not None:
-            from .viewer import viewer_html
-            view = viewer_html(case, kf=(ana.time, ana.kf), div_id=f"viewer-{len(rows)}")
+            try:
+                from .viewer import viewer_html
+                view = viewer_html(case, kf=(ana.time, ana.kf), div_id=f"viewer-{len(rows)}")
+            except ImportError as exc:          # plotly missing: the report without views
+                print(f"knotflow-report: no 3-D view ({exc}); pip install plotly",
+                      file=sys.stderr)
         kinds = [e.kind for e in ana.events] if ana else []
         utk = any(kinds[k] == "unknot" and "knot" in kinds[k + 1:] for k in range(len(kinds)))
         rows.append({
