@@ -6,6 +6,7 @@
 #   KNOTFLOW_JOBS      parallel build/test jobs (default 2)
 #   KNOTFLOW_PYTHON    Python interpreter to use (default: python3 on PATH)
 #   KNOTFLOW_NO_INSTALL=1  never install anything (only check and report what is missing)
+#   KNOTFLOW_NO_OPTIONAL=1 skip the optional system packages (ffmpeg, chromium)
 
 KF_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 KF_JOBS="${KNOTFLOW_JOBS:-2}"
@@ -32,6 +33,30 @@ kf_as_root() {
 KF_APT_PACKAGES=(gcc gfortran cmake make git pkg-config openssh-client libopenmpi-dev openmpi-bin libhdf5-dev
                  libopenblas-dev liblapack-dev libfftw3-dev python3 python3-pip python3-venv)
 
+# Optional system packages: ffmpeg (MP4 movies; without it GIFs) and chromium (the browser test
+# of the report's 3-D viewer; skipped without it).  Installed when missing; a failure is only a
+# warning.
+KF_APT_OPTIONAL=(ffmpeg chromium)
+
+kf_ensure_optional_packages() {
+  [ "${KNOTFLOW_NO_OPTIONAL:-0}" = 1 ] && return 0
+  command -v dpkg >/dev/null 2>&1 || return 0
+  local missing=() pkg
+  for pkg in "${KF_APT_OPTIONAL[@]}"; do
+    dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
+  done
+  [ "${#missing[@]}" -eq 0 ] && return 0
+  if [ "${KNOTFLOW_NO_INSTALL:-0}" = 1 ]; then
+    kf_log "optional packages missing (movies as GIF, browser test skipped): ${missing[*]}"
+    return 0
+  fi
+  kf_log "installing optional packages: ${missing[*]}"
+  { kf_as_root apt-get update -q </dev/null \
+      && kf_as_root apt-get install -y -q --no-install-recommends "${missing[@]}" </dev/null; } \
+    || kf_log "WARNING: could not install ${missing[*]} (movies as GIF, browser test skipped)"
+  return 0
+}
+
 kf_ensure_system_packages() {
   if ! command -v dpkg >/dev/null 2>&1; then
     kf_log "no dpkg (not Debian-like): skipping system packages; checking the tools instead"
@@ -47,6 +72,7 @@ kf_ensure_system_packages() {
   done
   if [ "${#missing[@]}" -eq 0 ]; then
     kf_log "system packages: all present"
+    kf_ensure_optional_packages
     return 0
   fi
   [ "${KNOTFLOW_NO_INSTALL:-0}" = 1 ] && kf_die "missing system packages: ${missing[*]}"
@@ -55,6 +81,7 @@ kf_ensure_system_packages() {
     || kf_die "apt-get update failed (need root or passwordless sudo); missing: ${missing[*]}"
   kf_as_root apt-get install -y -q --no-install-recommends "${missing[@]}" </dev/null \
     || kf_die "apt-get install failed for: ${missing[*]}"
+  kf_ensure_optional_packages
 }
 
 # Python: the tools package (tools/pyproject.toml, editable, with its [test] extra) or, before
@@ -86,7 +113,14 @@ kf_ensure_python() {
   export PATH
 
   if [ -f "$KF_ROOT/tools/pyproject.toml" ]; then
-    local name location
+    # Installed with the tested versions of tools/constraints.txt.  A stamp in the environment
+    # (sha256 of pyproject.toml + constraints.txt) tells whether it is up to date: a changed
+    # dependency list or pin reinstalls (tools/tests/test_constraints.py reads the stamp).
+    local name location prefix stamp digest constraints=()
+    [ -f "$KF_ROOT/tools/constraints.txt" ] && constraints=(-c "$KF_ROOT/tools/constraints.txt")
+    digest="$(cat "$KF_ROOT/tools/pyproject.toml" "${constraints[@]:1}" | sha256sum | cut -d' ' -f1)"
+    prefix="$("$KF_PY" -c 'import sys; print(sys.prefix)')"
+    stamp="$prefix/knotflow-tools.stamp"
     name="$("$KF_PY" -c 'import sys, tomllib; print(tomllib.load(open(sys.argv[1], "rb"))["project"]["name"])' \
             "$KF_ROOT/tools/pyproject.toml" 2>/dev/null || true)"
     location=""
@@ -95,13 +129,17 @@ kf_ensure_python() {
                   | sed -n 's/^Editable project location: //p' || true)"
     fi
     if [ -n "$location" ] && [ "$(cd "$location" 2>/dev/null && pwd)" = "$KF_ROOT/tools" ] \
-       && "$KF_PY" -c 'import pytest' 2>/dev/null; then
-      kf_log "python: $name already installed (editable) from tools/"
+       && "$KF_PY" -c 'import pytest' 2>/dev/null \
+       && [ "$(cut -d' ' -f1 "$stamp" 2>/dev/null)" = "$digest" ]; then
+      kf_log "python: $name already installed (editable) from tools/, constraints up to date"
     else
-      [ "${KNOTFLOW_NO_INSTALL:-0}" = 1 ] && kf_die "python package in tools/ not installed"
-      kf_log "python: pip install -e tools[test]"
-      "$KF_PY" -m pip install -q --disable-pip-version-check -e "$KF_ROOT/tools[test]" </dev/null \
+      [ "${KNOTFLOW_NO_INSTALL:-0}" = 1 ] && kf_die "python package in tools/ not installed (or outdated)"
+      kf_log "python: pip install ${constraints[*]} -e tools[test]"
+      "$KF_PY" -m pip install -q --disable-pip-version-check "${constraints[@]}" \
+               -e "$KF_ROOT/tools[test]" </dev/null \
         || kf_die "pip install -e tools[test] failed"
+      printf '%s pyproject.toml+constraints.txt\n' "$digest" >"$stamp" \
+        || kf_log "WARNING: cannot write $stamp"
     fi
   else
     local missing=() mod

@@ -35,6 +35,26 @@ if [ -z "$exe" ] || [ ! -x "$exe" ]; then
   kf_die "the knotflow executable was not built"
 fi
 
+# At the end: where the results are and how to reach the Python commands from a new shell.
+kf_where_tools() {
+  local bin
+  bin="$(dirname "$KF_PY")"
+  echo
+  if [ -n "${1:-}" ]; then
+    kf_log "done. Results: $1"
+  else
+    kf_log "done."
+  fi
+  if [ -n "${1:-}" ] && [ -f "$1/report/report.html" ]; then
+    echo "    report:  $1/report/report.html   (movies in report/figures/, <case>.xdmf2 for ParaView)"
+  fi
+  echo "    The Python commands (knotflow-report, knotflow-movie, knotflow-xdmf, knotflow-plot,"
+  echo "    knotflow-kf, ...) are in $bin. In a new shell, either"
+  echo "        source $bin/activate"
+  echo "    or put them on PATH:"
+  echo "        export PATH=\"$bin:\$PATH\""
+}
+
 kf_mpirun_flags
 kf_log "mpirun -n $np ${KF_MPIRUN_FLAGS[*]} $exe $sweep"
 mpirun -n "$np" "${KF_MPIRUN_FLAGS[@]}" "$exe" "$sweep"
@@ -47,6 +67,7 @@ if [ -z "$outdir" ]; then
 fi
 if [ -z "$outdir" ]; then
   kf_log "no output directory known (set KNOTFLOW_OUTPUT_DIR): report skipped"
+  kf_where_tools ""
   exit 0
 fi
 case "$outdir" in
@@ -64,8 +85,9 @@ if [ -x "$analyze" ] && [ "${#cases[@]}" -gt 0 ]; then
 fi
 
 if command -v knotflow-report >/dev/null 2>&1; then
-  kf_log "knotflow-report $outdir"
+  kf_log "knotflow-report $outdir (tables, figures, a movie and an interactive 3-D view per case, XDMF files)"
   knotflow-report "$outdir"
 else
   kf_log "knotflow-report not installed: report skipped (results in $outdir)"
 fi
+kf_where_tools "$outdir"

@@ -95,3 +95,9 @@ def test_report_on_sweep(tmp_path):
     assert "case A1_a finished" in md and "<table>" in html
     figs = os.listdir(sweep / "report" / "figures")
     assert "A1_a_kf.png" in figs and "A2_b_shape.png" in figs
+    # a movie of each case (mp4 with ffmpeg, else gif), linked from the report
+    movies = sorted(f for f in figs if f.startswith("A1_a_movie"))
+    assert movies and movies[0] in html
+    # ParaView-ready XDMF beside each case file, linked from the report
+    assert (sweep / "A1_a.xdmf2").is_file() and (sweep / "A2_b.xdmf2").is_file()
+    assert "[A1_a.xdmf2](../A1_a.xdmf2)" in md and "href='../A2_b.xdmf2'" in html

@@ -164,7 +164,13 @@ def main_report(argv=None) -> int:
     p.add_argument("--stride", type=int, default=0,
                    help="analyse every stride-th frame (0: automatic, at most 100 frames)")
     p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--movie", action="store_true")
+    p.add_argument("--movie", action="store_true",
+                   help="(default) a movie of each case, linked from the report")
+    p.add_argument("--no-movie", action="store_true", help="no movies")
+    p.add_argument("--movie-frames", type=int, default=40,
+                   help="at most this many frames per movie (stride raised; default 40)")
+    p.add_argument("--no-viewer", action="store_true",
+                   help="no interactive 3-D viewer in report.html")
     args = p.parse_args(argv)
     from .report import build_report
     import os
@@ -172,7 +178,8 @@ def main_report(argv=None) -> int:
         print(f"knotflow-report: error: not a directory: {args.sweep_dir}", file=sys.stderr)
         return 2
     res = build_report(args.sweep_dir, closures=args.closures, stride=args.stride,
-                       seed=args.seed, movie=args.movie)
+                       seed=args.seed, movie=not args.no_movie,
+                       movie_max_frames=args.movie_frames, viewer=not args.no_viewer)
     print(res["md"])
     print(res["html"])
     return 0

@@ -128,8 +128,9 @@ def _draw_chain(ax, r):
     ax.plot(r[:h + 1, 0], r[:h + 1, 1], r[:h + 1, 2], "-o", ms=2.5, lw=1.5, color=_COL_FIRST)
     ax.plot(r[h:, 0], r[h:, 1], r[h:, 2], "-o", ms=2.5, lw=1.5, color=_COL_SECOND)
     ax.scatter(*r[0], color="k", s=25, marker="s")
-    ctr = r.mean(axis=0)
+    ctr = 0.5 * (r.min(axis=0) + r.max(axis=0))
     half = max(np.ptp(r, axis=0).max() / 2, 1.0)
+    ax.set_box_aspect((1, 1, 1))      # equal scales: a cube of equal ranges in a cubic box
     ax.set_xlim(ctr[0] - half, ctr[0] + half)
     ax.set_ylim(ctr[1] - half, ctr[1] + half)
     ax.set_zlim(ctr[2] - half, ctr[2] + half)
@@ -155,39 +156,18 @@ def plot_snapshots(case: Case, path, frames=None) -> str:
     return str(path)
 
 
-def make_movie(case: Case, out_base, stride: int = 1, fps: int = 10) -> str:
-    """Animation of the case: ``out_base``.gif with pillow, else a directory of PNG frames."""
-    from matplotlib import animation
-    frames = list(range(0, case.nframes, max(1, stride)))
-    try:
-        import PIL  # noqa: F401
-        have_pillow = True
-    except ImportError:
-        have_pillow = False
-    fig = plt.figure(figsize=(5, 5))
-    ax = fig.add_subplot(projection="3d")
-
-    def draw(fi):
-        ax.cla()
-        _draw_chain(ax, case.positions[fi])
-        ax.set_title(f"{case.name}: t = {case.time[fi]:.4g}", fontsize=9)
-
-    if have_pillow:
-        path = f"{out_base}.gif"
-        anim = animation.FuncAnimation(fig, draw, frames=frames, interval=1000 // fps)
-        anim.save(path, writer=animation.PillowWriter(fps=fps))
-    else:
-        path = f"{out_base}_frames"
-        os.makedirs(path, exist_ok=True)
-        for k, fi in enumerate(frames):
-            draw(fi)
-            fig.savefig(os.path.join(path, f"frame_{k:05d}.png"), dpi=80)
-    plt.close(fig)
-    return path
+def make_movie(case: Case, out_base, stride: int = 1, fps: int = 10, kf=None,
+               max_frames: int = 0, width: int = 960, height: int = 540,
+               progress: bool = False) -> str:
+    """Movie of the case (``movie.render_movie``): ``out_base``.mp4 with ffmpeg, else .gif."""
+    from .movie import movie_frames, render_movie
+    frames = movie_frames(case.nframes, stride=max(1, stride), max_frames=max_frames)
+    return render_movie(case, f"{out_base}.mp4", frames, kf=kf, fps=fps, width=width,
+                        height=height, progress=progress, knot_core=True)
 
 
 def plot_case(case: Case, ana: CaseAnalysis, outdir, movie: bool = False,
-              movie_stride: int = 1) -> list:
+              movie_stride: int = 1, movie_max_frames: int = 0, movie_size=(960, 540)) -> list:
     """All figures of a case into outdir; returns the written paths."""
     os.makedirs(outdir, exist_ok=True)
     base = os.path.join(outdir, _safe(case.name))
@@ -197,7 +177,14 @@ def plot_case(case: Case, ana: CaseAnalysis, outdir, movie: bool = False,
         files.append(plot_knot_matrix(mat, f"{base}_knot_matrix_{fi}.png",
                                       f"{case.name}: knot matrix, frame {fi}"))
     if movie:
-        files.append(make_movie(case, f"{base}_movie", stride=movie_stride))
+        import subprocess
+        import sys
+        try:
+            files.append(make_movie(case, f"{base}_movie", stride=movie_stride,
+                                    kf=(ana.time, ana.kf), max_frames=movie_max_frames,
+                                    width=movie_size[0], height=movie_size[1]))
+        except (OSError, RuntimeError, ValueError, subprocess.CalledProcessError) as exc:
+            print(f"knotflow: movie of {case.name} not written: {exc}", file=sys.stderr)
     return files
 
 

@@ -6,10 +6,12 @@ import glob
 import html
 import json
 import os
+import sys
 
 from .analysis import analyze_case
 from .io import read_case
 from .plot import MODE_NAMES, plot_case
+from .xdmf import write_xdmf, xdmf_path
 
 
 def find_case_files(sweep_dir) -> list:
@@ -39,8 +41,10 @@ def _state_name(state) -> str:
 
 
 def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
-                 movie: bool = False) -> dict:
-    """Analyse every case of sweep_dir and write report/report.md and report/report.html."""
+                 movie: bool = True, movie_max_frames: int = 40, viewer: bool = True) -> dict:
+    """Analyse every case of sweep_dir and write report/report.md and report/report.html,
+    with a movie of each case (at most ``movie_max_frames`` frames, 640 x 360), an XDMF file
+    beside each case file and (``viewer``) an interactive 3-D viewer per case in the HTML."""
     outdir = os.path.join(sweep_dir, "report")
     figdir = os.path.join(outdir, "figures")
     os.makedirs(figdir, exist_ok=True)
@@ -53,13 +57,24 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
                          "A": None, "orientation": None, "status": f"unreadable: {exc}",
                          "final_kf": None, "final_state": "-", "transitions": "-",
                          "events": 0, "unknot_then_knot": False, "mode": "-",
-                         "strand_passages": None, "overlap_episodes": None, "figures": []})
+                         "strand_passages": None, "overlap_episodes": None, "figures": [],
+                         "xdmf": None, "viewer": None})
             continue
         if case.nframes == 0:
             ana = None
         else:
             ana = analyze_case(case, closures=closures, stride=stride, seed=seed)
-        figs = plot_case(case, ana, figdir, movie=movie) if ana is not None else []
+        figs = plot_case(case, ana, figdir, movie=movie, movie_max_frames=movie_max_frames,
+                         movie_size=(640, 360)) if ana is not None else []
+        xdmf_file = _xdmf_beside(path, outdir)
+        view = None
+        if viewer and ana is not None:
+            try:
+                from .viewer import viewer_html
+                view = viewer_html(case, kf=(ana.time, ana.kf), div_id=f"viewer-{len(rows)}")
+            except ImportError as exc:          # plotly missing: the report without views
+                print(f"knotflow-report: no 3-D view ({exc}); pip install plotly",
+                      file=sys.stderr)
         kinds = [e.kind for e in ana.events] if ana else []
         utk = any(kinds[k] == "unknot" and "knot" in kinds[k + 1:] for k in range(len(kinds)))
         rows.append({
@@ -73,6 +88,8 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
             "strand_passages": _total(case, "strand_passages"),
             "overlap_episodes": _total(case, "overlap_episodes"),
             "figures": [os.path.relpath(f, outdir) for f in figs],
+            "xdmf": os.path.relpath(xdmf_file, outdir) if xdmf_file else None,
+            "viewer": view,
         })
     summary_name, summary = _read_summary(sweep_dir)
     md = _markdown(sweep_dir, rows, summary_name, summary)
@@ -82,6 +99,21 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
         fh.write(_html(sweep_dir, rows, summary_name, summary))
     return {"rows": rows, "md": os.path.join(outdir, "report.md"),
             "html": os.path.join(outdir, "report.html")}
+
+
+def _xdmf_beside(path, outdir):
+    """Write the case's XDMF file beside it (in the report directory if that fails)."""
+    try:
+        return write_xdmf(path)
+    except OSError:
+        pass
+    except (KeyError, ValueError):
+        return None
+    try:
+        alt = os.path.join(outdir, os.path.basename(xdmf_path(path)))
+        return write_xdmf(path, alt)
+    except (OSError, KeyError, ValueError):
+        return None
 
 
 def _total(case, name):
@@ -140,14 +172,21 @@ def _markdown(sweep_dir, rows, summary_name, summary) -> str:
         out.append("(no cases with both forces.bending_a and chain.orientation)")
     if summary is not None:
         out += ["", f"## Sweep summary ({summary_name})", "", "```", summary.rstrip(), "```"]
-    out += ["", "## Figures", ""]
+    out += ["", "## Figures", "",
+            "report.html has an interactive 3-D view of each case (rotate, zoom, time slider).",
+            ""]
     for r in rows:
-        if r["figures"]:
+        if r["figures"] or r["xdmf"]:
             out.append(f"### {r['name']}")
             out.append("")
+            if r["xdmf"]:
+                out += [f"ParaView / VisIt: open [{os.path.basename(r['xdmf'])}]({r['xdmf']})"
+                        " (XDMF, points into the case file)", ""]
             for f in r["figures"]:
                 if f.endswith(".png") or f.endswith(".gif"):
                     out.append(f"![{os.path.basename(f)}]({f})")
+                elif f.endswith(".mp4"):
+                    out.append(f"- movie: [{os.path.basename(f)}]({f})")
                 else:
                     out.append(f"- [{os.path.basename(f)}]({f})")
             out.append("")
@@ -156,7 +195,11 @@ def _markdown(sweep_dir, rows, summary_name, summary) -> str:
 
 def _html(sweep_dir, rows, summary_name, summary) -> str:
     e = html.escape
-    out = ["<!DOCTYPE html><html><head><meta charset='utf-8'>",
+    plotly_js = ""
+    if any(r.get("viewer") for r in rows):
+        from .viewer import plotly_js_tag
+        plotly_js = plotly_js_tag()
+    out = ["<!DOCTYPE html><html><head><meta charset='utf-8'>", plotly_js,
            f"<title>knotflow sweep report: {e(str(sweep_dir))}</title>",
            "<style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}"
            "td,th{border:1px solid #999;padding:3px 8px}img{max-width:900px;display:block;"
@@ -183,11 +226,24 @@ def _html(sweep_dir, rows, summary_name, summary) -> str:
         out.append(f"<h2>Sweep summary ({e(summary_name)})</h2><pre>{e(summary)}</pre>")
     out.append("<h2>Figures</h2>")
     for r in rows:
-        if r["figures"]:
+        if r["figures"] or r["xdmf"] or r.get("viewer"):
             out.append(f"<h3>{e(str(r['name']))}</h3>")
+            if r.get("viewer"):
+                out.append("<p>Interactive 3-D view: drag to rotate, scroll to zoom, move the "
+                           "time slider; the title gives the frame's time and k<sub>f</sub>."
+                           "</p>")
+                out.append(f"<div class='viewer'>{r['viewer']}</div>")
+            if r["xdmf"]:
+                out.append(f"<p>ParaView / VisIt: open <a href='{e(r['xdmf'])}'>"
+                           f"{e(os.path.basename(r['xdmf']))}</a> (XDMF, points into the case"
+                           " file)</p>")
             for f in r["figures"]:
                 if f.endswith(".png") or f.endswith(".gif"):
                     out.append(f"<img src='{e(f)}' alt='{e(os.path.basename(f))}'>")
+                elif f.endswith(".mp4"):
+                    out.append(f"<video controls preload='metadata' width='640' src='{e(f)}'>"
+                               f"</video><p>movie: <a href='{e(f)}'>{e(os.path.basename(f))}"
+                               "</a></p>")
                 else:
                     out.append(f"<p><a href='{e(f)}'>{e(os.path.basename(f))}</a></p>")
     out.append("</body></html>")
