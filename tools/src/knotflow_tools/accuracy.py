@@ -423,7 +423,10 @@ def reuse_section(runs: dict) -> str:
                 for n in sizes]
         out += ["### Cost against N", "",
                 "Adaptive path on self-avoiding random chains (fixed seed, A = 2.2) from t = 0 "
-                "to %s: wall seconds per unit of simulated time. Fitted exponent (log-log, N = "
+                "to %s (the start of a run, where the rule refreshes more often than later: "
+                "the calibration needs two refreshes and the extrapolation grows its interval "
+                "at most threefold per refresh): wall seconds per unit of simulated time. "
+                "Fitted exponent (log-log, N = "
                 "%s–%s): **%s** (load %s)." % (sc.get("t_end"), sc.get("exponent_n_min"),
                                               sc.get("exponent_n_max"), sc.get("exponent"),
                                               sc.get("loadavg_start")), "",
@@ -451,12 +454,12 @@ def reuse_section(runs: dict) -> str:
                 _md_table(["motion", "angle", "amplitude", "largest velocity error"], rows), ""]
     ca = runs.get("case_trefoil")
     if ca:
-        out += ["### One reference case, measured", "",
+        out += ["### One reference case", "",
                 "The whole trefoil case (N = 99, A = 2.2, orientation c, t_end = 1000, tolerance "
-                "1e-4) with the adaptive path on one core: **%s s** (load at the start %s, at "
-                "the end %s)%s." % (ca.get("wall_s"), ca.get("loadavg_start"),
-                                    ca.get("loadavg_end"),
-                                    "; status: " + ca["status"] if "status" in ca else ""), ""]
+                "1e-4) with the adaptive path on one core: status %s; wall time until it ended "
+                "%s s (load at the start %s, at the end %s)." % (
+                    ca.get("status", "unknown"), ca.get("wall_s"), ca.get("loadavg_start"),
+                    ca.get("loadavg_end")), ""]
     return "\n".join(out)
 
 
