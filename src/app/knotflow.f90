@@ -15,6 +15,7 @@ program knotflow
   use kf_fs, only: make_directory, check_writable_directory, lock_directory
   use kf_h5, only: h5_initialize, h5_finalize
   use kf_case_runner, only: run_case, case_path, case_ok, case_failed, case_skipped
+  use kf_case_match, only: check_reusable
   use kf_comm, only: comm_t, comm_init, comm_finalize
   use kf_task_farm, only: run_task_farm, task_result_t, task_ok, task_failed, task_skipped
   use kf_exit, only: exit_program
@@ -48,6 +49,11 @@ program knotflow
   call agree(error)
   if (allocated(error)) call die(trim(scene_file)//': &output: directory = '''//directory// &
                                  ''': '//error%message, 2)
+  ! Existing case files are reused only when they hold the requested scene: refuse otherwise,
+  ! before any case runs.
+  if (me == 0) call check_existing_cases(error)
+  call agree(error)
+  if (allocated(error)) call die(trim(scene_file)//': '//error%message, 2)
 
   if (me == 0) then
     write (output_unit, '(a)') 'knotflow '//knotflow_version//' ('//knotflow_git_hash//'): '// &
@@ -135,6 +141,32 @@ contains
         trim(sc%hydro%model)//', t_end = '//to_str(sc%integrator%t_end, '(g0.6)')//')'
     end do
   end subroutine list_cases
+
+  !> Every finished or interrupted case file of the sweep must hold the requested scene
+  !> (kf_case_match): the first mismatch in full, the others by name.
+  subroutine check_existing_cases(err)
+    type(error_t), allocatable, intent(out) :: err
+    type(error_t), allocatable :: mismatch
+    type(scene_t) :: sc
+    character(len=:), allocatable :: name, others
+    integer :: k, nothers
+    others = ''
+    nothers = 0
+    do k = 1, sw%n_cases()
+      call sw%case_scene(k, sc, name)
+      call check_reusable(case_path(sc), sc, mismatch)
+      if (.not. allocated(mismatch)) cycle
+      if (.not. allocated(err)) then
+        call move_alloc(mismatch, err)
+      else
+        nothers = nothers + 1
+        if (nothers <= 10) others = others//merge(', ', '  ', nothers > 1)//case_path(sc)
+        if (nothers == 11) others = others//', ...'
+      end if
+    end do
+    if (nothers > 0) err%message = err%message//' (and '//to_str(nothers)// &
+      ' more case file(s) with another scene: '//trim(adjustl(others))//')'
+  end subroutine check_existing_cases
 
   !> summary.txt (one line per case) and summary.json in the output directory.
   subroutine write_summary()

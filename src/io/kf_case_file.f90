@@ -2,8 +2,9 @@
 !> analysis tools (schema in the README and in the comments below).
 !>
 !> Layout (shapes as seen from h5py; Fortran writes the transposes):
-!> - root attributes: status, knotflow_version, git_hash, compiler, compiler_flags, case_name,
-!>   n_beads, scene (namelist text), every effective scene variable as '<group>.<variable>',
+!> - root attributes: status, schema_version (int32, `case_schema_version`; files without it
+!>   are schema 1), knotflow_version, git_hash, compiler, compiler_flags, case_name, n_beads,
+!>   scene (namelist text), every effective scene variable as '<group>.<variable>',
 !>   chain.rotation (3x3).
 !> - /frames/time (nframes,), /frames/positions (nframes, N, 3),
 !>   /frames/observables/{rg,a,b,c,theta,phi} (nframes,) float64, .../close_pairs int32,
@@ -52,6 +53,10 @@ module kf_case_file
   private
 
   public :: case_file_status, read_frames
+
+  !> Version of the case file layout written by `create`. 1: files without the attribute
+  !> (before it existed); 2: the attribute itself. Raise it with any change a reader must know.
+  integer(i4), parameter, public :: case_schema_version = 2
 
   integer, parameter :: kind_str = 1, kind_i4 = 2, kind_i8 = 3, kind_real = 4, kind_real1 = 5, &
     kind_real2 = 6
@@ -256,7 +261,8 @@ contains
     this%diagnostics = .false.
     call h5_write_attr(this%file, '/', 'status', 'running', error)
     if (allocated(error)) return
-    call h5_write_attr(this%file, '/', 'knotflow_version', knotflow_version, error)
+    call h5_write_attr(this%file, '/', 'schema_version', case_schema_version, error)
+    if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'knotflow_version', knotflow_version, error)
     if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'git_hash', knotflow_git_hash, error)
     if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'compiler', knotflow_compiler, error)
     if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'compiler_flags', knotflow_flags, error)

@@ -18,6 +18,7 @@ module kf_case_runner
   use kf_case_file, only: case_file_t, case_file_status, stepper_checkpoint_t
   use kf_run_diagnostics, only: run_diagnostics_t
   use kf_fs, only: remove_file
+  use kf_case_match, only: check_reusable
   implicit none
   private
 
@@ -79,6 +80,16 @@ contains
     end if
     resumed = .false.
     with_diag = sc%output%diagnostics
+    if (state == 'finished' .or. state == 'running') then
+      ! Reused only when the stored scene is the requested one (knotflow checks every case at
+      ! set-up already; this guards other callers).
+      call check_reusable(path, sc, error)
+      if (allocated(error)) then
+        status = case_failed
+        message = error%message
+        return
+      end if
+    end if
     if (state == 'finished') then
       status = case_skipped
       message = 'already finished ('//path//')'
@@ -86,13 +97,6 @@ contains
     else if (state == 'running') then
       call file%open_resume(path, r, t, dt, steps, rejected, nframes, error, saved)
       if (.not. allocated(error)) then
-        if (file%scene_text() /= scene_text(sc) .and. .not. is_pre_diagnostics(file%scene_text(), sc)) then
-          call file%close()
-          status = case_failed
-          message = path//' was written with a different scene: remove it or use another '// &
-                    'output directory'
-          return
-        end if
         resumed = .true.
         ! a file written before the run diagnostics existed is continued without them
         with_diag = with_diag .and. file%has_diagnostics()
@@ -279,23 +283,6 @@ contains
     end function progress_line
 
   end subroutine run_case
-
-  !> Is `text` the scene text of `sc` as written before `&output diagnostics` existed (the same
-  !> text without the diagnostics line)? Such files are resumed (without diagnostics).
-  logical function is_pre_diagnostics(text, sc) result(same)
-    character(len=*), intent(in) :: text
-    type(scene_t), intent(in) :: sc
-    character(len=:), allocatable :: current
-    character(len=*), parameter :: key = new_line('a')//'  diagnostics = '
-    integer :: k, eol
-    current = scene_text(sc)
-    k = index(current, key)
-    same = .false.
-    if (k == 0 .or. index(text, key) /= 0) return
-    eol = index(current(k + 1:), new_line('a'))
-    if (eol == 0) return
-    same = text == current(1:k)//current(k + eol + 1:)
-  end function is_pre_diagnostics
 
   !> Every effective scene variable as a root attribute `<group>.<variable>`.
   subroutine write_scene_attributes(file, sc, error)
