@@ -16,6 +16,8 @@ program knotflow
   use kf_h5, only: h5_initialize, h5_finalize
   use kf_case_runner, only: run_case, case_path, case_ok, case_failed, case_skipped
   use kf_case_match, only: check_reusable
+  use kf_resources, only: check_resources, physical_memory
+  use kf_chain_shapes, only: chain_bead_count
   use kf_comm, only: comm_t, comm_init, comm_finalize
   use kf_task_farm, only: run_task_farm, task_result_t, task_ok, task_failed, task_skipped
   use kf_exit, only: exit_program
@@ -39,6 +41,10 @@ program knotflow
 
   ! Every rank reads and validates the same input; errors stop before anything is written.
   call read_sweep(scene_file, sw, error)
+  if (allocated(error)) call die(error%message, 2)
+  ! What a case needs (memory, frames): refuse what cannot fit before anything is written.
+  if (me == 0) call check_case_resources(error)
+  call agree(error)
   if (allocated(error)) call die(error%message, 2)
   directory = trim(sw%base%output%directory)
   if (me == 0) then
@@ -141,6 +147,23 @@ contains
         trim(sc%hydro%model)//', t_end = '//to_str(sc%integrator%t_end, '(g0.6)')//')'
     end do
   end subroutine list_cases
+
+  !> The resources of one case (kf_resources): the listed parameters of a sweep (A,
+  !> orientation, seed) change neither the number of beads nor the sizes, so case 1 stands for
+  !> all.
+  subroutine check_case_resources(err)
+    type(error_t), allocatable, intent(out) :: err
+    type(scene_t) :: sc
+    character(len=:), allocatable :: name
+    integer :: n_beads
+    call sw%case_scene(1, sc, name)
+    call chain_bead_count(sc%chain, n_beads, err)
+    if (allocated(err)) then
+      err%message = trim(scene_file)//': &chain: '//err%message
+      return
+    end if
+    call check_resources(sc, n_beads, physical_memory(), err)
+  end subroutine check_case_resources
 
   !> Every finished or interrupted case file of the sweep must hold the requested scene
   !> (kf_case_match): the first mismatch in full, the others by name.

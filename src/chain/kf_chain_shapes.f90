@@ -11,7 +11,7 @@ module kf_chain_shapes
   implicit none
   private
 
-  public :: build_initial_chain, trefoil_closed_points, random_rotation
+  public :: build_initial_chain, trefoil_closed_points, random_rotation, chain_bead_count
 
   integer, parameter, public :: trefoil_points = 100     !< points on the closed trefoil
   integer, parameter, public :: candycane_beads = 152
@@ -66,6 +66,28 @@ contains
         "' is unknown (allowed: trefoil, candycane, straight, random, file)")
     end select
   end subroutine build_initial_chain
+
+  !> The number of beads of the chain `params` describes, without building it (a coordinate
+  !> file is read): for the resource estimate at set-up.
+  subroutine chain_bead_count(params, n, error)
+    type(chain_params_t), intent(in) :: params
+    integer, intent(out) :: n
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: r(:, :)
+    real(wp) :: rotation(3, 3)
+    select case (trim(params%shape))
+    case ('trefoil')
+      n = trefoil_points - 1
+    case ('candycane')
+      n = candycane_beads
+    case ('straight', 'random')
+      n = params%n_beads
+    case default
+      call build_initial_chain(params, r, rotation, error)
+      n = 0
+      if (allocated(r)) n = size(r, 2)
+    end select
+  end subroutine chain_bead_count
 
   pure function identity3() result(m)
     real(wp) :: m(3, 3)

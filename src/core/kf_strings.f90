@@ -77,7 +77,8 @@ contains
   end function to_str_short
 
   !> The shortest text that reads back to exactly `x` (`g0.d` with the fewest significant
-  !> digits d <= 17 that round-trip; trailing zeros removed): `2.201`, not `2.2010000000000001`.
+  !> digits d <= 17 that round-trip; trailing zeros removed; whole numbers below 1e15 as
+  !> `10000000.0`): `2.201`, not `2.2010000000000001`.
   !> For messages that must tell apart values that differ only in their last digits.
   pure function to_str_exact(x) result(s)
     real(wp), intent(in) :: x
@@ -85,14 +86,29 @@ contains
     character(len=buf_len) :: buf
     character(len=16) :: edit
     real(wp) :: back
-    integer :: digits, ios, e, k
+    integer :: digits, ios, e, k, decimals
+    if (abs(x) < 1.0e15_wp .and. x == aint(x)) then
+      write (buf, '(i0,a)') int(x, i8), '.0'
+      s = trim(buf)
+      return
+    end if
     do digits = 1, 17
       write (edit, '(a,i0,a)') '(g0.', digits, ')'
       write (buf, edit) x
       read (buf, *, iostat=ios) back
       if (ios == 0 .and. back == x) exit
     end do
+    if (abs(x) >= 1.0e-5_wp .and. abs(x) < 1.0e15_wp) then
+      ! fixed notation with the decimals of those significant digits (0.0001, not 0.1E-3)
+      decimals = max(1, digits - 1 - floor(log10(abs(x))))
+      write (edit, '(a,i0,a)') '(f0.', decimals, ')'
+      write (buf, edit) x
+      read (buf, *, iostat=ios) back
+      if (ios /= 0 .or. back /= x) write (buf, '(g0.17)') x
+    end if
     s = trim(adjustl(buf))
+    if (s(1:1) == '.') s = '0'//s
+    if (s(1:2) == '-.') s = '-0'//s(2:)
     e = scan(s, 'eE')
     if (e == 0) e = len(s) + 1
     if (index(s(1:e - 1), '.') > 0) then
