@@ -92,19 +92,24 @@ contains
 
   !> May the case file `path` be reused (skipped when finished, resumed when running) for
   !> `sc`? `error` is set, with a message naming the file, the differing variables and what to
-  !> do, when the file is finished or running but holds another scene, or cannot be read.
-  !> Missing, failed and corrupt files are not reused (the case is recomputed): no error.
-  subroutine check_reusable(path, sc, error)
+  !> do, when the file is finished or running but holds another scene. Missing, failed and
+  !> corrupt files are not reused (the case is recomputed): no error. A finished or running file
+  !> whose scene cannot be read is no error either: `unreadable` (when present) says so, and the
+  !> case runner moves such a file aside.
+  subroutine check_reusable(path, sc, error, unreadable)
     character(len=*), intent(in) :: path
     type(scene_t), intent(in) :: sc
     type(error_t), allocatable, intent(out) :: error
+    logical, intent(out), optional :: unreadable
     character(len=:), allocatable :: state, differences
+    type(error_t), allocatable :: read_error
+    if (present(unreadable)) unreadable = .false.
     call case_file_status(path, state, error)
     if (allocated(error)) return
     if (state /= 'finished' .and. state /= 'running') return
-    call scene_differences(path, sc, differences, error)
-    if (allocated(error)) then
-      error%message = path//': cannot compare the stored scene: '//error%message
+    call scene_differences(path, sc, differences, read_error)
+    if (allocated(read_error)) then
+      if (present(unreadable)) unreadable = .true.
       return
     end if
     if (len(differences) == 0) return
