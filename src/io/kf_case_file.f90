@@ -1035,7 +1035,27 @@ contains
       if (size(r, 3) /= size(t)) call fatal_error(error, "case file '"//path// &
         "': /frames/time and /frames/positions have different lengths")
     end if
+    if (.not. allocated(error)) call check_finite_frames(path, t, r, error)
     call h5_close_file(file)
   end subroutine read_frames
+
+  !> Every frame time and coordinate must be finite: the error names the file, the first bad
+  !> frame (0-based), its time and the number of non-finite coordinates.
+  subroutine check_finite_frames(path, t, r, error)
+    character(len=*), intent(in) :: path
+    real(wp), intent(in) :: t(:), r(:, :, :)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: k, bad
+    do k = 1, size(t)
+      bad = count(.not. (abs(r(:, :, k)) <= huge(1.0_wp)))
+      if (bad > 0 .or. .not. (abs(t(k)) <= huge(1.0_wp))) then
+        call fatal_error(error, "case file '"//path//"': frame "//to_str(k - 1)//' (t = '// &
+          to_str(t(k), '(g0.6)')//') holds '//to_str(bad)//' non-finite coordinates'// &
+          merge(' and a non-finite time', '                      ', .not. (abs(t(k)) <= huge(1.0_wp))))
+        error%message = trim(error%message)
+        return
+      end if
+    end do
+  end subroutine check_finite_frames
 
 end module kf_case_file
