@@ -19,6 +19,9 @@ program knotflow
   use kf_case_match, only: check_reusable
   use kf_resources, only: check_resources, physical_memory
   use kf_chain_shapes, only: chain_bead_count
+  use kf_dynamics, only: dynamics_t
+  use kf_stepper, only: stepper_t
+  use kf_stepper_factory, only: make_stepper
   use kf_comm, only: comm_t, comm_init, comm_finalize
   use kf_task_farm, only: run_task_farm, task_result_t, task_ok, task_failed, task_skipped
   use kf_exit, only: exit_program, exit_program_now
@@ -154,7 +157,8 @@ contains
     end do
   end subroutine list_cases
 
-  !> The resources of one case (kf_resources): the listed parameters of a sweep (A,
+  !> The resources of one case (kf_resources), and the models built once for it (they refuse
+  !> what they cannot compute): the listed parameters of a sweep (A,
   !> orientation, seed) change neither the number of beads nor the sizes, so case 1 stands for
   !> all.
   subroutine check_case_resources(err)
@@ -165,10 +169,24 @@ contains
     call sw%case_scene(1, sc, name)
     call chain_bead_count(sc%chain, n_beads, err)
     if (allocated(err)) then
-      err%message = trim(scene_file)//': &chain: '//err%message
+      if (index(err%message, 'chain: ') == 1) then
+        err%message = trim(scene_file)//': &'//err%message
+      else
+        err%message = trim(scene_file)//': &chain: coordinate_file = '''//trim(sc%chain%coordinate_file)// &
+          ''': '//err%message
+      end if
       return
     end if
     call check_resources(sc, n_beads, physical_memory(), err)
+    if (allocated(err)) return
+    ! What the models themselves reject is refused here too, not by every case at run time.
+    block
+      type(dynamics_t) :: dyn
+      class(stepper_t), allocatable :: integ
+      call dyn%init(sc, n_beads, err)
+      if (.not. allocated(err)) call make_stepper(sc%integrator, integ, err)
+      if (allocated(err)) err%message = trim(scene_file)//': the models reject the scene: '//err%message
+    end block
   end subroutine check_case_resources
 
   !> Every finished or interrupted case file of the sweep must hold the requested scene

@@ -9,7 +9,7 @@ module kf_scene_read
                       integrator_params_t, output_params_t, path_len, name_len
   use kf_scene_items, only: scene_item_t, scene_items, group_names, item_string, item_integer, &
                             item_real, item_logical, item_real_array
-  use kf_namelist_scan, only: nml_group_t, scan_namelist_file, group_text
+  use kf_namelist_scan, only: nml_group_t, nml_assignment_t, scan_namelist_file, group_text, count_values
   implicit none
   private
 
@@ -285,9 +285,56 @@ contains
             groups(k)%items(m)%name//''' (allowed: '//trim(adjustl(allowed))//')')
           return
         end if
+        call check_shape(path, groups(k)%name, groups(k)%items(m), catalogue, error)
+        if (allocated(error)) return
       end do
     end do
   end subroutine check_names
+
+  !> The value of an assignment must fit its variable: one value for a scalar, exactly the
+  !> number of components for a whole array (a subscripted one, x(2) = ..., is left to the
+  !> namelist read), and a string no longer than the variable holds (it would be cut in silence).
+  subroutine check_shape(path, group, a, catalogue, error)
+    character(len=*), intent(in) :: path, group
+    type(nml_assignment_t), intent(in) :: a
+    type(scene_item_t), intent(in) :: catalogue(:)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: j, n, want, q
+    character(len=:), allocatable :: v
+    do j = 1, size(catalogue)
+      if (catalogue(j)%name /= group//'.'//a%name) cycle
+      if (index(a%lhs, '(') > 0) return
+      n = count_values(a%value)
+      select case (catalogue(j)%kind)
+      case (item_real_array)
+        want = max(1, catalogue(j)%dims(1))*max(1, catalogue(j)%dims(2))
+        if (n /= want) then
+          call fatal_error(error, trim(path)//': &'//group//': '//a%lhs//' = '//a%value//' has '// &
+            to_str(n)//' value(s) (allowed: exactly '//to_str(want)//')')
+          return
+        end if
+      case default
+        if (n /= 1) then
+          call fatal_error(error, trim(path)//': &'//group//': '//a%lhs//' = '//a%value//' has '// &
+            to_str(n)//' values (allowed: one)')
+          return
+        end if
+        if (catalogue(j)%kind == item_string) then
+          v = trim(adjustl(a%value))
+          q = len(v)
+          if (q >= 2) then
+            if ((v(1:1) == "'" .or. v(1:1) == '"') .and. v(q:q) == v(1:1)) q = q - 2
+          end if
+          if (q > catalogue(j)%max_len) then
+            call fatal_error(error, trim(path)//': &'//group//': '//a%lhs//' = '//a%value//' is '// &
+              to_str(q)//' characters long (allowed: at most '//to_str(catalogue(j)%max_len)//')')
+            return
+          end if
+        end if
+      end select
+      return
+    end do
+  end subroutine check_shape
 
   !> The index of group `name` in `groups`, 0 if absent.
   integer function find_group(groups, name) result(idx)
@@ -345,8 +392,13 @@ contains
             'an existing file (not found)'); return
         end if
       end if
-      if (c%shape == 'straight' .and. norm2(c%straight_direction) <= 0.0_wp) then
-        call bad(error, f, 'chain', 'straight_direction', '0, 0, 0', 'a non-zero vector'); return
+      if (.not. all(abs(c%straight_direction) <= huge(1.0_wp))) then
+        call bad(error, f, 'chain', 'straight_direction', vector_text(c%straight_direction), &
+          'finite numbers'); return
+      end if
+      if (c%shape == 'straight' .and. .not. norm2(c%straight_direction) > 0.0_wp) then
+        call bad(error, f, 'chain', 'straight_direction', vector_text(c%straight_direction), &
+          'a non-zero vector'); return
       end if
     end associate
     associate (p => sc%forces)
@@ -397,9 +449,10 @@ contains
             'at most 6 with lubrication = .true. (tables exist for L = 1..6)'); return
         end if
       end if
-      if (.not. (h%eps_lub < 0.5_wp)) then
+      ! the lubrication model's own range (kf_lubrication, kf_hydro_multipole): 0 < eps_lub < 0.5
+      if (.not. (h%eps_lub < 0.5_wp .and. h%eps_lub /= 0.0_wp)) then
         call bad(error, f, 'hydro', 'eps_lub', to_str(h%eps_lub), &
-          'a number in [0, 0.5), or negative for the integration tolerance'); return
+          'a number in (0, 0.5), or negative for the integration tolerance'); return
       end if
       if (.not. one_of(h%update, updates)) then
         call bad(error, f, 'hydro', 'update', quoted(h%update), 'one of '//updates); return
@@ -477,6 +530,17 @@ contains
       start = start + comma
     end do
   end function one_of
+
+  function vector_text(v) result(t)
+    real(wp), intent(in) :: v(:)
+    character(len=:), allocatable :: t
+    integer :: k
+    t = ''
+    do k = 1, size(v)
+      t = t//merge(', ', '  ', k > 1)//to_str(v(k))
+    end do
+    t = trim(adjustl(t))
+  end function vector_text
 
   function quoted(s) result(t)
     character(len=*), intent(in) :: s

@@ -47,6 +47,27 @@ CASES = [
      ["&sweep: cases 1 (seed = 1) and 3 (seed = 1)", "'s1.h5'"], None),
 ]
 
+# Coordinate files are read and checked at set-up.
+for name, points, frag in [
+        ("coords_one_bead", "1 2 3\n", "holds fewer than 2 beads"),
+        ("coords_columns", "1 2 3\n4 5\n", "line 2: expected three numbers 'x y z', got '4 5'"),
+        ("coords_nan", "1 2 3\n2 2 nan\n", "line 2: expected three numbers"),
+        ("coords_coincident", "1 2 3\n2 2 3\n1 2 3\n", "beads 1 and 3 coincide (allowed: distinct points)")]:
+    xyz = os.path.join(work, name + ".xyz")
+    with open(xyz, "w") as f:
+        f.write(points)
+    CASES.append((name, "&chain shape = 'file', coordinate_file = '%s' /\n&output directory = '{out}' /\n" % xyz,
+                  ["&chain: coordinate_file", frag], None))
+# The models are built at set-up: what they reject is refused before any case runs.
+CASES.append(("eps_lub_zero", "&hydro model = 'multipole', eps_lub = 0.0 /\n&output directory = '{out}' /\n",
+              ["&hydro: eps_lub = 0.0", "(0, 0.5)"], None))
+CASES.append(("orientation_long", "&chain orientation = 'bc' /\n&output directory = '{out}' /\n",
+              ["&chain: orientation = 'bc' is 2 characters long (allowed: at most 1)"], None))
+CASES.append(("twice", "&integrator t_end = 10.0, t_end = 20.0 /\n&output directory = '{out}' /\n",
+              ["&integrator: t_end is given twice"], None))
+CASES.append(("outside", "&output directory = '{out}' /\nt_end = 5\n",
+              ["text outside a group: \"t_end = 5\""], None))
+
 total = mem_total()
 ran = skipped = 0
 for name, text, fragments, needs in CASES:
@@ -66,5 +87,22 @@ for name, text, fragments, needs in CASES:
     for frag in fragments:
         assert frag in lines[0], (name, frag, lines[0])
     assert not os.path.exists(out), name + ": a refused scene created its output directory"
+    ran += 1
+# Not a scene at all: a directory, a binary file, an empty file (the output directory would be
+# ./results: run in a scratch directory and check that nothing appears there).
+scratch = os.path.join(work, "scratch")
+os.makedirs(scratch)
+binary = os.path.join(work, "binary.nml")
+with open(binary, "wb") as f:
+    f.write(bytes(range(256)) * 8)
+empty = os.path.join(work, "empty.nml")
+open(empty, "w").close()
+for path, frag in [(work, "is a directory"), (binary, "not a text file"),
+                   (empty, "no namelist group found")]:
+    r = subprocess.run([exe, path], capture_output=True, text=True, timeout=120, cwd=scratch)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and frag in lines[0], (path, r.returncode, r.stderr)
+    assert lines[0].startswith("knotflow: error: " + path + ": "), lines[0]
+    assert os.listdir(scratch) == [], os.listdir(scratch)
     ran += 1
 print("set-up refusals: %d refused as expected, %d skipped" % (ran, skipped))
