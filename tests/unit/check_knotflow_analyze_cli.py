@@ -103,6 +103,9 @@ def check_case_file(exe, work):
     with h5py.File(path) as f:
         assert 'analysis/knots/kf' in f and 'analysis/knot_matrix/frame_5' in f
     check_bad_frames(exe, work, pos)
+    for opt in ('--help', '--version'):
+        p = run(exe, opt)
+        assert p.returncode == 0 and 'knotflow-analyze' in p.stdout and 'Backtrace' not in p.stderr, (opt, p)
 
 
 def check_bad_frames(exe, work, pos):
