@@ -6,8 +6,10 @@
 !> `<group>.<variable>` that every case file holds (exact float64, int and string values), not
 !> the `scene` text. Rules, one per file generation (`schema_version`, kf_case_file):
 !> - a variable the file does not record (it was added to the scene after the file was
-!>   written, e.g. `hydro.update` or `output.diagnostics`) counts as its default value, which
-!>   is what the older program did;
+!>   written, e.g. `hydro.update` or `output.diagnostics`) counts as the value that reproduces
+!>   what the older program did: its default, or the value listed in `value_when_absent` where
+!>   the default has changed since (`hydro.update`: 'stage', the only behaviour before the
+!>   variable existed, while the default may be 'adaptive');
 !> - a file of a newer schema than this program writes is never reused;
 !> - `output.directory` (where the file is found) and `output.progress_interval` (wall-clock
 !>   progress lines only) do not take part: they do not change what is computed.
@@ -24,6 +26,11 @@ module kf_case_match
   private
 
   public :: scene_differences, check_reusable, ignored_in_match
+
+  !> Variables added after files were written, whose older behaviour is not their default:
+  !> `absent_names(k)` read as the string `absent_values(k)` when a file does not record it.
+  character(len=*), parameter :: absent_names(1) = [character(len=32) :: 'hydro.update']
+  character(len=*), parameter :: absent_values(1) = [character(len=32) :: 'stage']
 
   !> Scene variables that do not take part in the comparison.
   character(len=*), parameter :: ignored(2) = [character(len=32) :: 'output.directory', &
@@ -77,7 +84,7 @@ contains
         call read_item(file, wanted(k), stored, error)
         if (allocated(error)) exit
       else
-        stored = default_items(k)
+        stored = value_when_absent(default_items(k))
       end if
       if (.not. same_value(stored, wanted(k))) then
         dot = index(wanted(k)%name, '.')
@@ -144,6 +151,18 @@ contains
       end if
     end select
   end subroutine read_item
+
+  !> The value a file that does not record the variable of `default` was computed with.
+  function value_when_absent(default) result(item)
+    type(scene_item_t), intent(in) :: default
+    type(scene_item_t) :: item
+    integer :: k
+    item = default
+    do k = 1, size(absent_names)
+      if (trim(default%name) == trim(absent_names(k)) .and. default%kind == item_string) &
+        item%s = trim(absent_values(k))
+    end do
+  end function value_when_absent
 
   !> A value for messages: reals in their shortest exact form.
   function value_text(it) result(text)

@@ -6,9 +6,10 @@
    an interrupted case (status 'running'). A change in output.progress_interval alone is not a
    change of the scene (skipped).
 2. New case files carry schema_version = 2. An older file (no schema_version, no hydro.update,
-   no output.diagnostics attribute) counts the missing variables as their defaults: skipped
-   when the requested scene has the defaults, refused naming the variable when it has not. A
-   file of a newer schema (99) is never reused.
+   no output.diagnostics attribute) counts the missing variables as their defaults, except
+   hydro.update, which counts as 'stage' (the only behaviour before it existed, whatever the
+   default is now): skipped when the requested scene has those values, refused naming the
+   variable when it has not. A file of a newer schema (99) is never reused.
 3. Sweeps whose cases would share a file (A = 2.201 and 2.204, a seed listed twice, a zip
    repeating a pair) are refused at set-up with exit status 2, naming both cases, and
    nothing is written (no output directory).
@@ -28,15 +29,15 @@ os.makedirs(work)
 out = os.path.join(work, "out")
 
 
-def scene(name, a="1.0", t_end="2.0", extra_output="", extra=""):
+def scene(name, a="1.0", t_end="2.0", extra_output="", extra="", hydro=", update = 'stage'"):
     path = os.path.join(work, name + ".nml")
     with open(path, "w") as f:
         f.write("""&chain shape = 'straight', n_beads = 6 /
 &forces bending_a = %s /
-&hydro model = 'rpy' /
+&hydro model = 'rpy' %s /
 &integrator t_end = %s /
 &output directory = '%s', case_name = 'c', frame_interval = 0.5 %s /
-%s""" % (a, t_end, out, extra_output, extra))
+%s""" % (a, hydro, t_end, out, extra_output, extra))
     return path
 
 
@@ -104,16 +105,19 @@ refused(scene("other_a_running", a="2.5"), case + " (interrupted)", "bending_a =
 set_attrs(status="finished")
 checks += 6
 
-# 2. an older file: missing variables are their defaults
+# 2. an older file: missing variables are their defaults, except hydro.update, which was
+#    'stage' before it existed (whatever its default is now)
 set_attrs(schema_version=None, hydro__update=None, output__diagnostics=None)
 skipped(base)
+refused(scene("adaptive_update", hydro=", update = 'adaptive'"),
+        "&hydro: update = 'stage' in the file, 'adaptive' requested")
 refused(scene("adaptive", extra_output=", diagnostics = .false."),
         "&output: diagnostics = .true. in the file, .false. requested")
 set_attrs(schema_version=np.int32(99))
 refused(base, case, "schema_version = 99 in the file")
 set_attrs(schema_version=np.int32(2), hydro__update="stage", output__diagnostics=np.int64(1))
 skipped(base)
-checks += 4
+checks += 5
 
 # 3. sweeps whose cases would share a file: refused, nothing written
 for name, sweep, fragments in [
