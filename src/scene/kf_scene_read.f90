@@ -3,7 +3,7 @@
 !> messages name the file, group, variable, value and what is allowed.
 module kf_scene_read
   use kf_kinds, only: wp, i8
-  use kf_strings, only: to_str
+  use kf_strings, only: to_str, to_str_exact
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: scene_t, chain_params_t, forces_params_t, flow_params_t, hydro_params_t, &
                       integrator_params_t, output_params_t, path_len, name_len
@@ -379,7 +379,7 @@ contains
           'an integer from 1 to 100'); return
       end if
       if (.not. (c%bond_length > 0.0_wp .and. c%bond_length < 100.0_wp)) then
-        call bad(error, f, 'chain', 'bond_length', to_str(c%bond_length), 'a number in (0, 100)'); return
+        call bad(error, f, 'chain', 'bond_length', to_str_exact(c%bond_length), 'a number in (0, 100)'); return
       end if
       if (c%shape == 'file') then
         if (len_trim(c%coordinate_file) == 0) then
@@ -403,16 +403,16 @@ contains
     end associate
     associate (p => sc%forces)
       if (.not. (p%spring_k >= 0.0_wp .and. p%spring_k < 1.0e7_wp)) then
-        call bad(error, f, 'forces', 'spring_k', to_str(p%spring_k), 'a number in [0, 1e7)'); return
+        call bad(error, f, 'forces', 'spring_k', to_str_exact(p%spring_k), 'a number in [0, 1e7)'); return
       end if
       if (.not. (p%bending_a >= 0.0_wp .and. p%bending_a < 1.0e7_wp)) then
-        call bad(error, f, 'forces', 'bending_a', to_str(p%bending_a), 'a number in [0, 1e7)'); return
+        call bad(error, f, 'forces', 'bending_a', to_str_exact(p%bending_a), 'a number in [0, 1e7)'); return
       end if
       if (.not. (p%ev_strength >= 0.0_wp .and. p%ev_strength < 1.0e7_wp)) then
-        call bad(error, f, 'forces', 'ev_strength', to_str(p%ev_strength), 'a number in [0, 1e7)'); return
+        call bad(error, f, 'forces', 'ev_strength', to_str_exact(p%ev_strength), 'a number in [0, 1e7)'); return
       end if
       if (.not. (p%ev_range > 0.0_wp .and. p%ev_range <= 10.0_wp)) then
-        call bad(error, f, 'forces', 'ev_range', to_str(p%ev_range), 'a number in (0, 10]'); return
+        call bad(error, f, 'forces', 'ev_range', to_str_exact(p%ev_range), 'a number in (0, 10]'); return
       end if
       if (.not. all(abs(p%external_force) < 1.0e7_wp)) then
         call bad(error, f, 'forces', 'external_force', 'non-finite', 'finite numbers'); return
@@ -423,7 +423,7 @@ contains
         call bad(error, f, 'flow', 'flow_type', quoted(w%flow_type), 'one of '//flows); return
       end if
       if (.not. (abs(w%shear_rate) < 1.0e6_wp)) then
-        call bad(error, f, 'flow', 'shear_rate', to_str(w%shear_rate), 'a finite number'); return
+        call bad(error, f, 'flow', 'shear_rate', to_str_exact(w%shear_rate), 'a finite number'); return
       end if
       g = w%velocity_gradient
       if (w%flow_type == 'linear') then
@@ -431,7 +431,7 @@ contains
           call bad(error, f, 'flow', 'velocity_gradient', 'non-finite', 'finite numbers'); return
         end if
         if (abs(g(1, 1) + g(2, 2) + g(3, 3)) > 1.0e-12_wp*max(1.0_wp, maxval(abs(g)))) then
-          call bad(error, f, 'flow', 'velocity_gradient', 'trace '//to_str(g(1, 1) + g(2, 2) + g(3, 3)), &
+          call bad(error, f, 'flow', 'velocity_gradient', 'trace '//to_str_exact(g(1, 1) + g(2, 2) + g(3, 3)), &
             'a traceless matrix (incompressible flow)'); return
         end if
       end if
@@ -451,7 +451,7 @@ contains
       end if
       ! the lubrication model's own range (kf_lubrication, kf_hydro_multipole): 0 < eps_lub < 0.5
       if (.not. (h%eps_lub < 0.5_wp .and. h%eps_lub /= 0.0_wp)) then
-        call bad(error, f, 'hydro', 'eps_lub', to_str(h%eps_lub), &
+        call bad(error, f, 'hydro', 'eps_lub', to_str_exact(h%eps_lub), &
           'a number in (0, 0.5), or negative for the integration tolerance'); return
       end if
       if (.not. one_of(h%update, updates)) then
@@ -463,21 +463,21 @@ contains
         call bad(error, f, 'integrator', 'method', quoted(g%method), 'one of '//methods); return
       end if
       if (.not. (g%t_end > 0.0_wp .and. g%t_end < 1.0e12_wp)) then
-        call bad(error, f, 'integrator', 't_end', to_str(g%t_end), 'a number > 0'); return
+        call bad(error, f, 'integrator', 't_end', to_str_exact(g%t_end), 'a number > 0'); return
       end if
       if (.not. (g%tolerance > 0.0_wp .and. g%tolerance < 1.0_wp)) then
-        call bad(error, f, 'integrator', 'tolerance', to_str(g%tolerance), 'a number in (0, 1)'); return
+        call bad(error, f, 'integrator', 'tolerance', to_str_exact(g%tolerance), 'a number in (0, 1)'); return
       end if
       if (.not. (g%dt_min > 0.0_wp)) then
-        call bad(error, f, 'integrator', 'dt_min', to_str(g%dt_min), 'a number > 0'); return
+        call bad(error, f, 'integrator', 'dt_min', to_str_exact(g%dt_min), 'a number > 0'); return
       end if
       if (.not. (g%dt_max > g%dt_min)) then
-        call bad(error, f, 'integrator', 'dt_max', to_str(g%dt_max), 'a number > dt_min = '//to_str(g%dt_min))
+        call bad(error, f, 'integrator', 'dt_max', to_str_exact(g%dt_max), 'a number > dt_min = '//to_str_exact(g%dt_min))
         return
       end if
       if (.not. (g%dt_initial >= g%dt_min .and. g%dt_initial <= g%dt_max)) then
-        call bad(error, f, 'integrator', 'dt_initial', to_str(g%dt_initial), &
-          'a number in [dt_min, dt_max] = ['//to_str(g%dt_min)//', '//to_str(g%dt_max)//']'); return
+        call bad(error, f, 'integrator', 'dt_initial', to_str_exact(g%dt_initial), &
+          'a number in [dt_min, dt_max] = ['//to_str_exact(g%dt_min)//', '//to_str_exact(g%dt_max)//']'); return
       end if
       if (g%max_steps < 1) then
         call bad(error, f, 'integrator', 'max_steps', to_str(int(g%max_steps)), 'an integer >= 1'); return
@@ -488,10 +488,10 @@ contains
         call bad(error, f, 'output', 'directory', "''", 'a directory name'); return
       end if
       if (.not. (o%frame_interval > 0.0_wp)) then
-        call bad(error, f, 'output', 'frame_interval', to_str(o%frame_interval), 'a number > 0'); return
+        call bad(error, f, 'output', 'frame_interval', to_str_exact(o%frame_interval), 'a number > 0'); return
       end if
       if (.not. (o%progress_interval >= 0.0_wp)) then
-        call bad(error, f, 'output', 'progress_interval', to_str(o%progress_interval), &
+        call bad(error, f, 'output', 'progress_interval', to_str_exact(o%progress_interval), &
           'a number >= 0 (seconds; 0 = every frame)'); return
       end if
       if (verify(trim(o%case_name), 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.-+') /= 0) then
@@ -537,7 +537,7 @@ contains
     integer :: k
     t = ''
     do k = 1, size(v)
-      t = t//merge(', ', '  ', k > 1)//to_str(v(k))
+      t = t//merge(', ', '  ', k > 1)//to_str_exact(v(k))
     end do
     t = trim(adjustl(t))
   end function vector_text

@@ -71,7 +71,7 @@ contains
         if (ios /= 0) then
           call fatal_error(error, trim(path)//': &sweep: '//groups(ig)%items(k)%lhs//' = '// &
             groups(ig)%items(k)%value//' is not valid (expected a list of '// &
-            merge('quoted letters a-e', 'values            ', groups(ig)%items(k)%name == 'orientation')// &
+            trim(merge('quoted letters a-e', 'values            ', groups(ig)%items(k)%name == 'orientation'))// &
             ', at most 256)')
           return
         end if
