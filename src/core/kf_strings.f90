@@ -1,5 +1,6 @@
 !> Number-to-text conversion shared by the whole project (messages, logs, names).
 module kf_strings
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use kf_kinds, only: wp, i8
   implicit none
   private
@@ -87,6 +88,11 @@ contains
     character(len=16) :: edit
     real(wp) :: back
     integer :: digits, ios, e, k, decimals
+    if (.not. ieee_is_finite(x)) then
+      write (buf, '(g0)') x
+      s = trim(adjustl(buf))
+      return
+    end if
     if (abs(x) < 1.0e15_wp .and. x == aint(x)) then
       write (buf, '(i0,a)') int(x, i8), '.0'
       s = trim(buf)

@@ -52,6 +52,7 @@
 !> - Logical scene variables are stored as int32 attributes (1 true, 0 false): HDF5 has no
 !>   boolean type (h5py's is an enum), and an integer reads naturally in every tool.
 module kf_case_file
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use, intrinsic :: iso_fortran_env, only: int8
   use kf_kinds, only: wp, i4, i8
   use kf_strings, only: to_str
@@ -952,6 +953,12 @@ contains
         call fatal_error(error, 'frame 0 is not at t = 0')
         return
       end if
+      do k = 1, size(t)
+        if (.not. ieee_is_finite(t(k))) then
+          call fatal_error(error, 'frame '//to_str(int(k - 1, i8))//' has a non-finite time')
+          return
+        end if
+      end do
       do k = 2, size(t)
         if (.not. t(k) > t(k - 1)) then
           call fatal_error(error, 'frame '//to_str(int(k - 1, i8))//': time does not increase')
@@ -969,7 +976,7 @@ contains
         return
       end if
       do k = 1, size(r, 3)
-        bad = count(.not. (abs(r(:, :, k)) <= huge(1.0_wp)))
+        bad = count(.not. ieee_is_finite(r(:, :, k)))
         if (bad > 0) then
           call fatal_error(error, 'frame '//to_str(int(k - 1, i8))//' (t = '//to_str(t(k), '(g0.6)')//') holds '// &
             to_str(int(bad, i8))//' non-finite coordinates')
@@ -1047,11 +1054,11 @@ contains
     type(error_t), allocatable, intent(out) :: error
     integer :: k, bad
     do k = 1, size(t)
-      bad = count(.not. (abs(r(:, :, k)) <= huge(1.0_wp)))
-      if (bad > 0 .or. .not. (abs(t(k)) <= huge(1.0_wp))) then
+      bad = count(.not. ieee_is_finite(r(:, :, k)))
+      if (bad > 0 .or. .not. ieee_is_finite(t(k))) then
         call fatal_error(error, "case file '"//path//"': frame "//to_str(k - 1)//' (t = '// &
           to_str(t(k), '(g0.6)')//') holds '//to_str(bad)//' non-finite coordinates'// &
-          merge(' and a non-finite time', '                      ', .not. (abs(t(k)) <= huge(1.0_wp))))
+          merge(' and a non-finite time', '                      ', .not. ieee_is_finite(t(k))))
         error%message = trim(error%message)
         return
       end if

@@ -2,6 +2,7 @@
 !> read checked; unknown groups and variables are rejected by name; then a validation pass whose
 !> messages name the file, group, variable, value and what is allowed.
 module kf_scene_read
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use kf_kinds, only: wp, i8
   use kf_strings, only: to_str, to_str_exact
   use kf_error, only: error_t, fatal_error
@@ -392,7 +393,7 @@ contains
             'an existing file (not found)'); return
         end if
       end if
-      if (.not. all(abs(c%straight_direction) <= huge(1.0_wp))) then
+      if (.not. all(ieee_is_finite(c%straight_direction))) then
         call bad(error, f, 'chain', 'straight_direction', vector_text(c%straight_direction), &
           'finite numbers'); return
       end if
