@@ -360,6 +360,26 @@ contains
     real(wp) :: g(3, 3)
 
     f = trim(sc%source_file)
+    ! Every real must be finite (checked first, with ieee_is_finite: the range tests below would
+    ! trap on NaN in a build with -ffpe-trap=invalid).
+    block
+      type(scene_item_t), allocatable :: items(:)
+      integer :: k, dot
+      call scene_items(sc, items)
+      do k = 1, size(items)
+        dot = index(items(k)%name, '.')
+        select case (items(k)%kind)
+        case (item_real)
+          if (ieee_is_finite(items(k)%r)) cycle
+          call bad(error, f, items(k)%name(1:dot - 1), trim(items(k)%name(dot + 1:)), &
+            to_str_exact(items(k)%r), 'a finite number'); return
+        case (item_real_array)
+          if (all(ieee_is_finite(items(k)%ra))) cycle
+          call bad(error, f, items(k)%name(1:dot - 1), trim(items(k)%name(dot + 1:)), &
+            vector_text(items(k)%ra), 'finite numbers'); return
+        end select
+      end do
+    end block
     associate (c => sc%chain)
       if (.not. one_of(c%shape, shapes)) then
         call bad(error, f, 'chain', 'shape', quoted(c%shape), 'one of '//shapes); return
