@@ -33,7 +33,7 @@ CASES = [
     ("memory_rpy", "&chain shape = 'straight', n_beads = 100000 /\n&output directory = '{out}' /\n",
      ["&chain: n_beads = 100000 needs about 316.8 GiB of memory per case",
       "&hydro model = 'rpy' 260.8 GiB; run diagnostics 55.9 GiB", "of this machine (allowed: "], 316 * GiB),
-    ("memory_multipole", "&chain shape = 'straight', n_beads = 20000 /\n&hydro model = 'multipole' /\n"
+    ("memory_multipole", "&chain shape = 'straight', n_beads = 20000 /\n&hydro model = 'multipole', update = 'stage' /\n"
      "&output directory = '{out}', diagnostics = .false. /\n",
      ["&chain: n_beads = 20000 needs about 134.1 GiB", "&hydro model = 'multipole' 134.1 GiB)"], 134 * GiB),
     ("frames", "&integrator t_end = 1.0e7 /\n&output directory = '{out}', frame_interval = 1.0 /\n",
