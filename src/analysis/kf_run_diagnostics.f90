@@ -29,7 +29,7 @@ module kf_run_diagnostics
   implicit none
   private
 
-  public :: configuration_diagnostics, prefiltered_passages
+  public :: configuration_diagnostics, prefiltered_passages, pair_count, diagnostics_memory
 
   !> Sizes of the saved state (`get_state` / `set_state`).
   integer, parameter, public :: diag_n_counters = 5, diag_n_values = 5
@@ -65,10 +65,29 @@ module kf_run_diagnostics
 
 contains
 
-  !> Index of pair (i, j), i < j, in the packed pair arrays.
-  pure integer function pair_index(i, j)
+  !> Number of pairs i < j of `n_beads` beads, N(N-1)/2, in 64-bit integers: the product
+  !> N(N-1) passes huge(int32) from N = 46,342 on (in default integers it overflowed there and
+  !> the diagnostics crashed), the count itself from N = 65,537.
+  pure integer(i8) function pair_count(n_beads)
+    integer, intent(in) :: n_beads
+    integer(i8) :: n
+    n = max(0_i8, int(n_beads, i8))
+    pair_count = n*max(0_i8, n - 1)/2
+  end function pair_count
+
+  !> Bytes the run diagnostics of `n_beads` beads allocate (a flag and an episode start per
+  !> pair, four work columns per bead), for the memory estimate at set-up.
+  pure integer(i8) function diagnostics_memory(n_beads) result(bytes)
+    integer, intent(in) :: n_beads
+    logical :: flag
+    bytes = pair_count(n_beads)*(storage_size(flag)/8 + storage_size(1.0_wp)/8) + &
+            4_i8*max(1, n_beads)*(storage_size(1.0_wp)/8)
+  end function diagnostics_memory
+
+  !> Index of pair (i, j), i < j, in the packed pair arrays (64-bit: see `pair_count`).
+  pure integer(i8) function pair_index(i, j)
     integer, intent(in) :: i, j
-    pair_index = (j - 1)*(j - 2)/2 + i
+    pair_index = (int(j, i8) - 1)*(int(j, i8) - 2)/2 + i
   end function pair_index
 
   !> Reset for a chain of `n_beads` beads with rest length `bond_length`; `passage_tolerance`
@@ -78,11 +97,11 @@ contains
     integer, intent(in) :: n_beads
     real(wp), intent(in) :: bond_length
     real(wp), intent(in), optional :: passage_tolerance
-    integer :: n_pairs
+    integer(i8) :: n_pairs
     this%n_beads = n_beads
     this%bond_length = bond_length
     if (present(passage_tolerance)) this%passage_tolerance = passage_tolerance
-    n_pairs = max(0, n_beads*(n_beads - 1)/2)
+    n_pairs = pair_count(n_beads)
     allocate (this%overlapping(n_pairs), this%episode_start(n_pairs), this%work(max(n_beads, 1), 4))
     this%overlapping = .false.
     this%episode_start = 0.0_wp
@@ -117,7 +136,8 @@ contains
     class(run_diagnostics_t), intent(inout) :: this
     real(wp), intent(in) :: t
     real(wp), intent(in) :: r(:, :)
-    integer :: i, j, k0, k, n, now
+    integer :: i, j, n, now
+    integer(i8) :: k0, k
     real(wp) :: dmin2, duration
     logical :: over
     n = min(this%n_beads, size(r, 2))
@@ -188,7 +208,8 @@ contains
     integer(i8), intent(out) :: counters(diag_n_counters)
     real(wp), intent(out) :: values(diag_n_values)
     real(wp), allocatable, intent(out) :: ongoing(:, :)
-    integer :: i, j, k, m, n_on
+    integer :: i, j, m, n_on
+    integer(i8) :: k
     n_on = count(this%overlapping)
     counters = [this%strand_passages, this%overlap_episodes, this%completed_episodes, &
                 int(this%max_overlapping_pairs, i8), int(n_on, i8)]
@@ -221,7 +242,7 @@ contains
       return
     end if
     n_on = int(counters(5))
-    if (n_on < 0 .or. n_on > size(ongoing, 2) .or. n_on > size(this%overlapping)) then
+    if (n_on < 0 .or. n_on > size(ongoing, 2) .or. n_on > size(this%overlapping, kind=i8)) then
       call fatal_error(error, 'diagnostics state: '//to_str(n_on)//' ongoing episodes do not fit')
       return
     end if

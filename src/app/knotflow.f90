@@ -12,12 +12,19 @@ program knotflow
   use kf_build_info, only: knotflow_version, knotflow_git_hash
   use kf_scene, only: scene_t
   use kf_sweep, only: sweep_t, read_sweep
-  use kf_fs, only: make_directory, check_writable_directory, lock_directory
+  use kf_fs, only: make_directory, check_writable_directory, lock_directory, rename_file, &
+                   ignore_file_size_signal
   use kf_h5, only: h5_initialize, h5_finalize
   use kf_case_runner, only: run_case, case_path, case_ok, case_failed, case_skipped
+  use kf_case_match, only: check_reusable
+  use kf_resources, only: check_resources, physical_memory
+  use kf_chain_shapes, only: chain_bead_count
+  use kf_dynamics, only: dynamics_t
+  use kf_stepper, only: stepper_t
+  use kf_stepper_factory, only: make_stepper
   use kf_comm, only: comm_t, comm_init, comm_finalize
   use kf_task_farm, only: run_task_farm, task_result_t, task_ok, task_failed, task_skipped
-  use kf_exit, only: exit_program
+  use kf_exit, only: exit_program, exit_program_now
   use kf_blas_threads, only: allowed_cpus, load_average, blas_threads_for, set_blas_threads
   implicit none
 
@@ -27,12 +34,14 @@ program knotflow
   type(task_result_t), allocatable :: results(:)
   character(len=:), allocatable :: scene_file, directory
   logical :: dry_run
+  logical :: summary_failed = .false.
   integer :: me, nfailed, threads
   logical :: threads_set
 
   call comm_init(comm, error)
   if (allocated(error)) call die(error%message, 2)
   call keep_freed_heap()   ! after MPI start-up, which sets its own allocator options
+  call ignore_file_size_signal()   ! a write past `ulimit -f` fails (EFBIG) and is reported
   me = comm%rank()
   call parse_arguments(scene_file, dry_run)
   call h5_initialize(error)
@@ -40,6 +49,10 @@ program knotflow
 
   ! Every rank reads and validates the same input; errors stop before anything is written.
   call read_sweep(scene_file, sw, error)
+  if (allocated(error)) call die(error%message, 2)
+  ! What a case needs (memory, frames): refuse what cannot fit before anything is written.
+  if (me == 0) call check_case_resources(error)
+  call agree(error)
   if (allocated(error)) call die(error%message, 2)
   directory = trim(sw%base%output%directory)
   if (me == 0) then
@@ -50,6 +63,11 @@ program knotflow
   call agree(error)
   if (allocated(error)) call die(trim(scene_file)//': &output: directory = '''//directory// &
                                  ''': '//error%message, 2)
+  ! Existing case files are reused only when they hold the requested scene: refuse otherwise,
+  ! before any case runs.
+  if (me == 0) call check_existing_cases(error)
+  call agree(error)
+  if (allocated(error)) call die(trim(scene_file)//': '//error%message, 2)
 
   if (me == 0) then
     write (output_unit, '(a)') 'knotflow '//knotflow_version//' ('//knotflow_git_hash//'): '// &
@@ -78,7 +96,10 @@ program knotflow
   if (me == 0) call write_summary()
   call h5_finalize()
   call comm_finalize(error)
-  if (nfailed > 0) call exit_program(3)
+  ! Every file is closed and MPI finalised: end without the libraries' exit handlers, because
+  ! after a write that failed (full disk) HDF5 1.10's handler crashes on the file whose close
+  ! failed, which would turn a reported failure into a segmentation fault.
+  call exit_program_now(merge(3, 0, nfailed > 0 .or. summary_failed))
 
 contains
 
@@ -146,35 +167,129 @@ contains
     end do
   end subroutine list_cases
 
-  !> summary.txt (one line per case) and summary.json in the output directory.
-  subroutine write_summary()
+  !> The resources of one case (kf_resources), and the models built once for it (they refuse
+  !> what they cannot compute): the listed parameters of a sweep (A,
+  !> orientation, seed) change neither the number of beads nor the sizes, so case 1 stands for
+  !> all.
+  subroutine check_case_resources(err)
+    type(error_t), allocatable, intent(out) :: err
     type(scene_t) :: sc
     character(len=:), allocatable :: name
-    integer :: k, ut, uj, ios
-    open (newunit=ut, file=directory//'/summary.txt', status='replace', action='write', iostat=ios)
-    if (ios /= 0) then
-      write (error_unit, '(a)') 'knotflow: warning: cannot write '//directory//'/summary.txt'
+    integer :: n_beads
+    call sw%case_scene(1, sc, name)
+    call chain_bead_count(sc%chain, n_beads, err)
+    if (allocated(err)) then
+      if (index(err%message, 'chain: ') == 1) then
+        err%message = trim(scene_file)//': &'//err%message
+      else
+        err%message = trim(scene_file)//': &chain: coordinate_file = '''//trim(sc%chain%coordinate_file)// &
+          ''': '//err%message
+      end if
       return
     end if
-    open (newunit=uj, file=directory//'/summary.json', status='replace', action='write', iostat=ios)
-    write (ut, '(a)') '# case  bending_a  orientation  status  rank  file  message'
-    write (uj, '(a)') '{"scene": "'//json_escape(scene_file)//'", "cases": ['
-    do k = 1, size(results)
+    call check_resources(sc, n_beads, physical_memory(), err)
+    if (allocated(err)) return
+    ! What the models themselves reject is refused here too, not by every case at run time.
+    block
+      type(dynamics_t) :: dyn
+      class(stepper_t), allocatable :: integ
+      call dyn%init(sc, n_beads, err)
+      if (.not. allocated(err)) call make_stepper(sc%integrator, integ, err)
+      if (allocated(err)) err%message = trim(scene_file)//': the models reject the scene: '//err%message
+    end block
+  end subroutine check_case_resources
+
+  !> Every finished or interrupted case file of the sweep must hold the requested scene
+  !> (kf_case_match): the first mismatch in full, the others by name.
+  subroutine check_existing_cases(err)
+    type(error_t), allocatable, intent(out) :: err
+    type(error_t), allocatable :: mismatch
+    type(scene_t) :: sc
+    character(len=:), allocatable :: name, others
+    integer :: k, nothers
+    others = ''
+    nothers = 0
+    do k = 1, sw%n_cases()
       call sw%case_scene(k, sc, name)
-      write (ut, '(a)') name//'  '//to_str(sc%forces%bending_a, '(g0.6)')//'  '//sc%chain%orientation//'  '// &
-        status_word(results(k)%status)//'  '//to_str(results(k)%rank)//'  '//case_path(sc)//'  '// &
-        trim(results(k)%message)
-      write (uj, '(a)') '  {"case": "'//name//'", "bending_a": '//to_str(sc%forces%bending_a, '(g0.6)')// &
-        ', "orientation": "'//sc%chain%orientation//'", "status": "'//status_word(results(k)%status)// &
-        '", "rank": '//to_str(results(k)%rank)//', "file": "'//json_escape(case_path(sc))// &
-        '", "message": "'//json_escape(trim(results(k)%message))//'"}'//merge(',', ' ', k < size(results))
+      call check_reusable(case_path(sc), sc, mismatch)
+      if (.not. allocated(mismatch)) cycle
+      if (.not. allocated(err)) then
+        call move_alloc(mismatch, err)
+      else
+        nothers = nothers + 1
+        if (nothers <= 10) others = others//merge(', ', '  ', nothers > 1)//case_path(sc)
+        if (nothers == 11) others = others//', ...'
+      end if
     end do
-    write (uj, '(a)') ']}'
-    close (ut)
-    close (uj)
-    write (output_unit, '(a)') 'knotflow: '//to_str(count(results%status == task_ok))//' finished, '// &
-      to_str(count(results%status == task_skipped))//' skipped (already finished), '// &
-      to_str(nfailed)//' failed; summary in '//directory//'/summary.txt'
+    if (nothers > 0) err%message = err%message//' (and '//to_str(nothers)// &
+      ' more case file(s) with another scene: '//trim(adjustl(others))//')'
+  end subroutine check_existing_cases
+
+  !> summary.txt (one line per case) and summary.json in the output directory, each written to
+  !> '<name>.tmp' (every write and the close checked) and renamed over the old one, so a summary
+  !> is either complete or the previous one. A summary that cannot be written is reported on
+  !> stderr and counts as a failure (exit status 3).
+  subroutine write_summary()
+    type(scene_t) :: sc
+    character(len=:), allocatable :: name, line
+    character(len=256) :: msg
+    integer :: k, ut, uj, ios, iosj
+    logical :: ok
+    ok = .false.
+    msg = ''
+    open (newunit=ut, file=directory//'/summary.txt.tmp', status='replace', action='write', iostat=ios, iomsg=msg)
+    if (ios == 0) open (newunit=uj, file=directory//'/summary.json.tmp', status='replace', action='write', &
+                        iostat=ios, iomsg=msg)
+    if (ios == 0) then
+      iosj = 0
+      write (ut, '(a)', iostat=ios, iomsg=msg) '# case  bending_a  orientation  status  rank  file  message'
+      if (ios == 0) write (uj, '(a)', iostat=ios, iomsg=msg) '{"scene": "'//json_escape(scene_file)//'", "cases": ['
+      do k = 1, size(results)
+        if (ios /= 0) exit
+        call sw%case_scene(k, sc, name)
+        line = name//'  '//to_str(sc%forces%bending_a, '(g0.6)')//'  '//sc%chain%orientation//'  '// &
+          status_word(results(k)%status)//'  '//to_str(results(k)%rank)//'  '//case_path(sc)//'  '// &
+          trim(results(k)%message)
+        write (ut, '(a)', iostat=ios, iomsg=msg) line
+        if (ios == 0) write (uj, '(a)', iostat=ios, iomsg=msg) '  {"case": "'//name//'", "bending_a": '// &
+          to_str(sc%forces%bending_a, '(g0.6)')//', "orientation": "'//sc%chain%orientation//'", "status": "'// &
+          status_word(results(k)%status)//'", "rank": '//to_str(results(k)%rank)//', "file": "'// &
+          json_escape(case_path(sc))//'", "message": "'//json_escape(trim(results(k)%message))//'"}'// &
+          merge(',', ' ', k < size(results))
+      end do
+      if (ios == 0) write (uj, '(a)', iostat=ios, iomsg=msg) ']}'
+      close (ut, iostat=iosj)
+      if (ios == 0 .and. iosj /= 0) then
+        ios = iosj
+        msg = 'closing summary.txt.tmp failed'
+      end if
+      close (uj, iostat=iosj)
+      if (ios == 0 .and. iosj /= 0) then
+        ios = iosj
+        msg = 'closing summary.json.tmp failed'
+      end if
+      ok = ios == 0
+    end if
+    if (ok) then
+      block
+        type(error_t), allocatable :: err
+        call rename_file(directory//'/summary.txt.tmp', directory//'/summary.txt', err)
+        if (.not. allocated(err)) call rename_file(directory//'/summary.json.tmp', directory//'/summary.json', err)
+        if (allocated(err)) then
+          ok = .false.
+          msg = err%message
+        end if
+      end block
+    end if
+    if (.not. ok) then
+      write (error_unit, '(a)') 'knotflow: error: cannot write the summary in '//directory//': '//trim(msg)// &
+        ' (the case files hold the results)'
+      summary_failed = .true.
+    end if
+    line = 'knotflow: '//to_str(count(results%status == task_ok))//' finished, '// &
+      to_str(count(results%status == task_skipped))//' skipped (already finished), '//to_str(nfailed)//' failed'
+    if (ok) line = line//'; summary in '//directory//'/summary.txt'
+    write (output_unit, '(a)') line
     do k = 1, size(results)
       if (results(k)%status == task_failed) then
         call sw%case_scene(k, sc, name)

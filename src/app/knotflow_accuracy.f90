@@ -16,6 +16,7 @@ program knotflow_accuracy
   use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
   use kf_kinds, only: wp, i8
   use kf_exit, only: exit_program
+  use kf_build_info, only: knotflow_version, knotflow_git_hash
   use kf_error, only: error_t, fatal_error
   use kf_strings, only: to_str
   use kf_scene, only: scene_t
@@ -101,9 +102,12 @@ program knotflow_accuracy
       write (output_unit, '(a)') 'usage: knotflow-accuracy [--models] [--tolerance] [--scaling] '// &
         '[--case-time] [--all] [--quick] [--out DIR] [--ref-order L] [--coil FILE]'
       call exit_program(0)
+    case ('--version')
+      write (output_unit, '(a)') 'knotflow-accuracy '//knotflow_version//' ('//knotflow_git_hash//')'
+      call exit_program(0)
     case default
       call die("unknown argument '"//arg//"' (allowed: --models --tolerance --scaling "// &
-        "--case-time --all --quick --out DIR --ref-order L --coil FILE)")
+        "--case-time --all --quick --out DIR --ref-order L --coil FILE --help --version)")
     end select
   end do
   any_part = do_models .or. do_tolerance .or. do_scaling .or. do_case_time

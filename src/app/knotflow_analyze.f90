@@ -6,6 +6,7 @@ program knotflow_analyze
   use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
   use kf_kinds, only: wp, i8
   use kf_exit, only: exit_program
+  use kf_build_info, only: knotflow_version, knotflow_git_hash
   use kf_strings, only: to_str
   use kf_memory, only: keep_freed_heap
   use kf_error, only: error_t, fatal_error
@@ -82,7 +83,8 @@ contains
       'usage: knotflow-analyze chain.xyz [--closures N] [--seed S] [--matrix] [--matrix-closures N]', &
       '                        [--min-length M] [--closure-points FILE] [--json] [--per-closure]', &
       '       knotflow-analyze CASE.h5 [CASE2.h5 ...] [--closures N] [--seed S] [--stride K]', &
-      '                        [--matrix-frames k1,k2|last] [--min-length M] [--force]'
+      '                        [--matrix-frames k1,k2|last] [--min-length M] [--force]', &
+      '       knotflow-analyze --help | --version'
   end subroutine usage
 
   !> Read and validate the command line.
@@ -104,6 +106,9 @@ contains
       select case (trim(arg))
       case ('-h', '--help')
         call usage()
+        stop
+      case ('--version')
+        write (output_unit, '(a)') 'knotflow-analyze '//knotflow_version//' ('//knotflow_git_hash//')'
         stop
       case ('--matrix')
         opt%matrix = .true.

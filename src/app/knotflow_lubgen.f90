@@ -14,7 +14,10 @@
 !> (L = ceil(25/sqrt(xi)) <= 500); the fit, its residual and the change from MULTIPOLE.md's
 !> constants are printed, and the fitted constants are used for xi < 0.02.
 program knotflow_lubgen
+  use, intrinsic :: iso_fortran_env, only: error_unit
   use kf_kinds, only: wp, i8
+  use kf_exit, only: exit_program
+  use kf_build_info, only: knotflow_version, knotflow_git_hash
   use kf_error, only: error_t
   use kf_two_sphere, only: n_functions, two_sphere_resistance, function_names, has_strain
   use kf_near_contact, only: exact_resistance, singular_part, singular_weight, near_coeff, &
@@ -43,6 +46,20 @@ program knotflow_lubgen
 
   path = 'kf_lubrication_data.f90'
   if (command_argument_count() >= 1) call get_command_argument(1, path)
+  ! options, not an output file named '--help' (which would also start the long generation)
+  select case (trim(path))
+  case ('-h', '--help')
+    write (*, '(a)') 'usage: knotflow-lubgen [output file]   (default: kf_lubrication_data.f90)', &
+      '       knotflow-lubgen --help | --version'
+    stop
+  case ('--version')
+    write (*, '(a)') 'knotflow-lubgen '//knotflow_version//' ('//knotflow_git_hash//')'
+    stop
+  end select
+  if (path(1:1) == '-') then
+    write (error_unit, '(a)') 'knotflow-lubgen: error: unknown option '//trim(path)//' (allowed: --help, --version)'
+    call exit_program(2)
+  end if
   do order = 1, max_order
     ngrid(order) = ceiling(sqrt(2.0_wp*(cutoff(order) - 1.0_wp))/du_target) + 1
   end do

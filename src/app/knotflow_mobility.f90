@@ -14,7 +14,10 @@
 program knotflow_mobility
   use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
   use kf_kinds, only: wp
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use kf_exit, only: exit_program
+  use kf_strings, only: to_str
+  use kf_build_info, only: knotflow_version, knotflow_git_hash
   use kf_error, only: error_t
   use kf_text_coords, only: read_coordinates
   use kf_hydro_model, only: hydro_model_t
@@ -43,6 +46,14 @@ program knotflow_mobility
   do while (i <= nargs)
     arg = get_arg(i)
     select case (arg)
+    case ('-h', '--help')
+      write (output_unit, '(a)') 'usage: knotflow-mobility FILE [--model none|rpy|multipole] [--order L] '// &
+        '[--lubrication on|off] [--eps-lub X] [--output mobility|shear]', &
+        '       knotflow-mobility --help | --version'
+      call exit_program(0)
+    case ('--version')
+      write (output_unit, '(a)') 'knotflow-mobility '//knotflow_version//' ('//knotflow_git_hash//')'
+      call exit_program(0)
     case ('--model', '--order', '--lubrication', '--eps-lub', '--output')
       if (i == nargs) call die('option '//arg//' needs a value')
       val = get_arg(i + 1)
@@ -72,7 +83,7 @@ program knotflow_mobility
       end select
     case default
       if (arg(1:min(1, len(arg))) == '-') call die('unknown option '//arg// &
-        ' (allowed: --model, --order, --lubrication, --eps-lub, --output)')
+        ' (allowed: --model, --order, --lubrication, --eps-lub, --output, --help, --version)')
       if (len(file) > 0) call die('more than one coordinate file given: '//file//' and '//arg)
       file = arg
       i = i + 1
@@ -114,6 +125,9 @@ program knotflow_mobility
   case ('mobility')
     allocate (mu(3*n, 3*n))
     call model%mobility_matrix(mu)
+    ! never print a non-finite matrix with exit status 0
+    if (.not. all(ieee_is_finite(mu))) call die('the '//model_name//' mobility of '//file//' holds '// &
+      to_str(count(.not. ieee_is_finite(mu)))//' non-finite entries; nothing printed')
     do i = 1, 3*n
       write (output_unit, '(*(1x, es24.16e3))') (mu(i, j), j = 1, 3*n)
     end do
@@ -124,6 +138,8 @@ program knotflow_mobility
     e(3, 1) = 0.5_wp
     u = 0.0_wp
     call model%add_strain_disturbance(e, u)
+    if (.not. all(ieee_is_finite(u))) call die('the '//model_name//' shear disturbance of '//file// &
+      ' holds non-finite values; nothing printed')
     do i = 1, n
       write (output_unit, '(3(1x, es24.16e3))') u(:, i)
     end do

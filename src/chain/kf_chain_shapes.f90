@@ -11,7 +11,7 @@ module kf_chain_shapes
   implicit none
   private
 
-  public :: build_initial_chain, trefoil_closed_points, random_rotation
+  public :: build_initial_chain, trefoil_closed_points, random_rotation, chain_bead_count
 
   integer, parameter, public :: trefoil_points = 100     !< points on the closed trefoil
   integer, parameter, public :: candycane_beads = 152
@@ -60,12 +60,57 @@ contains
       if (size(r, 2) < 2) then
         call fatal_error(error, "chain: coordinate_file '"//trim(params%coordinate_file)// &
           "' holds fewer than 2 beads")
+        return
       end if
+      call check_coincident(r, trim(params%coordinate_file), error)
     case default
       call fatal_error(error, "chain: shape = '"//trim(params%shape)// &
         "' is unknown (allowed: trefoil, candycane, straight, random, file)")
     end select
   end subroutine build_initial_chain
+
+  !> The number of beads of the chain `params` describes, without building it (a coordinate
+  !> file is read): for the resource estimate at set-up.
+  subroutine chain_bead_count(params, n, error)
+    type(chain_params_t), intent(in) :: params
+    integer, intent(out) :: n
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: r(:, :)
+    real(wp) :: rotation(3, 3)
+    select case (trim(params%shape))
+    case ('trefoil')
+      n = trefoil_points - 1
+    case ('candycane')
+      n = candycane_beads
+    case ('straight', 'random')
+      n = params%n_beads
+    case default
+      call build_initial_chain(params, r, rotation, error)
+      n = 0
+      if (allocated(r)) n = size(r, 2)
+    end select
+  end subroutine chain_bead_count
+
+  !> Beads at the same place (closer than 1e-9 d) make the hydrodynamic and bending terms
+  !> singular: refused, naming the two beads (1-based, the points of the file in order). Every
+  !> pair is compared up to 20,000 beads, the bonded neighbours beyond.
+  subroutine check_coincident(r, file, error)
+    real(wp), intent(in) :: r(:, :)
+    character(len=*), intent(in) :: file
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), parameter :: tiny_distance2 = 1.0e-18_wp
+    integer :: i, j, n
+    n = size(r, 2)
+    do j = 2, n
+      do i = merge(1, j - 1, n <= 20000), j - 1
+        if (sum((r(:, j) - r(:, i))**2) < tiny_distance2) then
+          call fatal_error(error, "chain: coordinate_file '"//file//"': beads "//to_str(i)//' and '// &
+            to_str(j)//' coincide (allowed: distinct points)')
+          return
+        end if
+      end do
+    end do
+  end subroutine check_coincident
 
   pure function identity3() result(m)
     real(wp) :: m(3, 3)

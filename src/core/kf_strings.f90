@@ -1,10 +1,11 @@
 !> Number-to-text conversion shared by the whole project (messages, logs, names).
 module kf_strings
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use kf_kinds, only: wp, i8
   implicit none
   private
 
-  public :: to_str, to_str_fixed, to_str_short
+  public :: to_str, to_str_fixed, to_str_short, to_str_exact
 
   !> Text of a number without surrounding blanks: integers as `i0`, reals as `g0` or in the
   !> edit descriptor given as optional `fmt` (e.g. `'(es23.16e2)'`).
@@ -75,5 +76,58 @@ contains
       s = to_str(x, '(es10.3)')
     end if
   end function to_str_short
+
+  !> The shortest text that reads back to exactly `x` (`g0.d` with the fewest significant
+  !> digits d <= 17 that round-trip; trailing zeros removed; whole numbers below 1e15 as
+  !> `10000000.0`): `2.201`, not `2.2010000000000001`.
+  !> For messages that must tell apart values that differ only in their last digits.
+  pure function to_str_exact(x) result(s)
+    real(wp), intent(in) :: x
+    character(len=:), allocatable :: s
+    character(len=buf_len) :: buf
+    character(len=16) :: edit
+    real(wp) :: back
+    integer :: digits, ios, e, k, decimals
+    if (.not. ieee_is_finite(x)) then
+      write (buf, '(g0)') x
+      s = trim(adjustl(buf))
+      return
+    end if
+    if (abs(x) < 1.0e15_wp .and. x == aint(x)) then
+      write (buf, '(i0,a)') int(x, i8), '.0'
+      s = trim(buf)
+      return
+    end if
+    do digits = 1, 17
+      write (edit, '(a,i0,a)') '(g0.', digits, ')'
+      write (buf, edit) x
+      read (buf, *, iostat=ios) back
+      if (ios == 0 .and. back == x) exit
+    end do
+    if (abs(x) >= 1.0e-5_wp .and. abs(x) < 1.0e15_wp) then
+      ! fixed notation with the decimals of those significant digits (0.0001, not 0.1E-3)
+      decimals = max(1, digits - 1 - floor(log10(abs(x))))
+      write (edit, '(a,i0,a)') '(f0.', decimals, ')'
+      write (buf, edit) x
+      read (buf, *, iostat=ios) back
+      if (ios /= 0 .or. back /= x) write (buf, '(g0.17)') x
+    end if
+    s = trim(adjustl(buf))
+    if (s(1:1) == '.') s = '0'//s
+    if (s(1:2) == '-.') s = '-0'//s(2:)
+    e = scan(s, 'eE')
+    if (e == 0) e = len(s) + 1
+    if (index(s(1:e - 1), '.') > 0) then
+      k = e - 1
+      do while (s(k:k) == '0')
+        k = k - 1
+      end do
+      if (s(k:k) == '.') then
+        s = s(1:k)//'0'//s(e:)
+      else
+        s = s(1:k)//s(e:)
+      end if
+    end if
+  end function to_str_exact
 
 end module kf_strings

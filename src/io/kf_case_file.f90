@@ -2,15 +2,18 @@
 !> analysis tools (schema in the README and in the comments below).
 !>
 !> Layout (shapes as seen from h5py; Fortran writes the transposes):
-!> - root attributes: status, knotflow_version, git_hash, compiler, compiler_flags, case_name,
-!>   n_beads, scene (namelist text), every effective scene variable as '<group>.<variable>',
+!> - root attributes: status, schema_version (int32, `case_schema_version`; files without it
+!>   are schema 1), knotflow_version, git_hash, compiler, compiler_flags, case_name, n_beads,
+!>   scene (namelist text), every effective scene variable as '<group>.<variable>',
 !>   chain.rotation (3x3).
 !> - /frames/time (nframes,), /frames/positions (nframes, N, 3),
 !>   /frames/observables/{rg,a,b,c,theta,phi} (nframes,) float64, .../close_pairs int32,
-!>   /frames/integrator/{steps,rejected} int64, /frames/integrator/dt float64: all chunked and
-!>   extendible along the frame axis.
+!>   /frames/integrator/{steps,rejected} int64, /frames/integrator/dt float64: all chunked,
+!>   extendible along the frame axis and protected by HDF5's Fletcher-32 checksum filter.
 !> - /checkpoint/{time, positions (N, 3), dt, steps, rejected, nframes}: the state of the last
-!>   frame, rewritten with every frame.
+!>   frame, rewritten with every frame; /checkpoint/digest (int64): a digest of every part of
+!>   the checkpoint (stepper and diagnostics state included), written just before nframes
+!>   (absent from older files).
 !> - /checkpoint/stepper/{reals float64, ints int64} (1-D) with the group attribute `name` (the
 !>   &integrator method): the time stepper's whole state as exported by its `get_state`
 !>   (kf_stepper), rewritten with every frame when the caller passes it to `append_frame` and
@@ -31,27 +34,43 @@
 !>   a kill says 'running'. Such a file has no /checkpoint yet, `open_resume` then fails and the
 !>   caller recreates the case from scratch. A file whose HDF5 structure was damaged by a kill
 !>   reports 'corrupt: ...' from `case_file_status` and is recreated as well.
-!> - `append_frame` appends to every /frames dataset, then rewrites /checkpoint (nframes = the
-!>   new frame count), then flushes (H5Fflush). If the run is killed in between, /frames may hold
-!>   entries beyond the checkpoint (or some datasets one entry more than others): `open_resume`
-!>   truncates all of /frames to the checkpoint's nframes, so no frame is lost or duplicated.
+!> - `append_frame` appends to every /frames dataset and flushes, then rewrites /checkpoint
+!>   (digest, then nframes = the new frame count) and flushes again; every HDF5 status is
+!>   checked, and a failed write names the operating system's reason. If the run is killed or a
+!>   write fails (full disk) in between, /frames may hold entries beyond the checkpoint (or some
+!>   datasets one entry more than others): `open_resume` truncates all of /frames to the
+!>   checkpoint's nframes, so no frame is lost or duplicated. A write that fails while the frame
+!>   is flushed leaves the previous checkpoint untouched.
+!> - `open_resume` trusts a checkpoint only when it is whole: its digest matches its parts and
+!>   it equals the last frame it counts (time and positions). Otherwise it fails and the caller
+!>   moves the file aside (kf_case_runner).
+!> - `finish` writes status = 'finished' only after the last frame is flushed, the file closed,
+!>   read back and verified (`verify_case_file`: frame counts, checksums, finite positions,
+!>   times from 0 to t_end, checkpoint = last frame).
 !> - `open_resume` sets the status back to 'running'.
 !> - Frame times must increase strictly; `append_frame` rejects a time not after the last one.
 !> - Logical scene variables are stored as int32 attributes (1 true, 0 false): HDF5 has no
 !>   boolean type (h5py's is an enum), and an integer reads naturally in every tool.
 module kf_case_file
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+  use, intrinsic :: iso_fortran_env, only: int8
   use kf_kinds, only: wp, i4, i8
+  use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_shape, only: shape_t
   use kf_run_diagnostics, only: run_diagnostics_t, configuration_diagnostics
   use kf_build_info, only: knotflow_version, knotflow_git_hash, knotflow_compiler, knotflow_flags
   use kf_h5, only: h5_file_t, h5_create_file, h5_open_file, h5_close_file, h5_flush, &
     h5_create_group, h5_exists, h5_attr_exists, h5_write_attr, h5_read_attr, h5_write, h5_read, &
-    h5_create_extendible, h5_append, h5_set_length, h5_length, h5_real, h5_int32, h5_int64
+    h5_create_extendible, h5_append, h5_set_length, h5_length, h5_real, h5_int32, h5_int64, h5_read_entry
   implicit none
   private
 
-  public :: case_file_status, read_frames
+  public :: case_file_status, read_frames, verify_case_file
+
+  !> Version of the case file layout written by `create`. 1: files without the attribute
+  !> (before it existed); 2: the attribute itself. Raise it with any change a reader must know.
+  integer(i4), parameter, public :: case_schema_version = 2
 
   integer, parameter :: kind_str = 1, kind_i4 = 2, kind_i8 = 3, kind_real = 4, kind_real1 = 5, &
     kind_real2 = 6
@@ -98,6 +117,7 @@ module kf_case_file
     integer(i8) :: nframes = 0
     real(wp) :: last_time = 0.0_wp
     logical :: diagnostics = .false.     !< the file has /frames/diagnostics
+    real(wp) :: flushed_time = -1.0_wp   !< time of the last checkpoint flushed (-1: none)
   contains
     !> create(path, case_name, n_beads, scene_text, [scene_attrs,] rotation, error): the
     !> scene attributes can also be written afterwards with `write_attribute`.
@@ -107,9 +127,11 @@ module kf_case_file
     procedure :: open_resume
     procedure :: append_frame
     procedure :: set_status
+    procedure :: finish
     procedure :: close => close_case
     procedure :: is_open => case_is_open
     procedure :: frame_count
+    procedure :: checkpoint_time
     procedure :: enable_diagnostics
     procedure :: has_diagnostics
     procedure :: restore_diagnostics
@@ -254,9 +276,11 @@ contains
     this%n_beads = n_beads
     this%nframes = 0
     this%diagnostics = .false.
+    this%flushed_time = -1.0_wp
     call h5_write_attr(this%file, '/', 'status', 'running', error)
     if (allocated(error)) return
-    call h5_write_attr(this%file, '/', 'knotflow_version', knotflow_version, error)
+    call h5_write_attr(this%file, '/', 'schema_version', case_schema_version, error)
+    if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'knotflow_version', knotflow_version, error)
     if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'git_hash', knotflow_git_hash, error)
     if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'compiler', knotflow_compiler, error)
     if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'compiler_flags', knotflow_flags, error)
@@ -372,6 +396,9 @@ contains
     type(run_diagnostics_t), intent(in), optional :: diagnostics
     type(stepper_checkpoint_t), intent(in), optional :: stepper
     real(wp), allocatable :: rc(:, :)
+    integer(i8) :: digest(2), counters(5)
+    real(wp) :: values(5)
+    real(wp), allocatable :: ongoing(:, :)
     if (.not. this%file%is_open()) then
       call fatal_error(error, 'case file: append_frame on a file that is not open')
       return
@@ -414,42 +441,69 @@ contains
     if (.not. allocated(error)) call h5_append(this%file, '/frames/integrator/dt', dt, error)
     if (allocated(error)) return
     if (present(diagnostics)) then
-      call write_diagnostics(this%file, r, diagnostics, error)
+      call write_diagnostics_frame(this%file, r, diagnostics, error)
       if (allocated(error)) return
     end if
+    ! The frame reaches the disk before the checkpoint is touched: a write that fails here (full
+    ! disk) leaves the previous checkpoint as it was, and a resume drops the partial frame.
+    call h5_flush(this%file, error)
+    if (allocated(error)) return
     this%nframes = this%nframes + 1
     this%last_time = t
+    if (present(diagnostics)) then
+      call write_diagnostics_state(this%file, diagnostics, error, counters, values, ongoing)
+      if (allocated(error)) return
+    end if
     call h5_write(this%file, '/checkpoint/time', t, error)
     if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/positions', rc, error)
     if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/dt', dt, error)
     if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/steps', steps, error)
     if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/rejected', rejected, error)
     if (present(stepper) .and. .not. allocated(error)) call write_stepper(this%file, stepper, error)
-    ! nframes last: a checkpoint is only trusted up to the frame count written with it.
+    ! The digest of every part, then nframes last: a checkpoint is only trusted up to the frame
+    ! count written with it, and only when its parts belong together (`resume` recomputes it).
+    if (.not. allocated(error)) then
+      if (present(stepper)) then
+        digest = checkpoint_digest(this%nframes, t, rc, dt, steps, rejected, stepper%reals, stepper%ints)
+      else
+        digest = checkpoint_digest(this%nframes, t, rc, dt, steps, rejected)
+      end if
+      if (present(diagnostics)) call digest_add(digest, counters, values, ongoing)
+      call h5_write(this%file, '/checkpoint/digest', digest_value(digest), error)
+    end if
     if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/nframes', this%nframes, error)
     if (allocated(error)) return
     call h5_flush(this%file, error)
+    if (.not. allocated(error)) this%flushed_time = t
   end subroutine append_frame
 
-  !> Per-frame values, run totals and checkpoint state of the run diagnostics.
-  subroutine write_diagnostics(file, r, diag, error)
+  !> Per-frame values of the run diagnostics.
+  subroutine write_diagnostics_frame(file, r, diag, error)
     type(h5_file_t), intent(in) :: file
     real(wp), intent(in) :: r(:, :)
     type(run_diagnostics_t), intent(in) :: diag
     type(error_t), allocatable, intent(out) :: error
     integer :: pairs
     real(wp) :: dmin, strain
-    integer(i8) :: counters(5)
-    real(wp) :: values(5)
-    real(wp), allocatable :: ongoing(:, :)
     call configuration_diagnostics(r, diag%bond_length, pairs, dmin, strain)
     call h5_append(file, '/frames/diagnostics/strand_passages', diag%strand_passages, error)
     if (.not. allocated(error)) call h5_append(file, '/frames/diagnostics/overlapping_pairs', int(pairs, i4), error)
     if (.not. allocated(error)) call h5_append(file, '/frames/diagnostics/overlap_episodes', diag%overlap_episodes, error)
     if (.not. allocated(error)) call h5_append(file, '/frames/diagnostics/min_distance', dmin, error)
     if (.not. allocated(error)) call h5_append(file, '/frames/diagnostics/max_bond_strain', strain, error)
-    if (.not. allocated(error)) &
-      call h5_write_attr(file, '/', 'diagnostics.strand_passages', diag%strand_passages, error)
+  end subroutine write_diagnostics_frame
+
+  !> Run totals (root attributes) and checkpoint state of the run diagnostics (the state
+  !> written is returned in `counters`, `values`, `ongoing`).
+  subroutine write_diagnostics_state(file, diag, error, counters, values, ongoing)
+    type(h5_file_t), intent(in) :: file
+    type(run_diagnostics_t), intent(in) :: diag
+    type(error_t), allocatable, intent(out) :: error
+    integer(i8), intent(out) :: counters(5)
+    real(wp), intent(out) :: values(5)
+    real(wp), allocatable, intent(out) :: ongoing(:, :)
+    call diag%get_state(counters, values, ongoing)
+    call h5_write_attr(file, '/', 'diagnostics.strand_passages', diag%strand_passages, error)
     if (.not. allocated(error)) &
       call h5_write_attr(file, '/', 'diagnostics.first_passage_time', diag%first_passage_time, error)
     if (.not. allocated(error)) &
@@ -465,11 +519,10 @@ contains
     if (.not. allocated(error)) &
       call h5_write_attr(file, '/', 'diagnostics.max_bond_strain', diag%max_bond_strain, error)
     if (allocated(error)) return
-    call diag%get_state(counters, values, ongoing)
     call h5_write(file, '/checkpoint/diagnostics/counters', counters, error)
     if (.not. allocated(error)) call h5_write(file, '/checkpoint/diagnostics/values', values, error)
     if (.not. allocated(error)) call h5_write(file, '/checkpoint/diagnostics/ongoing', ongoing, error)
-  end subroutine write_diagnostics
+  end subroutine write_diagnostics_state
 
   !> The time stepper's state in /checkpoint/stepper.
   subroutine write_stepper(file, stepper, error)
@@ -510,6 +563,9 @@ contains
     integer(i4) :: n_beads
     integer(i8) :: length
     integer :: i
+    real(wp), allocatable :: times(:), last(:, :), values(:), ongoing(:, :)
+    integer(i8), allocatable :: counters(:)
+    integer(i8) :: digest(2), stored_digest
     character(len=32), parameter :: other_sets(4) = [character(len=32) :: '/frames/positions', &
       '/frames/observables/close_pairs', '/frames/integrator/steps', '/frames/integrator/rejected']
     character(len=40) :: all_sets(size(frame_real_sets) + size(other_sets) + size(diag_sets))
@@ -543,6 +599,26 @@ contains
       call fatal_error(error, "case file '"//path//"': checkpoint has no frames")
       return
     end if
+    ! The checkpoint must be its last frame: a write that failed part-way is not resumed from.
+    call h5_length(this%file, '/frames/time', length, error)
+    if (allocated(error)) return
+    if (length < nframes) then
+      call fatal_error(error, "case file '"//path//"': /frames/time is shorter than the checkpoint's frame count")
+      return
+    end if
+    call h5_read(this%file, '/frames/time', times, error)
+    if (.not. allocated(error)) call h5_read_entry(this%file, '/frames/positions', nframes, last, error)
+    if (allocated(error)) return
+    if (times(nframes) /= t .or. any(shape(last) /= shape(r))) then
+      call fatal_error(error, "case file '"//path//"': the checkpoint (t = "//to_str(t, '(g0.6)')// &
+        ') is not its last frame: it was not written completely')
+      return
+    end if
+    if (any(last /= r)) then
+      call fatal_error(error, "case file '"//path//"': the checkpoint (t = "//to_str(t, '(g0.6)')// &
+        ') is not its last frame: it was not written completely')
+      return
+    end if
     if (h5_exists(this%file, '/checkpoint/stepper/ints')) then
       call h5_read(this%file, '/checkpoint/stepper/reals', stepper%reals, error)
       if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/stepper/ints', stepper%ints, error)
@@ -550,6 +626,28 @@ contains
       if (allocated(error)) return
     end if
     this%diagnostics = h5_exists(this%file, trim(diag_sets(1)))
+    ! Files written since the digest exists: every part must come from the same frame.
+    if (h5_exists(this%file, '/checkpoint/digest')) then
+      call h5_read(this%file, '/checkpoint/digest', stored_digest, error)
+      if (allocated(error)) return
+      if (allocated(stepper%ints)) then
+        digest = checkpoint_digest(nframes, t, r, dt, steps, rejected, stepper%reals, stepper%ints)
+      else
+        digest = checkpoint_digest(nframes, t, r, dt, steps, rejected)
+      end if
+      if (this%diagnostics .and. h5_exists(this%file, '/checkpoint/diagnostics/counters')) then
+        call h5_read(this%file, '/checkpoint/diagnostics/counters', counters, error)
+        if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/diagnostics/values', values, error)
+        if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/diagnostics/ongoing', ongoing, error)
+        if (allocated(error)) return
+        call digest_add(digest, counters, values, ongoing)
+      end if
+      if (digest_value(digest) /= stored_digest) then
+        call fatal_error(error, "case file '"//path//"': the checkpoint (t = "//to_str(t, '(g0.6)')// &
+          ') does not match its digest: it was not written completely')
+        return
+      end if
+    end if
     n_sets = size(frame_real_sets) + size(other_sets)
     all_sets(1:size(frame_real_sets)) = frame_real_sets
     all_sets(size(frame_real_sets) + 1:n_sets) = other_sets
@@ -574,6 +672,7 @@ contains
     this%n_beads = n_beads
     this%nframes = nframes
     this%last_time = t
+    this%flushed_time = t
   end subroutine resume
 
   !> Set the status attribute ('running', 'finished', 'failed: <reason>') and flush.
@@ -585,16 +684,60 @@ contains
     if (.not. allocated(error)) call h5_flush(this%file, error)
   end subroutine set_status
 
-  !> Close the file (a closed case file is left alone).
-  subroutine close_case(this)
+  !> Close the file (a closed case file is left alone). `error`, when present, reports a
+  !> failed close (the last writes may not have reached the disk).
+  subroutine close_case(this, error)
     class(case_file_t), intent(inout) :: this
-    call h5_close_file(this%file)
+    type(error_t), allocatable, intent(out), optional :: error
+    call h5_close_file(this%file, error)
   end subroutine close_case
+
+  !> End a run that reached `t_end`: flush and close the file (both checked), read it back and
+  !> verify it (`verify_case_file`), and only then write status = 'finished' (written, flushed
+  !> and closed, all checked). On error the file is closed and still says 'running'; `damaged`
+  !> tells that the verification found the file itself bad (then it must not be resumed).
+  subroutine finish(this, t_end, error, damaged)
+    class(case_file_t), intent(inout) :: this
+    real(wp), intent(in) :: t_end
+    type(error_t), allocatable, intent(out) :: error
+    logical, intent(out) :: damaged
+    character(len=:), allocatable :: path
+    damaged = .false.
+    path = this%file%name()
+    call h5_flush(this%file, error)
+    if (allocated(error)) then
+      call this%close()
+      return
+    end if
+    call this%close(error)
+    if (allocated(error)) return
+    call verify_case_file(path, t_end, error)
+    if (allocated(error)) then
+      damaged = .true.
+      return
+    end if
+    call h5_open_file(this%file, path, .true., error)
+    if (allocated(error)) return
+    call h5_write_attr(this%file, '/', 'status', 'finished', error)
+    if (.not. allocated(error)) call h5_flush(this%file, error)
+    if (allocated(error)) then
+      call this%close()
+      return
+    end if
+    call this%close(error)
+  end subroutine finish
 
   pure logical function case_is_open(this)
     class(case_file_t), intent(in) :: this
     case_is_open = this%file%is_open()
   end function case_is_open
+
+  !> Time of the last checkpoint flushed to the file by `append_frame` (or found by
+  !> `open_resume`); -1 when there is none yet.
+  pure real(wp) function checkpoint_time(this)
+    class(case_file_t), intent(in) :: this
+    checkpoint_time = this%flushed_time
+  end function checkpoint_time
 
   !> Number of frames in the file.
   pure integer(i8) function frame_count(this)
@@ -727,6 +870,163 @@ contains
     call h5_close_file(file)
   end subroutine case_file_status
 
+  ! ---------------------------------------------------------------- checkpoint digest
+
+  !> The digest of a checkpoint's parts (an Adler-style pair of sums modulo a prime over their
+  !> bytes): it tells whether parts read back were written by the same `append_frame`.
+  pure function checkpoint_digest(nframes, t, r, dt, steps, rejected, reals, ints) result(d)
+    integer(i8), intent(in) :: nframes, steps, rejected
+    real(wp), intent(in) :: t, dt, r(:, :)
+    real(wp), intent(in), optional :: reals(:)
+    integer(i8), intent(in), optional :: ints(:)
+    integer(i8) :: d(2)
+    d = [1_i8, 0_i8]
+    call add_bytes(d, transfer([nframes, steps, rejected], [0_int8]))
+    call add_bytes(d, transfer([t, dt], [0_int8]))
+    call add_bytes(d, transfer(r, [0_int8]))
+    if (present(reals)) call add_bytes(d, transfer(reals, [0_int8]))
+    if (present(ints)) call add_bytes(d, transfer(ints, [0_int8]))
+  end function checkpoint_digest
+
+  !> Add the run diagnostics' checkpoint state to a digest.
+  pure subroutine digest_add(d, counters, values, ongoing)
+    integer(i8), intent(inout) :: d(2)
+    integer(i8), intent(in) :: counters(:)
+    real(wp), intent(in) :: values(:), ongoing(:, :)
+    call add_bytes(d, transfer(counters, [0_int8]))
+    call add_bytes(d, transfer(values, [0_int8]))
+    call add_bytes(d, transfer(ongoing, [0_int8]))
+  end subroutine digest_add
+
+  pure subroutine add_bytes(d, bytes)
+    integer(i8), intent(inout) :: d(2)
+    integer(int8), intent(in) :: bytes(:)
+    integer(i8), parameter :: prime = 2147483629_i8
+    integer :: k
+    do k = 1, size(bytes)
+      d(1) = mod(d(1) + iand(int(bytes(k), i8), 255_i8), prime)
+      d(2) = mod(d(2) + d(1), prime)
+    end do
+  end subroutine add_bytes
+
+  pure integer(i8) function digest_value(d)
+    integer(i8), intent(in) :: d(2)
+    digest_value = d(2)*2147483648_i8 + d(1)
+  end function digest_value
+
+  !> Read the case file `path` back and check what a finished run must hold: every /frames
+  !> dataset has the checkpoint's frame count and reads without a checksum error; the times
+  !> start at 0, increase strictly and end at `t_end`; every position is finite; the checkpoint
+  !> is the last frame. The message names the file, dataset and frame of the first problem.
+  subroutine verify_case_file(path, t_end, error)
+    character(len=*), intent(in) :: path
+    real(wp), intent(in) :: t_end
+    type(error_t), allocatable, intent(out) :: error
+    type(h5_file_t) :: file
+    real(wp), allocatable :: t(:), r(:, :, :), values(:), rc(:, :)
+    integer(i4), allocatable :: ivalues(:)
+    integer(i8), allocatable :: lvalues(:)
+    integer(i8) :: nframes, length
+    integer(i4) :: n_beads
+    integer :: k, bad
+    character(len=40) :: sets(size(frame_real_sets) + 3 + size(diag_sets))
+    integer :: kinds(size(sets)), n_sets
+    call h5_open_file(file, path, .false., error)
+    if (allocated(error)) return
+    call check()
+    call h5_close_file(file)
+    if (allocated(error)) error%message = "case file '"//path//"' fails verification: "//error%message
+
+  contains
+
+    subroutine check()
+      call h5_read_attr(file, '/', 'n_beads', n_beads, error)
+      if (.not. allocated(error)) call h5_read(file, '/checkpoint/nframes', nframes, error)
+      if (.not. allocated(error)) call h5_read(file, '/frames/time', t, error)
+      if (allocated(error)) return
+      if (size(t, kind=i8) /= nframes .or. nframes < 1) then
+        call fatal_error(error, '/frames/time has '//to_str(size(t, kind=i8))//' frames, the checkpoint '// &
+          to_str(nframes))
+        return
+      end if
+      if (t(1) /= 0.0_wp) then
+        call fatal_error(error, 'frame 0 is not at t = 0')
+        return
+      end if
+      do k = 1, size(t)
+        if (.not. ieee_is_finite(t(k))) then
+          call fatal_error(error, 'frame '//to_str(int(k - 1, i8))//' has a non-finite time')
+          return
+        end if
+      end do
+      do k = 2, size(t)
+        if (.not. t(k) > t(k - 1)) then
+          call fatal_error(error, 'frame '//to_str(int(k - 1, i8))//': time does not increase')
+          return
+        end if
+      end do
+      if (.not. abs(t(size(t)) - t_end) <= 1.0e-9_wp*max(1.0_wp, abs(t_end))) then
+        call fatal_error(error, 'the last frame is not at t_end')
+        return
+      end if
+      call h5_read(file, '/frames/positions', r, error)
+      if (allocated(error)) return
+      if (size(r, 1) /= 3 .or. size(r, 2) /= n_beads .or. size(r, 3, kind=i8) /= nframes) then
+        call fatal_error(error, '/frames/positions does not have shape (nframes, n_beads, 3)')
+        return
+      end if
+      do k = 1, size(r, 3)
+        bad = count(.not. ieee_is_finite(r(:, :, k)))
+        if (bad > 0) then
+          call fatal_error(error, 'frame '//to_str(int(k - 1, i8))//' (t = '//to_str(t(k), '(g0.6)')//') holds '// &
+            to_str(int(bad, i8))//' non-finite coordinates')
+          return
+        end if
+      end do
+      call h5_read(file, '/checkpoint/positions', rc, error)
+      if (allocated(error)) return
+      if (any(shape(rc) /= [3, int(n_beads)])) then
+        call fatal_error(error, '/checkpoint/positions does not have shape (n_beads, 3)')
+        return
+      end if
+      if (any(rc /= r(:, :, size(r, 3)))) then
+        call fatal_error(error, 'the checkpoint is not the last frame')
+        return
+      end if
+      n_sets = size(frame_real_sets)
+      sets(1:n_sets) = frame_real_sets
+      kinds(1:n_sets) = h5_real
+      sets(n_sets + 1:n_sets + 3) = [character(len=40) :: '/frames/observables/close_pairs', &
+        '/frames/integrator/steps', '/frames/integrator/rejected']
+      kinds(n_sets + 1:n_sets + 3) = [h5_int32, h5_int64, h5_int64]
+      n_sets = n_sets + 3
+      if (h5_exists(file, trim(diag_sets(1)))) then
+        sets(n_sets + 1:n_sets + size(diag_sets)) = diag_sets
+        kinds(n_sets + 1:n_sets + size(diag_sets)) = diag_kinds
+        n_sets = n_sets + size(diag_sets)
+      end if
+      do k = 1, n_sets
+        call h5_length(file, trim(sets(k)), length, error)
+        if (allocated(error)) return
+        if (length /= nframes) then
+          call fatal_error(error, trim(sets(k))//' has '//to_str(length)//' frames, the checkpoint '// &
+            to_str(nframes))
+          return
+        end if
+        select case (kinds(k))
+        case (h5_real)
+          call h5_read(file, trim(sets(k)), values, error)
+        case (h5_int32)
+          call h5_read(file, trim(sets(k)), ivalues, error)
+        case default
+          call h5_read(file, trim(sets(k)), lvalues, error)
+        end select
+        if (allocated(error)) return
+      end do
+    end subroutine check
+
+  end subroutine verify_case_file
+
   !> Read all frame times t(nframes) and positions r(3, N, nframes) of a case file.
   subroutine read_frames(path, t, r, error)
     character(len=*), intent(in) :: path
@@ -742,7 +1042,27 @@ contains
       if (size(r, 3) /= size(t)) call fatal_error(error, "case file '"//path// &
         "': /frames/time and /frames/positions have different lengths")
     end if
+    if (.not. allocated(error)) call check_finite_frames(path, t, r, error)
     call h5_close_file(file)
   end subroutine read_frames
+
+  !> Every frame time and coordinate must be finite: the error names the file, the first bad
+  !> frame (0-based), its time and the number of non-finite coordinates.
+  subroutine check_finite_frames(path, t, r, error)
+    character(len=*), intent(in) :: path
+    real(wp), intent(in) :: t(:), r(:, :, :)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: k, bad
+    do k = 1, size(t)
+      bad = count(.not. ieee_is_finite(r(:, :, k)))
+      if (bad > 0 .or. .not. ieee_is_finite(t(k))) then
+        call fatal_error(error, "case file '"//path//"': frame "//to_str(k - 1)//' (t = '// &
+          to_str(t(k), '(g0.6)')//') holds '//to_str(bad)//' non-finite coordinates'// &
+          merge(' and a non-finite time', '                      ', .not. ieee_is_finite(t(k))))
+        error%message = trim(error%message)
+        return
+      end if
+    end do
+  end subroutine check_finite_frames
 
 end module kf_case_file

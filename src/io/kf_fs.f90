@@ -1,12 +1,14 @@
 !> Small file-system helpers through the C library (POSIX): create directories, check that a
 !> directory is writable, remove files, and lock a directory against a second writer.
 module kf_fs
-  use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char
+  use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char, c_ptr, c_f_pointer, &
+    c_associated, c_funptr, c_intptr_t
   use kf_error, only: error_t, fatal_error
   implicit none
   private
 
   public :: make_directory, check_writable_directory, file_exists, remove_file, lock_directory
+  public :: rename_file, move_aside, clear_os_error, os_error_text, ignore_file_size_signal
 
   interface
     function c_mkdir(path, mode) bind(c, name='mkdir') result(rc)
@@ -32,6 +34,27 @@ module kf_fs
       integer(c_int), value :: fd, operation
       integer(c_int) :: rc
     end function c_flock
+    function c_rename(old, new) bind(c, name='rename') result(rc)
+      import :: c_char, c_int
+      character(kind=c_char), intent(in) :: old(*), new(*)
+      integer(c_int) :: rc
+    end function c_rename
+    !> glibc's (and musl's) address of the calling thread's errno.
+    function c_errno_location() bind(c, name='__errno_location') result(p)
+      import :: c_ptr
+      type(c_ptr) :: p
+    end function c_errno_location
+    function c_signal(signum, handler) bind(c, name='signal') result(old)
+      import :: c_int, c_funptr
+      integer(c_int), value :: signum
+      type(c_funptr), value :: handler
+      type(c_funptr) :: old
+    end function c_signal
+    function c_strerror(errnum) bind(c, name='strerror') result(p)
+      import :: c_int, c_ptr
+      integer(c_int), value :: errnum
+      type(c_ptr) :: p
+    end function c_strerror
   end interface
 
   integer(c_int), parameter :: w_ok = 2, x_ok = 1, f_ok = 0
@@ -112,5 +135,71 @@ contains
         path//'''): wait for it to end, or choose another output directory')
     end if
   end subroutine lock_directory
+
+  !> Ignore SIGXFSZ (Linux: 25), which the kernel sends when a write passes the file size limit
+  !> (`ulimit -f`) and which otherwise kills the program (the Fortran runtime even installs a
+  !> backtrace handler for it): the write then fails with EFBIG ('File too large') and the
+  !> program reports it like a full disk. Called once by programs that write case files.
+  subroutine ignore_file_size_signal()
+    integer(c_int), parameter :: sigxfsz = 25
+    integer(c_intptr_t), parameter :: sig_ign = 1
+    type(c_funptr) :: old
+    old = c_signal(sigxfsz, transfer(sig_ign, old))
+  end subroutine ignore_file_size_signal
+
+  !> Set the C library's errno to 0, before an operation whose failure `os_error_text` explains.
+  subroutine clear_os_error()
+    integer(c_int), pointer :: e
+    call c_f_pointer(c_errno_location(), e)
+    e = 0
+  end subroutine clear_os_error
+
+  !> The operating system's reason for the last failed system call (strerror(errno), e.g.
+  !> 'No space left on device', 'File too large'), '' when errno is 0.
+  function os_error_text() result(text)
+    character(len=:), allocatable :: text
+    integer(c_int), pointer :: e
+    character(kind=c_char), pointer :: chars(:)
+    type(c_ptr) :: p
+    integer :: n
+    text = ''
+    call c_f_pointer(c_errno_location(), e)
+    if (e == 0) return
+    p = c_strerror(e)
+    if (.not. c_associated(p)) return
+    call c_f_pointer(p, chars, [256])
+    do n = 1, 256
+      if (chars(n) == c_null_char) exit
+      text = text//chars(n)
+    end do
+  end function os_error_text
+
+  !> Rename `old` to `new` (rename(2): atomic within one file system, replaces `new`).
+  subroutine rename_file(old, new, error)
+    character(len=*), intent(in) :: old, new
+    type(error_t), allocatable, intent(out) :: error
+    call clear_os_error()
+    if (c_rename(old//c_null_char, new//c_null_char) /= 0) then
+      call fatal_error(error, 'cannot rename '''//old//''' to '''//new//''': '//os_error_text())
+    end if
+  end subroutine rename_file
+
+  !> Move the file `path` aside, never deleting it: renamed to '<path>.damaged', or
+  !> '<path>.damaged.<k>' (k = 2, 3, ...) when that exists. `moved_to` is the new name.
+  subroutine move_aside(path, moved_to, error)
+    character(len=*), intent(in) :: path
+    character(len=:), allocatable, intent(out) :: moved_to
+    type(error_t), allocatable, intent(out) :: error
+    character(len=16) :: suffix
+    integer :: k
+    moved_to = path//'.damaged'
+    k = 1
+    do while (file_exists(moved_to))
+      k = k + 1
+      write (suffix, '(i0)') k
+      moved_to = path//'.damaged.'//trim(suffix)
+    end do
+    call rename_file(path, moved_to, error)
+  end subroutine move_aside
 
 end module kf_fs

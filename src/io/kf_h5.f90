@@ -9,6 +9,9 @@
 !> with shape (m, n, 3). Extendible datasets grow along their last Fortran dimension (the first
 !> axis as seen from h5py). Strings are written as fixed-length, null-padded ASCII; strings are
 !> read both in that form and as variable-length strings (what h5py writes by default).
+!> Chunked (extendible) datasets carry HDF5's Fletcher-32 checksum filter, so damaged data fails
+!> to read instead of reading wrong. Failed writes, flushes and closes name the operating
+!> system's reason (errno, kf_fs).
 !> Writing an attribute that exists replaces it; writing a dataset that exists overwrites it in
 !> place when the shape matches (no file space is lost) and replaces it otherwise.
 module kf_h5
@@ -18,6 +21,7 @@ module kf_h5
   use kf_kinds, only: wp, i4, i8
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
+  use kf_fs, only: clear_os_error, os_error_text
   use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5close_f, h5eset_auto_f, &
     h5fcreate_f, h5fopen_f, h5fclose_f, h5fflush_f, H5F_ACC_TRUNC_F, H5F_ACC_RDWR_F, &
     H5F_ACC_RDONLY_F, H5F_SCOPE_GLOBAL_F, h5gcreate_f, h5gclose_f, h5lexists_f, h5ldelete_f, &
@@ -26,7 +30,7 @@ module kf_h5
     h5sget_simple_extent_dims_f, h5sselect_hyperslab_f, h5acreate_f, h5aopen_f, h5aclose_f, &
     h5aexists_f, h5adelete_f, h5awrite_f, h5aread_f, h5aget_type_f, h5aget_space_f, &
     h5dcreate_f, h5dopen_f, h5dclose_f, h5dwrite_f, h5dread_f, h5dget_space_f, &
-    h5dset_extent_f, h5pcreate_f, h5pclose_f, h5pset_chunk_f, H5P_DATASET_CREATE_F, &
+    h5dset_extent_f, h5pcreate_f, h5pclose_f, h5pset_chunk_f, h5pset_fletcher32_f, H5P_DATASET_CREATE_F, &
     h5tcopy_f, h5tclose_f, h5tset_size_f, h5tget_size_f, h5tset_strpad_f, h5tget_class_f, &
     h5tis_variable_str_f, H5T_FORTRAN_S1, H5T_STR_NULLPAD_F, H5T_STRING_F, &
     H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, H5T_STD_I32LE, H5T_STD_I64LE, h5kind_to_type, &
@@ -40,7 +44,8 @@ module kf_h5
   public :: h5_create_group, h5_exists, h5_attr_exists, h5_delete
   public :: h5_write_attr, h5_read_attr
   public :: h5_write, h5_read
-  public :: h5_create_extendible, h5_append, h5_set_length, h5_length
+  public :: h5_create_extendible, h5_append, h5_set_length, h5_length, h5_read_entry
+  public :: h5_extend_truncated
   public :: h5_real, h5_int32, h5_int64
 
   !> Element kinds of extendible datasets (for `h5_create_extendible`).
@@ -150,10 +155,11 @@ contains
     type(error_t), allocatable, intent(out) :: error
     integer :: stat
     file%path = path
+    call clear_os_error()
     call h5fcreate_f(path, H5F_ACC_TRUNC_F, file%id, stat)
     if (stat < 0) then
       file%id = -1
-      call fatal_error(error, "HDF5: cannot create file '"//path//"'")
+      call fatal_error(error, "HDF5: cannot create file '"//path//"'"//os_reason())
     end if
   end subroutine h5_create_file
 
@@ -188,9 +194,11 @@ contains
     type(error_t), allocatable, intent(out), optional :: error
     integer :: stat
     if (file%id < 0) return
+    call clear_os_error()
     call h5fclose_f(file%id, stat)
     file%id = -1
-    if (stat < 0 .and. present(error)) call fatal_error(error, "HDF5: cannot close file '"//file%name()//"'")
+    if (stat < 0 .and. present(error)) call fatal_error(error, "HDF5: cannot close file '"//file%name()// &
+      "' (its last writes may be lost)"//os_reason())
   end subroutine h5_close_file
 
   !> Flush all buffers of the file to disk (H5Fflush).
@@ -198,8 +206,9 @@ contains
     type(h5_file_t), intent(in) :: file
     type(error_t), allocatable, intent(out) :: error
     integer :: stat
+    call clear_os_error()
     call h5fflush_f(file%id, H5F_SCOPE_GLOBAL_F, stat)
-    if (stat < 0) call fail(error, file, 'flush', '/')
+    if (stat < 0) call fail_io(error, file, 'flush', '/')
   end subroutine h5_flush
 
   ! ---------------------------------------------------------------- groups and links
@@ -398,11 +407,13 @@ contains
     end if
     call h5acreate_f(oid, name, filetype, sid, aid, stat)
     if (stat < 0) then
-      call fail(error, file, 'create attribute', obj//'@'//name)
+      call fail_io(error, file, 'create attribute', obj//'@'//name)
     else
+      call clear_os_error()
       call h5awrite_f(aid, memtype, buf, stat)
-      if (stat < 0) call fail(error, file, 'write attribute', obj//'@'//name)
-      call h5aclose_f(aid, ignore)
+      if (stat < 0) call fail_io(error, file, 'write attribute', obj//'@'//name)
+      call h5aclose_f(aid, stat)
+      if (stat < 0 .and. .not. allocated(error)) call fail_io(error, file, 'write (close) attribute', obj//'@'//name)
     end if
     call h5sclose_f(sid, ignore)
     call h5oclose_f(oid, ignore)
@@ -783,9 +794,10 @@ contains
         call h5sclose_f(sid, ignore)
       end if
       if (same) then
+        call clear_os_error()
         call h5dwrite_f(did, memtype, buf, stat)
-        if (stat < 0) call fail(error, file, 'write dataset', name)
-        call h5dclose_f(did, ignore)
+        if (stat < 0) call fail_io(error, file, 'write dataset', name)
+        call close_written(did, file, name, error)
         return
       end if
       call h5dclose_f(did, ignore)
@@ -803,16 +815,30 @@ contains
       call fail(error, file, 'create dataspace for dataset', name)
       return
     end if
+    call clear_os_error()
     call h5dcreate_f(file%id, name, filetype, sid, did, stat)
     if (stat < 0) then
-      call fail(error, file, 'create dataset', name)
+      call fail_io(error, file, 'create dataset', name)
     else
       call h5dwrite_f(did, memtype, buf, stat)
-      if (stat < 0) call fail(error, file, 'write dataset', name)
-      call h5dclose_f(did, ignore)
+      if (stat < 0) call fail_io(error, file, 'write dataset', name)
+      call close_written(did, file, name, error)
     end if
     call h5sclose_f(sid, ignore)
   end subroutine write_raw
+
+  !> Close a dataset just written: the close may write its data (chunk cache) and can fail like
+  !> a write; a failure is reported unless an earlier one already is.
+  subroutine close_written(did, file, name, error)
+    integer(hid_t), intent(in) :: did
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: name
+    type(error_t), allocatable, intent(inout) :: error
+    integer :: stat
+    if (.not. allocated(error)) call clear_os_error()
+    call h5dclose_f(did, stat)
+    if (stat < 0 .and. .not. allocated(error)) call fail_io(error, file, 'write (close) dataset', name)
+  end subroutine close_written
 
   ! ---------------------------------------------------------------- datasets: whole reads
 
@@ -1003,8 +1029,12 @@ contains
     call open_dataset(file, name, did, error)
     if (allocated(error)) return
     ptr = buf
+    call clear_os_error()
     call h5dread_f(did, memtype, ptr, stat)
-    if (stat < 0) call fail(error, file, 'read dataset', name)
+    if (stat < 0) then
+      call fail_io(error, file, 'read dataset', name)
+      error%message = error%message//' (damaged data: checksum mismatch or I/O error)'
+    end if
     call h5dclose_f(did, ignore)
   end subroutine read_raw
 
@@ -1066,14 +1096,17 @@ contains
     end if
     call h5pcreate_f(H5P_DATASET_CREATE_F, pid, stat)
     if (stat >= 0) call h5pset_chunk_f(pid, rank, chunks, stat)
+    ! Fletcher-32 checksum per chunk: damage inside the data is detected when it is read.
+    if (stat >= 0) call h5pset_fletcher32_f(pid, stat)
     if (stat < 0) then
-      call fail(error, file, 'set chunking for dataset', name)
+      call fail(error, file, 'set chunking and checksums for dataset', name)
     else
+      call clear_os_error()
       call h5dcreate_f(file%id, name, ftype, sid, did, stat, pid)
       if (stat < 0) then
-        call fail(error, file, 'create extendible dataset', name)
+        call fail_io(error, file, 'create extendible dataset', name)
       else
-        call h5dclose_f(did, ignore)
+        call close_written(did, file, name, error)
       end if
     end if
     call h5pclose_f(pid, ignore)
@@ -1150,9 +1183,10 @@ contains
     call open_dataset(file, name, did, error)
     if (allocated(error)) return
     dims(rank) = dims(rank) + 1
+    call clear_os_error()
     call h5dset_extent_f(did, dims, stat)
     if (stat < 0) then
-      call fail(error, file, 'extend dataset', name)
+      call fail_io(error, file, 'extend dataset', name)
       call h5dclose_f(did, ignore)
       return
     end if
@@ -1171,13 +1205,112 @@ contains
     if (stat < 0) then
       call fail(error, file, 'create memory dataspace for dataset', name)
     else
+      call clear_os_error()
       call h5dwrite_f(did, memtype, buf, stat, msid, fsid)
-      if (stat < 0) call fail(error, file, 'append to dataset', name)
+      if (stat < 0) call fail_io(error, file, 'append to dataset', name)
       call h5sclose_f(msid, ignore)
     end if
     call h5sclose_f(fsid, ignore)
-    call h5dclose_f(did, ignore)
+    call close_written(did, file, name, error)
   end subroutine append_raw
+
+  !> Read entry `k` (1-based) along the last dimension of the 3-D real dataset `name`: the 2-D
+  !> slice value(n1, n2) (e.g. the positions of one frame) without reading the others.
+  subroutine h5_read_entry(file, name, k, value, error)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: name
+    integer(i8), intent(in) :: k
+    real(wp), allocatable, target, intent(out) :: value(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    integer(hsize_t), allocatable :: dims(:)
+    integer(hsize_t) :: start(3), count(3)
+    integer(hid_t) :: did, fsid, msid
+    integer :: stat, ignore
+    type(c_ptr) :: ptr
+    call dataset_dims(file, name, 3, dims, error)
+    if (allocated(error)) return
+    if (k < 1 .or. k > int(dims(3), i8)) then
+      call fatal_error(error, "HDF5: dataset '"//name//"' in '"//file%name()//"' has no entry "//to_str(k))
+      return
+    end if
+    allocate (value(dims(1), dims(2)))
+    call open_dataset(file, name, did, error)
+    if (allocated(error)) return
+    start = [0_hsize_t, 0_hsize_t, int(k - 1, hsize_t)]
+    count = [dims(1), dims(2), 1_hsize_t]
+    call h5dget_space_f(did, fsid, stat)
+    if (stat >= 0) call h5sselect_hyperslab_f(fsid, H5S_SELECT_SET_F, start, count, stat)
+    if (stat >= 0) then
+      call h5screate_simple_f(3, count, msid, stat)
+      if (stat >= 0) then
+        call clear_os_error()
+        ptr = c_loc(value)
+        call h5dread_f(did, H5T_NATIVE_DOUBLE, ptr, stat, msid, fsid)
+        call h5sclose_f(msid, ignore)
+      end if
+      call h5sclose_f(fsid, ignore)
+    end if
+    if (stat < 0) then
+      call fail_io(error, file, 'read entry '//to_str(k)//' of dataset', name)
+      error%message = error%message//' (damaged data: checksum mismatch or I/O error)'
+    end if
+    call h5dclose_f(did, ignore)
+  end subroutine h5_read_entry
+
+  !> A file cut short by a write that failed (full disk, file size limit) after HDF5 had
+  !> recorded its new end in the superblock cannot be opened ("truncated file"). Extend such a
+  !> file with zeros to the end address its superblock records (superblock versions 0-3, 8-byte
+  !> addresses, no user block), so that what was written before can be read and checked.
+  !> `extended` tells whether the file was such a file; `old_size` and `new_size` its sizes.
+  subroutine h5_extend_truncated(path, extended, old_size, new_size, error)
+    character(len=*), intent(in) :: path
+    logical, intent(out) :: extended
+    integer(i8), intent(out) :: old_size, new_size
+    type(error_t), allocatable, intent(out) :: error
+    character(len=1) :: head(48)
+    character(len=8), parameter :: signature = char(137)//'HDF'//achar(13)//achar(10)//achar(26)//achar(10)
+    integer :: unit, ios, version, at, k
+    extended = .false.
+    new_size = 0
+    inquire (file=path, size=old_size)
+    if (old_size < 48) return
+    open (newunit=unit, file=path, access='stream', form='unformatted', status='old', action='read', iostat=ios)
+    if (ios /= 0) return
+    read (unit, iostat=ios) head
+    close (unit)
+    if (ios /= 0) return
+    do k = 1, 8
+      if (head(k) /= signature(k:k)) return
+    end do
+    version = iachar(head(9))
+    select case (version)
+    case (0)
+      if (iachar(head(14)) /= 8) return
+      at = 40
+    case (1)
+      if (iachar(head(14)) /= 8) return
+      at = 44
+    case (2, 3)
+      if (iachar(head(10)) /= 8) return
+      at = 28
+    case default
+      return
+    end select
+    new_size = 0
+    do k = 8, 1, -1
+      new_size = new_size*256 + iachar(head(at + k))
+    end do
+    if (new_size <= old_size .or. new_size > 1024_i8*old_size + 2_i8**30) return
+    open (newunit=unit, file=path, access='stream', form='unformatted', status='old', action='readwrite', &
+          iostat=ios)
+    if (ios == 0) write (unit, pos=new_size, iostat=ios) achar(0)
+    if (ios == 0) close (unit, iostat=ios)
+    if (ios /= 0) then
+      call fatal_error(error, "cannot extend the truncated file '"//path//"' to "//to_str(new_size)//' bytes')
+      return
+    end if
+    extended = .true.
+  end subroutine h5_extend_truncated
 
   !> Set the length of the last (extendible) dimension to `length`: truncates (the entries
   !> beyond are dropped) or extends (new entries hold the fill value 0).
@@ -1188,7 +1321,7 @@ contains
     type(error_t), allocatable, intent(out) :: error
     integer(hsize_t), allocatable :: dims(:)
     integer(hid_t) :: did
-    integer :: stat, ignore
+    integer :: stat
     call dataset_dims(file, name, -1, dims, error)
     if (allocated(error)) return
     if (length < 0) then
@@ -1198,9 +1331,10 @@ contains
     call open_dataset(file, name, did, error)
     if (allocated(error)) return
     dims(size(dims)) = int(length, hsize_t)
+    call clear_os_error()
     call h5dset_extent_f(did, dims, stat)
-    if (stat < 0) call fail(error, file, 'set the extent of dataset', name)
-    call h5dclose_f(did, ignore)
+    if (stat < 0) call fail_io(error, file, 'set the extent of dataset', name)
+    call close_written(did, file, name, error)
   end subroutine h5_set_length
 
   !> Current length of the last (extendible) dimension of dataset `name`.
@@ -1229,6 +1363,22 @@ contains
     character(len=*), intent(in) :: what, obj
     call fatal_error(error, "HDF5: cannot "//what//" '"//obj//"' in file '"//file%name()//"'")
   end subroutine fail
+
+  !> `fail` for a write, flush or close: adds the operating system's reason when there is one
+  !> (': No space left on device', ': File too large').
+  subroutine fail_io(error, file, what, obj)
+    type(error_t), allocatable, intent(out) :: error
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: what, obj
+    call fatal_error(error, "HDF5: cannot "//what//" '"//obj//"' in file '"//file%name()//"'"//os_reason())
+  end subroutine fail_io
+
+  !> ': <strerror(errno)>' after a failed system call, else ''.
+  function os_reason() result(text)
+    character(len=:), allocatable :: text
+    text = os_error_text()
+    if (len(text) > 0) text = ': '//text
+  end function os_reason
 
   !> Dimensions of a dataspace in Fortran order. rank >= 0 requires that rank (stat = -1
   !> otherwise); rank < 0 accepts any. A scalar dataspace has zero dimensions.

@@ -1,6 +1,7 @@
 !> Plain-text coordinate files: one bead per line, `x y z`; blank lines and lines whose first
 !> non-blank character is `#` are ignored.
 module kf_text_coords
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use kf_kinds, only: wp
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
@@ -85,7 +86,7 @@ contains
       if (pos == 0) pos = len(rest) + 1
       read (rest(1:pos - 1), *, iostat=stat) x(k)
       if (stat /= 0) return
-      if (x(k) /= x(k) .or. abs(x(k)) > huge(x(k))) then
+      if (.not. ieee_is_finite(x(k))) then
         stat = 1
         return
       end if

@@ -4,7 +4,7 @@
 module kf_case_runner
   use, intrinsic :: iso_fortran_env, only: int64
   use kf_kinds, only: wp, i8
-  use kf_strings, only: to_str, to_str_short
+  use kf_strings, only: to_str, to_str_short, to_str_exact
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: scene_t
   use kf_scene_items, only: scene_item_t, scene_items, scene_text, item_string, item_integer, &
@@ -15,9 +15,11 @@ module kf_case_runner
   use kf_stepper, only: stepper_t
   use kf_stepper_factory, only: make_stepper
   use kf_shape, only: shape_t, compute_shape
-  use kf_case_file, only: case_file_t, case_file_status, stepper_checkpoint_t
+  use kf_case_file, only: case_file_t, case_file_status, stepper_checkpoint_t, verify_case_file
   use kf_run_diagnostics, only: run_diagnostics_t
-  use kf_fs, only: remove_file
+  use kf_fs, only: remove_file, move_aside
+  use kf_case_match, only: check_reusable
+  use kf_h5, only: h5_extend_truncated
   implicit none
   private
 
@@ -63,10 +65,11 @@ contains
     real(wp), allocatable :: r(:, :)
     real(wp) :: rotation(3, 3), t, t_next, dt
     integer(i8) :: steps, rejected, nframes
-    character(len=:), allocatable :: path, state, name
+    character(len=:), allocatable :: path, state, name, moved_to
     integer(int64) :: clock0, clock_last, clock_now, rate
     real(wp) :: t_start
-    logical :: resumed, with_diag
+    logical :: resumed, with_diag, unreadable, damaged, extended
+    integer(i8) :: old_size, new_size
 
     path = case_path(sc)
     name = trim(sc%output%case_name)
@@ -79,29 +82,67 @@ contains
     end if
     resumed = .false.
     with_diag = sc%output%diagnostics
-    if (state == 'finished') then
-      status = case_skipped
-      message = 'already finished ('//path//')'
-      return
-    else if (state == 'running') then
-      call file%open_resume(path, r, t, dt, steps, rejected, nframes, error, saved)
-      if (.not. allocated(error)) then
-        if (file%scene_text() /= scene_text(sc) .and. .not. is_pre_diagnostics(file%scene_text(), sc)) then
-          call file%close()
+    if (index(state, 'corrupt: ') == 1) then
+      ! A file cut short by a failed write (full disk) cannot be opened until it has its
+      ! recorded size again; its checkpoint is then checked like any other.
+      call h5_extend_truncated(path, extended, old_size, new_size, error)
+      if (allocated(error)) deallocate (error)
+      if (extended) then
+        call report('case '//name//': '//path//' was cut short by a failed write ('//to_str(old_size)//' of '// &
+                    to_str(new_size)//' bytes): extended to its recorded size to read its checkpoint')
+        call case_file_status(path, state, error)
+        if (allocated(error)) then
           status = case_failed
-          message = path//' was written with a different scene: remove it or use another '// &
-                    'output directory'
+          message = error%message
           return
         end if
+      end if
+    end if
+    if (state == 'finished' .or. state == 'running') then
+      ! Reused only when the stored scene is the requested one (knotflow checks every case at
+      ! set-up already; this guards other callers).
+      call check_reusable(path, sc, error, unreadable)
+      if (allocated(error)) then
+        status = case_failed
+        message = error%message
+        return
+      end if
+      if (unreadable) state = 'corrupt: its scene attributes cannot be read'
+    end if
+    if (state == 'finished') then
+      ! A finished file is skipped only when it reads back completely (checksums included).
+      call verify_case_file(path, sc%integrator%t_end, error)
+      if (.not. allocated(error)) then
+        status = case_skipped
+        message = 'already finished ('//path//')'
+        return
+      end if
+      state = 'corrupt: marked finished, but '//error%message
+      deallocate (error)
+    end if
+    if (state == 'running') then
+      call file%open_resume(path, r, t, dt, steps, rejected, nframes, error, saved)
+      if (.not. allocated(error)) then
         resumed = .true.
         ! a file written before the run diagnostics existed is continued without them
         with_diag = with_diag .and. file%has_diagnostics()
       else
-        ! An unreadable checkpoint: start again from the beginning.
-        call remove_file(path)
+        state = 'corrupt: its checkpoint cannot be resumed: '//error%message
+        deallocate (error)
       end if
-    else if (state /= 'missing') then
-      ! Failed or corrupt files are recomputed from scratch.
+    end if
+    if (index(state, 'corrupt: ') == 1) then
+      ! Damaged or unreadable: moved aside (never deleted) and the case recomputed.
+      call move_aside(path, moved_to, error)
+      if (allocated(error)) then
+        status = case_failed
+        message = path//' is damaged ('//state(10:)//') and cannot be moved aside: '//error%message
+        return
+      end if
+      call report('case '//name//': '//path//' is damaged ('//state(10:)//'): moved to '//moved_to// &
+                  '; computing the case again')
+    else if (state /= 'missing' .and. .not. resumed) then
+      ! Failed cases are recomputed from scratch.
       call remove_file(path)
     end if
 
@@ -147,8 +188,7 @@ contains
       if (.not. allocated(error)) call write_scene_attributes(file, sc, error)
       if (.not. allocated(error) .and. with_diag) call file%enable_diagnostics(error)
       if (allocated(error)) then
-        status = case_failed
-        message = error%message
+        call write_failed(error%message)
         return
       end if
       t = 0.0_wp
@@ -158,6 +198,10 @@ contains
         if (with_diag) call diag%start(t, r)
         call integ%get_state(saved%reals, saved%ints)
         call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt(), error, diag, saved)
+        if (allocated(error)) then
+          call write_failed(error%message)
+          return
+        end if
       end if
       if (allocated(error)) then
         call fail(error%message)
@@ -178,13 +222,15 @@ contains
         return
       end if
       call compute_shape(r, obs, error)
-      if (.not. allocated(error)) then
-        call integ%get_state(saved%reals, saved%ints)
-        call file%append_frame(t, r, obs, integ%steps(), integ%rejected(), integ%dt(), error, diag, saved)
-      end if
-      if (.not. allocated(error)) call write_hydro_counters(error)
       if (allocated(error)) then
         call fail(error%message)
+        return
+      end if
+      call integ%get_state(saved%reals, saved%ints)
+      call file%append_frame(t, r, obs, integ%steps(), integ%rejected(), integ%dt(), error, diag, saved)
+      if (.not. allocated(error)) call write_hydro_counters(error)
+      if (allocated(error)) then
+        call write_failed(error%message)
         return
       end if
       nframes = nframes + 1
@@ -194,11 +240,21 @@ contains
         call report(progress_line())
       end if
     end do
-    call file%set_status('finished', error)
-    call file%close()
+    ! 'finished' only after the last frame is flushed and the file read back and verified.
+    call file%finish(sc%integrator%t_end, error, damaged)
     if (allocated(error)) then
       status = case_failed
-      message = error%message
+      if (damaged) then
+        message = error%message
+        call move_aside(path, moved_to, error)
+        if (allocated(error)) then
+          message = message//'; it cannot be moved aside: '//error%message
+        else
+          message = message//'; moved to '//moved_to//', the next run computes the case again'
+        end if
+      else
+        call write_failed(error%message)
+      end if
       return
     end if
     status = case_ok
@@ -249,14 +305,42 @@ contains
       if (allocated(err)) err%message = path//': '//err%message
     end subroutine restore_stepper
 
+    !> The case cannot be computed (integration failure): recorded as status 'failed: <reason>'
+    !> (the next run computes it again from the start).
     subroutine fail(reason)
       character(len=*), intent(in) :: reason
-      type(error_t), allocatable :: ignored
+      type(error_t), allocatable :: err
       status = case_failed
       message = reason
-      call file%set_status('failed: '//reason, ignored)
-      call file%close()
+      call file%set_status('failed: '//reason, err)
+      if (allocated(err)) then
+        call file%close()
+      else
+        call file%close(err)
+      end if
+      if (allocated(err)) message = message//' (the case file could not record it: '//err%message//')'
     end subroutine fail
+
+    !> Writing the case file failed (full disk, file size limit, I/O error): the case fails
+    !> with the reason, the file keeps its status 'running' and its last complete checkpoint,
+    !> from which the next run resumes.
+    subroutine write_failed(reason)
+      character(len=*), intent(in) :: reason
+      character(len=:), allocatable :: short
+      integer :: k
+      status = case_failed
+      ! the summary line names the file already: keep the message short
+      short = reason
+      k = index(short, " in file '"//path//"'")
+      if (k > 0) short = short(1:k - 1)//short(k + len(" in file '"//path//"'"):)
+      if (file%checkpoint_time() >= 0.0_wp) then
+        message = 'write failed: '//short//'; not marked finished, the next run resumes it from its '// &
+          'last complete checkpoint (t = '//to_str_exact(file%checkpoint_time())//')'
+      else
+        message = 'write failed: '//short//'; no checkpoint yet, the next run computes the case again'
+      end if
+      call file%close()
+    end subroutine write_failed
 
     function progress_line() result(line)
       character(len=:), allocatable :: line
@@ -273,23 +357,6 @@ contains
     end function progress_line
 
   end subroutine run_case
-
-  !> Is `text` the scene text of `sc` as written before `&output diagnostics` existed (the same
-  !> text without the diagnostics line)? Such files are resumed (without diagnostics).
-  logical function is_pre_diagnostics(text, sc) result(same)
-    character(len=*), intent(in) :: text
-    type(scene_t), intent(in) :: sc
-    character(len=:), allocatable :: current
-    character(len=*), parameter :: key = new_line('a')//'  diagnostics = '
-    integer :: k, eol
-    current = scene_text(sc)
-    k = index(current, key)
-    same = .false.
-    if (k == 0 .or. index(text, key) /= 0) return
-    eol = index(current(k + 1:), new_line('a'))
-    if (eol == 0) return
-    same = text == current(1:k)//current(k + eol + 1:)
-  end function is_pre_diagnostics
 
   !> Every effective scene variable as a root attribute `<group>.<variable>`.
   subroutine write_scene_attributes(file, sc, error)

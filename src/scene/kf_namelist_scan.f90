@@ -19,7 +19,7 @@ module kf_namelist_scan
     type(nml_assignment_t), allocatable :: items(:)
   end type nml_group_t
 
-  public :: scan_namelist_file, group_text, lower
+  public :: scan_namelist_file, group_text, lower, count_values
 
 contains
 
@@ -39,8 +39,20 @@ contains
     pos = 1
     do
       gstart = index(text(pos:), '&')
-      if (gstart == 0) exit
+      if (gstart == 0) then
+        if (len_trim(text(pos:)) > 0) then
+          call fatal_error(error, trim(path)//': text outside a group: "'//snippet(adjustl(text(pos:)))// &
+            '" (allowed: only &group ... / blocks and ! comments)')
+          return
+        end if
+        exit
+      end if
       gstart = pos + gstart - 1
+      if (len_trim(text(pos:gstart - 1)) > 0) then
+        call fatal_error(error, trim(path)//': text outside a group: "'// &
+          snippet(adjustl(text(pos:gstart - 1)))//'" (allowed: only &group ... / blocks and ! comments)')
+        return
+      end if
       gend = find_unquoted(text, '/', gstart + 1)
       if (gend == 0) then
         call fatal_error(error, trim(path)//': group starting at "'//snippet(text(gstart:))// &
@@ -53,6 +65,10 @@ contains
       pos = gend + 1
       if (pos > n) exit
     end do
+    if (size(groups) == 0) then
+      call fatal_error(error, trim(path)//': no namelist group found (the file is empty or not a '// &
+        'scene; allowed: groups such as &chain shape = ''trefoil'' /)')
+    end if
   end subroutine scan_namelist_file
 
   !> The text `&name assignments /` of a group, suitable for an internal namelist read.
@@ -76,8 +92,9 @@ contains
     character(len=*), intent(in) :: path
     character(len=:), allocatable, intent(out) :: text
     type(error_t), allocatable, intent(out) :: error
-    integer :: unit, ios
-    character(len=4096) :: line
+    integer :: unit, ios, got
+    character(len=4096) :: chunk
+    character(len=:), allocatable :: line
     character(len=256) :: msg
     logical :: exists
 
@@ -86,19 +103,51 @@ contains
       call fatal_error(error, trim(path)//': file not found')
       return
     end if
+    inquire (file=trim(path)//'/.', exist=exists)
+    if (exists) then
+      call fatal_error(error, trim(path)//': is a directory (allowed: a namelist scene file)')
+      return
+    end if
     open (newunit=unit, file=path, status='old', action='read', iostat=ios, iomsg=msg)
     if (ios /= 0) then
       call fatal_error(error, trim(path)//': cannot open: '//trim(msg))
       return
     end if
     text = ''
+    ! lines of any length: read in pieces (non-advancing) until the end of the record
+    line = ''
     do
-      read (unit, '(a)', iostat=ios) line
-      if (ios /= 0) exit
-      text = text//' '//strip_comment(line)
+      read (unit, '(a)', advance='no', iostat=ios, size=got) chunk
+      if (ios == 0) then
+        line = line//chunk(1:got)
+        cycle
+      end if
+      if (is_iostat_eor(ios)) then
+        line = line//chunk(1:got)
+        text = text//' '//strip_comment(line)
+        line = ''
+        cycle
+      end if
+      if (is_iostat_end(ios)) then
+        if (len(line) > 0) text = text//' '//strip_comment(line)
+        exit
+      end if
+      call fatal_error(error, trim(path)//': cannot read (a directory or not a text file?): '// &
+        'read error '//trim(adjustl(itoa(ios))))
+      close (unit)
+      return
     end do
     close (unit)
+    if (index(text, achar(0)) > 0) then
+      call fatal_error(error, trim(path)//': not a text file (it holds NUL bytes; allowed: a namelist scene)')
+    end if
   end subroutine read_stripped
+
+  pure function itoa(i) result(s)
+    integer, intent(in) :: i
+    character(len=16) :: s
+    write (s, '(i0)') i
+  end function itoa
 
   function strip_comment(line) result(s)
     character(len=*), intent(in) :: line
@@ -195,6 +244,18 @@ contains
       end if
       call add_assignment(g, body(lhs_starts(k):eqs(k) - 1), body(eqs(k) + 1:value_end))
     end do
+    ! a variable given twice (the last value would win in silence)
+    do k = 2, size(g%items)
+      do n = 1, k - 1
+        if (lower(g%items(n)%lhs) == lower(g%items(k)%lhs) .or. (g%items(n)%name == g%items(k)%name .and. &
+            (index(g%items(n)%lhs, '(') == 0 .or. index(g%items(k)%lhs, '(') == 0))) then
+          call fatal_error(error, trim(path)//': &'//g%name//': '//g%items(k)%name//' is given twice ('// &
+            g%items(n)%lhs//' = '//g%items(n)%value//' and '//g%items(k)%lhs//' = '//g%items(k)%value// &
+            '; allowed: each variable once)')
+          return
+        end if
+      end do
+    end do
   end subroutine parse_group
 
   subroutine add_assignment(g, lhs, value)
@@ -254,6 +315,48 @@ contains
     start = start + 1
     if (start > k) start = 0
   end function lhs_begin
+
+  !> Number of values in the value text of an assignment: items separated by commas or blanks
+  !> outside quotes, `r*c` counting r times.
+  integer function count_values(value) result(n)
+    character(len=*), intent(in) :: value
+    integer :: k, start, star, r, ios
+    character(len=1) :: quote
+    logical :: in_item
+    n = 0
+    quote = ' '
+    in_item = .false.
+    start = 1
+    do k = 1, len(value) + 1
+      if (k <= len(value)) then
+        if (quote /= ' ') then
+          if (value(k:k) == quote) quote = ' '
+          cycle
+        end if
+        if (value(k:k) == '"' .or. value(k:k) == "'") then
+          quote = value(k:k)
+          if (.not. in_item) start = k
+          in_item = .true.
+          cycle
+        end if
+        if (value(k:k) /= ',' .and. value(k:k) /= ' ') then
+          if (.not. in_item) start = k
+          in_item = .true.
+          cycle
+        end if
+      end if
+      if (in_item) then
+        star = index(value(start:k - 1), '*')
+        r = 1
+        if (star > 1) then
+          read (value(start:start + star - 2), *, iostat=ios) r
+          if (ios /= 0) r = 1
+        end if
+        n = n + max(r, 1)
+        in_item = .false.
+      end if
+    end do
+  end function count_values
 
   logical elemental function is_name_char(c)
     character(len=1), intent(in) :: c

@@ -20,6 +20,7 @@ module kf_scene_items
     real(wp) :: r = 0.0_wp                        !< item_real
     real(wp), allocatable :: ra(:)                !< item_real_array (flattened, Fortran order)
     integer :: dims(2) = [0, 0]                   !< item_real_array: (n) -> [n, 0]; (n,m) -> [n, m]
+    integer :: max_len = 0                        !< item_string: the declared length
   end type scene_item_t
 
   public :: scene_items, scene_text, item_value_text, group_names
@@ -153,6 +154,7 @@ contains
     it%name = name
     it%kind = item_string
     it%s = trim(value)
+    it%max_len = len(value)
     call push(items, it)
   end subroutine add_s
 

@@ -2,14 +2,15 @@
 !> read checked; unknown groups and variables are rejected by name; then a validation pass whose
 !> messages name the file, group, variable, value and what is allowed.
 module kf_scene_read
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use kf_kinds, only: wp, i8
-  use kf_strings, only: to_str
+  use kf_strings, only: to_str, to_str_exact
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: scene_t, chain_params_t, forces_params_t, flow_params_t, hydro_params_t, &
                       integrator_params_t, output_params_t, path_len, name_len
   use kf_scene_items, only: scene_item_t, scene_items, group_names, item_string, item_integer, &
                             item_real, item_logical, item_real_array
-  use kf_namelist_scan, only: nml_group_t, scan_namelist_file, group_text
+  use kf_namelist_scan, only: nml_group_t, nml_assignment_t, scan_namelist_file, group_text, count_values
   implicit none
   private
 
@@ -285,9 +286,56 @@ contains
             groups(k)%items(m)%name//''' (allowed: '//trim(adjustl(allowed))//')')
           return
         end if
+        call check_shape(path, groups(k)%name, groups(k)%items(m), catalogue, error)
+        if (allocated(error)) return
       end do
     end do
   end subroutine check_names
+
+  !> The value of an assignment must fit its variable: one value for a scalar, exactly the
+  !> number of components for a whole array (a subscripted one, x(2) = ..., is left to the
+  !> namelist read), and a string no longer than the variable holds (it would be cut in silence).
+  subroutine check_shape(path, group, a, catalogue, error)
+    character(len=*), intent(in) :: path, group
+    type(nml_assignment_t), intent(in) :: a
+    type(scene_item_t), intent(in) :: catalogue(:)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: j, n, want, q
+    character(len=:), allocatable :: v
+    do j = 1, size(catalogue)
+      if (catalogue(j)%name /= group//'.'//a%name) cycle
+      if (index(a%lhs, '(') > 0) return
+      n = count_values(a%value)
+      select case (catalogue(j)%kind)
+      case (item_real_array)
+        want = max(1, catalogue(j)%dims(1))*max(1, catalogue(j)%dims(2))
+        if (n /= want) then
+          call fatal_error(error, trim(path)//': &'//group//': '//a%lhs//' = '//a%value//' has '// &
+            to_str(n)//' value(s) (allowed: exactly '//to_str(want)//')')
+          return
+        end if
+      case default
+        if (n /= 1) then
+          call fatal_error(error, trim(path)//': &'//group//': '//a%lhs//' = '//a%value//' has '// &
+            to_str(n)//' values (allowed: one)')
+          return
+        end if
+        if (catalogue(j)%kind == item_string) then
+          v = trim(adjustl(a%value))
+          q = len(v)
+          if (q >= 2) then
+            if ((v(1:1) == "'" .or. v(1:1) == '"') .and. v(q:q) == v(1:1)) q = q - 2
+          end if
+          if (q > catalogue(j)%max_len) then
+            call fatal_error(error, trim(path)//': &'//group//': '//a%lhs//' = '//a%value//' is '// &
+              to_str(q)//' characters long (allowed: at most '//to_str(catalogue(j)%max_len)//')')
+            return
+          end if
+        end if
+      end select
+      return
+    end do
+  end subroutine check_shape
 
   !> The index of group `name` in `groups`, 0 if absent.
   integer function find_group(groups, name) result(idx)
@@ -312,6 +360,26 @@ contains
     real(wp) :: g(3, 3)
 
     f = trim(sc%source_file)
+    ! Every real must be finite (checked first, with ieee_is_finite: the range tests below would
+    ! trap on NaN in a build with -ffpe-trap=invalid).
+    block
+      type(scene_item_t), allocatable :: items(:)
+      integer :: k, dot
+      call scene_items(sc, items)
+      do k = 1, size(items)
+        dot = index(items(k)%name, '.')
+        select case (items(k)%kind)
+        case (item_real)
+          if (ieee_is_finite(items(k)%r)) cycle
+          call bad(error, f, items(k)%name(1:dot - 1), trim(items(k)%name(dot + 1:)), &
+            to_str_exact(items(k)%r), 'a finite number'); return
+        case (item_real_array)
+          if (all(ieee_is_finite(items(k)%ra))) cycle
+          call bad(error, f, items(k)%name(1:dot - 1), trim(items(k)%name(dot + 1:)), &
+            vector_text(items(k)%ra), 'finite numbers'); return
+        end select
+      end do
+    end block
     associate (c => sc%chain)
       if (.not. one_of(c%shape, shapes)) then
         call bad(error, f, 'chain', 'shape', quoted(c%shape), 'one of '//shapes); return
@@ -332,7 +400,7 @@ contains
           'an integer from 1 to 100'); return
       end if
       if (.not. (c%bond_length > 0.0_wp .and. c%bond_length < 100.0_wp)) then
-        call bad(error, f, 'chain', 'bond_length', to_str(c%bond_length), 'a number in (0, 100)'); return
+        call bad(error, f, 'chain', 'bond_length', to_str_exact(c%bond_length), 'a number in (0, 100)'); return
       end if
       if (c%shape == 'file') then
         if (len_trim(c%coordinate_file) == 0) then
@@ -345,22 +413,27 @@ contains
             'an existing file (not found)'); return
         end if
       end if
-      if (c%shape == 'straight' .and. norm2(c%straight_direction) <= 0.0_wp) then
-        call bad(error, f, 'chain', 'straight_direction', '0, 0, 0', 'a non-zero vector'); return
+      if (.not. all(ieee_is_finite(c%straight_direction))) then
+        call bad(error, f, 'chain', 'straight_direction', vector_text(c%straight_direction), &
+          'finite numbers'); return
+      end if
+      if (c%shape == 'straight' .and. .not. norm2(c%straight_direction) > 0.0_wp) then
+        call bad(error, f, 'chain', 'straight_direction', vector_text(c%straight_direction), &
+          'a non-zero vector'); return
       end if
     end associate
     associate (p => sc%forces)
       if (.not. (p%spring_k >= 0.0_wp .and. p%spring_k < 1.0e7_wp)) then
-        call bad(error, f, 'forces', 'spring_k', to_str(p%spring_k), 'a number in [0, 1e7)'); return
+        call bad(error, f, 'forces', 'spring_k', to_str_exact(p%spring_k), 'a number in [0, 1e7)'); return
       end if
       if (.not. (p%bending_a >= 0.0_wp .and. p%bending_a < 1.0e7_wp)) then
-        call bad(error, f, 'forces', 'bending_a', to_str(p%bending_a), 'a number in [0, 1e7)'); return
+        call bad(error, f, 'forces', 'bending_a', to_str_exact(p%bending_a), 'a number in [0, 1e7)'); return
       end if
       if (.not. (p%ev_strength >= 0.0_wp .and. p%ev_strength < 1.0e7_wp)) then
-        call bad(error, f, 'forces', 'ev_strength', to_str(p%ev_strength), 'a number in [0, 1e7)'); return
+        call bad(error, f, 'forces', 'ev_strength', to_str_exact(p%ev_strength), 'a number in [0, 1e7)'); return
       end if
       if (.not. (p%ev_range > 0.0_wp .and. p%ev_range <= 10.0_wp)) then
-        call bad(error, f, 'forces', 'ev_range', to_str(p%ev_range), 'a number in (0, 10]'); return
+        call bad(error, f, 'forces', 'ev_range', to_str_exact(p%ev_range), 'a number in (0, 10]'); return
       end if
       if (.not. all(abs(p%external_force) < 1.0e7_wp)) then
         call bad(error, f, 'forces', 'external_force', 'non-finite', 'finite numbers'); return
@@ -371,7 +444,7 @@ contains
         call bad(error, f, 'flow', 'flow_type', quoted(w%flow_type), 'one of '//flows); return
       end if
       if (.not. (abs(w%shear_rate) < 1.0e6_wp)) then
-        call bad(error, f, 'flow', 'shear_rate', to_str(w%shear_rate), 'a finite number'); return
+        call bad(error, f, 'flow', 'shear_rate', to_str_exact(w%shear_rate), 'a finite number'); return
       end if
       g = w%velocity_gradient
       if (w%flow_type == 'linear') then
@@ -379,7 +452,7 @@ contains
           call bad(error, f, 'flow', 'velocity_gradient', 'non-finite', 'finite numbers'); return
         end if
         if (abs(g(1, 1) + g(2, 2) + g(3, 3)) > 1.0e-12_wp*max(1.0_wp, maxval(abs(g)))) then
-          call bad(error, f, 'flow', 'velocity_gradient', 'trace '//to_str(g(1, 1) + g(2, 2) + g(3, 3)), &
+          call bad(error, f, 'flow', 'velocity_gradient', 'trace '//to_str_exact(g(1, 1) + g(2, 2) + g(3, 3)), &
             'a traceless matrix (incompressible flow)'); return
         end if
       end if
@@ -397,9 +470,10 @@ contains
             'at most 6 with lubrication = .true. (tables exist for L = 1..6)'); return
         end if
       end if
-      if (.not. (h%eps_lub < 0.5_wp)) then
-        call bad(error, f, 'hydro', 'eps_lub', to_str(h%eps_lub), &
-          'a number in [0, 0.5), or negative for the integration tolerance'); return
+      ! the lubrication model's own range (kf_lubrication, kf_hydro_multipole): 0 < eps_lub < 0.5
+      if (.not. (h%eps_lub < 0.5_wp .and. h%eps_lub /= 0.0_wp)) then
+        call bad(error, f, 'hydro', 'eps_lub', to_str_exact(h%eps_lub), &
+          'a number in (0, 0.5), or negative for the integration tolerance'); return
       end if
       if (.not. one_of(h%update, updates)) then
         call bad(error, f, 'hydro', 'update', quoted(h%update), 'one of '//updates); return
@@ -410,21 +484,21 @@ contains
         call bad(error, f, 'integrator', 'method', quoted(g%method), 'one of '//methods); return
       end if
       if (.not. (g%t_end > 0.0_wp .and. g%t_end < 1.0e12_wp)) then
-        call bad(error, f, 'integrator', 't_end', to_str(g%t_end), 'a number > 0'); return
+        call bad(error, f, 'integrator', 't_end', to_str_exact(g%t_end), 'a number > 0'); return
       end if
       if (.not. (g%tolerance > 0.0_wp .and. g%tolerance < 1.0_wp)) then
-        call bad(error, f, 'integrator', 'tolerance', to_str(g%tolerance), 'a number in (0, 1)'); return
+        call bad(error, f, 'integrator', 'tolerance', to_str_exact(g%tolerance), 'a number in (0, 1)'); return
       end if
       if (.not. (g%dt_min > 0.0_wp)) then
-        call bad(error, f, 'integrator', 'dt_min', to_str(g%dt_min), 'a number > 0'); return
+        call bad(error, f, 'integrator', 'dt_min', to_str_exact(g%dt_min), 'a number > 0'); return
       end if
       if (.not. (g%dt_max > g%dt_min)) then
-        call bad(error, f, 'integrator', 'dt_max', to_str(g%dt_max), 'a number > dt_min = '//to_str(g%dt_min))
+        call bad(error, f, 'integrator', 'dt_max', to_str_exact(g%dt_max), 'a number > dt_min = '//to_str_exact(g%dt_min))
         return
       end if
       if (.not. (g%dt_initial >= g%dt_min .and. g%dt_initial <= g%dt_max)) then
-        call bad(error, f, 'integrator', 'dt_initial', to_str(g%dt_initial), &
-          'a number in [dt_min, dt_max] = ['//to_str(g%dt_min)//', '//to_str(g%dt_max)//']'); return
+        call bad(error, f, 'integrator', 'dt_initial', to_str_exact(g%dt_initial), &
+          'a number in [dt_min, dt_max] = ['//to_str_exact(g%dt_min)//', '//to_str_exact(g%dt_max)//']'); return
       end if
       if (g%max_steps < 1) then
         call bad(error, f, 'integrator', 'max_steps', to_str(int(g%max_steps)), 'an integer >= 1'); return
@@ -435,10 +509,10 @@ contains
         call bad(error, f, 'output', 'directory', "''", 'a directory name'); return
       end if
       if (.not. (o%frame_interval > 0.0_wp)) then
-        call bad(error, f, 'output', 'frame_interval', to_str(o%frame_interval), 'a number > 0'); return
+        call bad(error, f, 'output', 'frame_interval', to_str_exact(o%frame_interval), 'a number > 0'); return
       end if
       if (.not. (o%progress_interval >= 0.0_wp)) then
-        call bad(error, f, 'output', 'progress_interval', to_str(o%progress_interval), &
+        call bad(error, f, 'output', 'progress_interval', to_str_exact(o%progress_interval), &
           'a number >= 0 (seconds; 0 = every frame)'); return
       end if
       if (verify(trim(o%case_name), 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.-+') /= 0) then
@@ -477,6 +551,17 @@ contains
       start = start + comma
     end do
   end function one_of
+
+  function vector_text(v) result(t)
+    real(wp), intent(in) :: v(:)
+    character(len=:), allocatable :: t
+    integer :: k
+    t = ''
+    do k = 1, size(v)
+      t = t//merge(', ', '  ', k > 1)//to_str_exact(v(k))
+    end do
+    t = trim(adjustl(t))
+  end function vector_text
 
   function quoted(s) result(t)
     character(len=*), intent(in) :: s

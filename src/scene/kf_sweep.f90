@@ -5,7 +5,7 @@
 !> cases that is not a product (the study's Table 2) is one sweep.
 module kf_sweep
   use kf_kinds, only: wp, i8
-  use kf_strings, only: to_str, to_str_fixed
+  use kf_strings, only: to_str, to_str_fixed, to_str_exact
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: scene_t
   use kf_scene_read, only: read_scene, validate_scene, find_group
@@ -16,6 +16,7 @@ module kf_sweep
   integer, parameter :: max_values = 256
   real(wp), parameter :: unset_real = -huge(1.0_wp)
   integer(i8), parameter :: unset_int = -huge(1_i8)
+  integer, parameter :: a_part = 1, o_part = 2, s_part = 3   !< the parts of a case name
 
   !> The cases of a sweep.
   type, public :: sweep_t
@@ -70,7 +71,7 @@ contains
         if (ios /= 0) then
           call fatal_error(error, trim(path)//': &sweep: '//groups(ig)%items(k)%lhs//' = '// &
             groups(ig)%items(k)%value//' is not valid (expected a list of '// &
-            merge('quoted letters a-e', 'values            ', groups(ig)%items(k)%name == 'orientation')// &
+            trim(merge('quoted letters a-e', 'values            ', groups(ig)%items(k)%name == 'orientation'))// &
             ', at most 256)')
           return
         end if
@@ -101,6 +102,8 @@ contains
         trim(sw%base%chain%shape)//''' has no orientations (only trefoil has a-e)')
       return
     end if
+    call check_unique_names(path, sw, error)
+    if (allocated(error)) return
     ! Every case must be valid: check them all before anything runs.
     block
       type(scene_t) :: sc
@@ -115,6 +118,113 @@ contains
       end do
     end block
   end subroutine read_sweep
+
+  !> Every case must have its own name (its own file): refuse a sweep whose cases would share
+  !> one, naming the two cases, their values and what to change. Names are kept short and stable
+  !> (a case keeps its name when values are added to the sweep), so a clash is refused rather
+  !> than resolved by longer names: it comes from values equal to the precision of the name
+  !> (bending_a has 2 decimals) or from a value, seed or orientation listed twice.
+  subroutine check_unique_names(path, sw, error)
+    character(len=*), intent(in) :: path
+    type(sweep_t), intent(in) :: sw
+    type(error_t), allocatable, intent(out) :: error
+    integer :: k, m, n
+    n = sw%n_cases()
+    if (sw%zip) then
+      do m = 2, n
+        do k = 1, m - 1
+          if (same_part(a_part, k, m) .and. same_part(o_part, k, m) .and. same_part(s_part, k, m)) then
+            call clash(k, m)
+            return
+          end if
+        end do
+      end do
+    else
+      call product_clash(size(sw%bending_a), a_part)
+      if (.not. allocated(error)) call product_clash(size(sw%orientation), o_part)
+      if (.not. allocated(error)) call product_clash(size(sw%seed), s_part)
+    end if
+
+  contains
+
+    !> Two entries of one list with the same name part: the first cases that differ only there
+    !> (bending_a varies slowest, seed fastest, as in `case_scene`).
+    subroutine product_clash(length, which)
+      integer, intent(in) :: length, which
+      integer :: i, j, no, ns
+      no = max(1, size(sw%orientation))
+      ns = max(1, size(sw%seed))
+      do j = 2, length
+        do i = 1, j - 1
+          if (part(which, i) /= part(which, j)) cycle
+          select case (which)
+          case (a_part)
+            call clash((i - 1)*no*ns + 1, (j - 1)*no*ns + 1)
+          case (o_part)
+            call clash((i - 1)*ns + 1, (j - 1)*ns + 1)
+          case default
+            call clash(i, j)
+          end select
+          return
+        end do
+      end do
+    end subroutine product_clash
+
+    logical function same_part(which, k1, k2)
+      integer, intent(in) :: which, k1, k2
+      integer :: length
+      select case (which)
+      case (a_part)
+        length = size(sw%bending_a)
+      case (o_part)
+        length = size(sw%orientation)
+      case default
+        length = size(sw%seed)
+      end select
+      same_part = .true.
+      if (length > 0) same_part = part(which, min(k1, length)) == part(which, min(k2, length))
+    end function same_part
+
+    !> The name part of entry i of a list ('A2.20', 'orb', 's7').
+    function part(which, i) result(text)
+      integer, intent(in) :: which, i
+      character(len=:), allocatable :: text
+      select case (which)
+      case (a_part)
+        text = 'A'//to_str_fixed(sw%bending_a(i), 2)
+      case (o_part)
+        text = 'or'//sw%orientation(i)
+      case default
+        text = 's'//to_str(sw%seed(i))
+      end select
+    end function part
+
+    subroutine clash(k1, k2)
+      integer, intent(in) :: k1, k2
+      type(scene_t) :: s1, s2
+      character(len=:), allocatable :: n1, n2
+      call sw%case_scene(k1, s1, n1)
+      call sw%case_scene(k2, s2, n2)
+      call fatal_error(error, trim(path)//': &sweep: cases '//to_str(k1)//' ('//case_values(sw, s1)// &
+        ') and '//to_str(k2)//' ('//case_values(sw, s2)//') would both be written to case file '''// &
+        n1//'.h5'': every case needs its own name (allowed: each value, orientation and seed '// &
+        'listed once, bending_a values that differ in their first 2 decimals)')
+    end subroutine clash
+
+  end subroutine check_unique_names
+
+  !> The listed parameters of a case, e.g. "bending_a = 2.201, seed = 3".
+  function case_values(sw, sc) result(text)
+    type(sweep_t), intent(in) :: sw
+    type(scene_t), intent(in) :: sc
+    character(len=:), allocatable :: text
+    text = ''
+    if (size(sw%bending_a) > 0) text = 'bending_a = '//to_str_exact(sc%forces%bending_a)
+    if (size(sw%orientation) > 0) text = text//merge(', ', '  ', len(text) > 0)//"orientation = '"// &
+      sc%chain%orientation//"'"
+    if (size(sw%seed) > 0) text = text//merge(', ', '  ', len(text) > 0)//'seed = '//to_str(sc%chain%seed)
+    text = trim(adjustl(text))
+  end function case_values
 
   !> Number of cases (1 without a &sweep group).
   pure integer function n_cases(this)

@@ -102,6 +102,46 @@ def check_case_file(exe, work):
     assert p.returncode != 0 and '--matrix-frames' in p.stderr and len(p.stderr.strip().splitlines()) == 1
     with h5py.File(path) as f:
         assert 'analysis/knots/kf' in f and 'analysis/knot_matrix/frame_5' in f
+    check_bad_frames(exe, work, pos)
+    for opt in ('--help', '--version'):
+        p = run(exe, opt)
+        assert p.returncode == 0 and 'knotflow-analyze' in p.stdout and 'Backtrace' not in p.stderr, (opt, p)
+
+
+def check_bad_frames(exe, work, pos):
+    """A frame holding NaN, and damaged data (a Fletcher-32 chunk that fails its checksum): one
+    error line naming the file, the frame or dataset and the cause, non-zero exit status, and
+    no /analysis written."""
+    import h5py
+    import numpy as np
+    nf, n = pos.shape[:2]
+    bad = pos.copy()
+    bad[4, 10, 2] = np.nan
+    path = os.path.join(work, 'nan.h5')
+    with h5py.File(path, 'w') as f:
+        f.attrs['status'] = 'finished'
+        f.create_dataset('frames/time', data=np.arange(nf) * 0.5, maxshape=(None,), chunks=True)
+        f.create_dataset('frames/positions', data=bad, maxshape=(None, n, 3), chunks=True)
+    p = run(exe, path, '--closures', '10')
+    lines = p.stderr.strip().splitlines()
+    assert p.returncode != 0 and len(lines) == 1, p.stderr
+    assert "nan.h5': frame 4 (t = 2.00000) holds 1 non-finite coordinates" in lines[0], lines[0]
+    with h5py.File(path) as f:
+        assert 'analysis' not in f
+    path = os.path.join(work, 'damaged.h5')
+    with h5py.File(path, 'w') as f:
+        f.attrs['status'] = 'finished'
+        f.create_dataset('frames/time', data=np.arange(nf) * 0.5, maxshape=(None,), chunks=True)
+        f.create_dataset('frames/positions', data=pos, maxshape=(None, n, 3), chunks=(2, n, 3),
+                         fletcher32=True)
+        info = f['frames/positions'].id.get_chunk_info(1)
+    with open(path, 'r+b') as fh:
+        fh.seek(info.byte_offset + 100)
+        fh.write(b'\x7f' * 8)
+    p = run(exe, path, '--closures', '10')
+    lines = p.stderr.strip().splitlines()
+    assert p.returncode != 0 and len(lines) == 1, p.stderr
+    assert "/frames/positions" in lines[0] and 'damaged.h5' in lines[0] and 'checksum mismatch' in lines[0], lines[0]
 
 
 if __name__ == '__main__':

@@ -78,26 +78,57 @@ class Case:
         return len(self.time)
 
 
+def _read(path, ds):
+    """All of dataset ds; a read that fails (a Fletcher-32 checksum mismatch in damaged data,
+    an I/O error) becomes a ValueError naming the file and the dataset."""
+    try:
+        return ds[()]
+    except OSError as exc:
+        raise ValueError(f"{path}: {ds.name}: cannot read (damaged data: checksum mismatch or "
+                         f"I/O error: {exc})") from exc
+
+
+def check_frames(path, time, positions) -> None:
+    """Every frame time and coordinate must be finite: a ValueError names the file, the first
+    bad frame (0-based), its time and the cause. A NaN frame would otherwise give wrong
+    results in silence (k_f = 1 for a chain whose k_f is 0.87)."""
+    bad_t = ~np.isfinite(time)
+    bad_r = ~np.isfinite(positions).reshape(len(positions), -1).all(axis=1)
+    bad = np.flatnonzero(bad_t[:len(bad_r)] | bad_r)
+    if len(bad):
+        k = int(bad[0])
+        if bad_r[k]:
+            count = int((~np.isfinite(positions[k])).sum())
+            cause = f"{count} non-finite coordinates (NaN or Inf)"
+        else:
+            cause = "a non-finite time"
+        more = f"; {len(bad) - 1} more bad frames" if len(bad) > 1 else ""
+        raise ValueError(f"{path}: frame {k} (t = {time[k]:g}): {cause}{more}")
+
+
 def read_case(path) -> Case:
-    """Read a case file; missing optional parts are left empty."""
+    """Read a case file; missing optional parts are left empty. A frame with a non-finite
+    time or coordinate, or data that cannot be read (damaged), is a ValueError naming the
+    file, the frame or dataset and the cause."""
     with h5py.File(path, "r") as f:
         attrs = {k: _attr(v) for k, v in f.attrs.items()}
         fr = f["frames"]
-        time = np.asarray(fr["time"][()], dtype=float)
-        pos = np.asarray(fr["positions"][()], dtype=float)
+        time = np.asarray(_read(path, fr["time"]), dtype=float)
+        pos = np.asarray(_read(path, fr["positions"]), dtype=float)
         n = min(len(time), len(pos))
         if "checkpoint" in f and "nframes" in f["checkpoint"]:
             n = min(n, int(f["checkpoint"]["nframes"][()]))
         time, pos = time[:n], pos[:n]
+        check_frames(path, time, pos)
         obs = {}
         if "observables" in fr:
             for k in OBSERVABLES:
                 if k in fr["observables"]:
-                    obs[k] = np.asarray(fr["observables"][k][()])[:n]
+                    obs[k] = np.asarray(_read(path, fr["observables"][k]))[:n]
         case = Case(path=str(path), attrs=attrs, time=time, positions=pos, observables=obs)
         if "diagnostics" in fr:
             g = fr["diagnostics"]
-            case.diagnostics = {k: np.asarray(g[k][()])[:n] for k in DIAGNOSTICS if k in g}
+            case.diagnostics = {k: np.asarray(_read(path, g[k]))[:n] for k in DIAGNOSTICS if k in g}
         totals = {k: attrs["diagnostics." + k] for k in DIAGNOSTIC_TOTALS
                   if "diagnostics." + k in attrs}
         if totals:
@@ -156,7 +187,13 @@ def read_xyz(path) -> np.ndarray:
             parts = s.split()
             if len(parts) != 3:
                 raise ValueError(f"{path}:{lineno}: expected 3 numbers, got {len(parts)}")
-            pts.append([float(x) for x in parts])
+            try:
+                xyz = [float(x) for x in parts]
+            except ValueError:
+                raise ValueError(f"{path}:{lineno}: not a number in '{s}'") from None
+            if not all(np.isfinite(xyz)):
+                raise ValueError(f"{path}:{lineno}: non-finite coordinate in '{s}'")
+            pts.append(xyz)
     return np.array(pts, dtype=float).reshape(-1, 3)
 
 

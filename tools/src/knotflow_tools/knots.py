@@ -418,6 +418,10 @@ def analyze_chain(r: np.ndarray, closures: int = 1000, seed: int = 1,
     gives the same closure points and projections, hence the same result.
     """
     r = np.asarray(r, dtype=float)
+    if not np.all(np.isfinite(r)):
+        bead = int(np.flatnonzero(~np.isfinite(r).all(axis=1))[0])
+        raise ValueError(f"the chain holds non-finite coordinates (first at bead {bead}): "
+                         "its knot type is undefined")
     rng = np.random.default_rng(seed)
     if points is None:
         points = closure_points(r, closures, rng)

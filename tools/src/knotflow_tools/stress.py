@@ -177,7 +177,7 @@ def main(argv=None) -> int:
     for path in files:
         try:
             rows.append(summarise_case(path, wall))
-        except (OSError, KeyError) as exc:
+        except (OSError, KeyError, ValueError) as exc:
             print("knotflow-stress-summary: error: %s: %s" % (path, exc), file=sys.stderr)
             return 2
     table = format_table(rows)

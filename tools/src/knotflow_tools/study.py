@@ -13,6 +13,7 @@ import argparse
 import json
 import math
 import os
+import sys
 
 import matplotlib
 
@@ -437,6 +438,16 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
 
 
 def main(argv=None):
+    """knotflow-study entry point: a file that cannot be read (damaged, non-finite frames) is an
+    error naming it (exit status 2)."""
+    try:
+        return _main(argv)
+    except (OSError, KeyError, ValueError) as exc:
+        print(f"knotflow-study: error: {exc}", file=sys.stderr)
+        return 2
+
+
+def _main(argv=None):
     p = argparse.ArgumentParser(prog="knotflow-study", description=__doc__.splitlines()[0])
     p.add_argument("--trefoil", help="output directory of inputs/trefoil_table2.nml")
     p.add_argument("--candycane", help="output directory of inputs/candycane.nml")

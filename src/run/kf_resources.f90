@@ -1,0 +1,165 @@
+!> What one case needs, estimated at set-up: memory (the arrays whose size grows with the
+!> number of pairs or with N^2) and the size of its case file (frames). A scene that cannot fit
+!> in the machine's memory, or that would write more than `max_frames` frames, is refused before
+!> anything runs, with the estimate in the message.
+!>
+!> Memory per case (bytes; N beads, P = N(N-1)/2 pairs, all sizes in 64-bit integers):
+!> - chain, forces, the stepper's stages and work arrays: `per_bead_bytes`*N (generous);
+!> - run diagnostics (`&output diagnostics`): kf_run_diagnostics' own `diagnostics_memory`
+!>   (a flag and a start time per pair);
+!> - hydrodynamic model: 'rpy' keeps 7 float64 pair tables (kf_hydro_rpy: 56 P); 'multipole'
+!>   the dense 3N x 3N mobility and 6N x 6N friction (360 N^2), three more 6N x 6N matrices
+!>   with update = 'adaptive' (864 N^2): a lower bound (the many-body system comes on top);
+!>   'none' nothing.
+!> The estimate is compared with the machine's physical memory (/proc/meminfo MemTotal; no
+!> check where that cannot be read).
+module kf_resources
+  use kf_kinds, only: wp, i8
+  use kf_strings, only: to_str, to_str_exact
+  use kf_error, only: error_t, fatal_error
+  use kf_scene, only: scene_t
+  use kf_run_diagnostics, only: pair_count, diagnostics_memory
+  implicit none
+  private
+
+  public :: case_resources_t, estimate_resources, check_resources, physical_memory, bytes_text
+
+  !> Most frames one case may write (a case file of 10^6 frames of 99 beads is about 2.6 GB).
+  integer(i8), parameter, public :: max_frames = 1000000_i8
+  integer(i8), parameter :: per_bead_bytes = 2048_i8
+  !> Bytes of one frame besides the positions (observables, integrator, diagnostics, chunk
+  !> overhead): a round upper figure.
+  integer(i8), parameter :: per_frame_bytes = 256_i8
+
+  !> The estimate for one case.
+  type, public :: case_resources_t
+    integer :: n_beads = 0
+    integer(i8) :: pairs = 0              !< N(N-1)/2
+    integer(i8) :: hydro_bytes = 0        !< the hydrodynamic model's arrays
+    integer(i8) :: diagnostics_bytes = 0  !< the run diagnostics' arrays
+    integer(i8) :: memory_bytes = 0       !< total
+    integer(i8) :: frames = 0             !< frames written (t = 0 included)
+    integer(i8) :: file_bytes = 0         !< size of the case file
+  end type case_resources_t
+
+contains
+
+  !> The estimate for the scene `sc` with `n_beads` beads.
+  pure function estimate_resources(sc, n_beads) result(res)
+    type(scene_t), intent(in) :: sc
+    integer, intent(in) :: n_beads
+    type(case_resources_t) :: res
+    integer(i8) :: n
+    real(wp) :: frames
+    n = max(0_i8, int(n_beads, i8))
+    res%n_beads = n_beads
+    res%pairs = pair_count(n_beads)
+    select case (trim(sc%hydro%model))
+    case ('rpy')
+      res%hydro_bytes = 56_i8*res%pairs + 72_i8*n
+    case ('multipole')
+      res%hydro_bytes = 360_i8*n*n
+      if (sc%hydro%update == 'adaptive') res%hydro_bytes = res%hydro_bytes + 864_i8*n*n
+    case default
+      res%hydro_bytes = 0
+    end select
+    res%diagnostics_bytes = 0
+    if (sc%output%diagnostics) res%diagnostics_bytes = diagnostics_memory(n_beads)
+    res%memory_bytes = per_bead_bytes*n + res%hydro_bytes + res%diagnostics_bytes
+    ! frames at t = 0, frame_interval, ..., and t_end (kf_case_runner); capped to stay an i8
+    frames = sc%integrator%t_end/sc%output%frame_interval
+    if (frames < 1.0e15_wp) then
+      res%frames = ceiling(frames*(1.0_wp - 1.0e-12_wp), i8) + 1
+    else
+      res%frames = 10_i8**15
+    end if
+    res%file_bytes = res%frames*(24_i8*n + per_frame_bytes)
+  end function estimate_resources
+
+  !> Refuse the scene `sc` (`n_beads` beads) when a case would not fit in `memory_limit` bytes
+  !> (<= 0: no limit) or would write more than `max_frames` frames. The messages name the file,
+  !> group, variable, value, the estimate and what is allowed.
+  subroutine check_resources(sc, n_beads, memory_limit, error)
+    type(scene_t), intent(in) :: sc
+    integer, intent(in) :: n_beads
+    integer(i8), intent(in) :: memory_limit
+    type(error_t), allocatable, intent(out) :: error
+    type(case_resources_t) :: res
+    character(len=:), allocatable :: what, parts
+    res = estimate_resources(sc, n_beads)
+    if (res%frames > max_frames) then
+      call fatal_error(error, trim(sc%source_file)//': &output: frame_interval = '// &
+        to_str_exact(sc%output%frame_interval)//' with &integrator: t_end = '// &
+        to_str_exact(sc%integrator%t_end)// &
+        ' would write '//to_str(res%frames)//' frames per case (a case file of about '// &
+        bytes_text(res%file_bytes)//'; allowed: at most '//to_str(max_frames)// &
+        ' frames, frame_interval >= t_end/'//to_str(max_frames - 1)//')')
+      return
+    end if
+    if (memory_limit > 0 .and. res%memory_bytes > memory_limit) then
+      if (trim(sc%chain%shape) == 'file') then
+        what = '&chain: coordinate_file = '''//trim(sc%chain%coordinate_file)//''' ('// &
+          to_str(n_beads)//' beads)'
+      else if (trim(sc%chain%shape) == 'straight' .or. trim(sc%chain%shape) == 'random') then
+        what = '&chain: n_beads = '//to_str(n_beads)
+      else
+        what = '&chain: shape = '''//trim(sc%chain%shape)//''' ('//to_str(n_beads)//' beads)'
+      end if
+      parts = ''
+      if (res%hydro_bytes > 0) parts = '&hydro model = '''//trim(sc%hydro%model)//''' '// &
+        bytes_text(res%hydro_bytes)
+      if (res%diagnostics_bytes > 0) parts = parts//merge('; ', '  ', len(parts) > 0)// &
+        'run diagnostics '//bytes_text(res%diagnostics_bytes)
+      call fatal_error(error, trim(sc%source_file)//': '//what//' needs about '// &
+        bytes_text(res%memory_bytes)//' of memory per case ('//trim(adjustl(parts))// &
+        '), more than the '//bytes_text(memory_limit)//' of this machine (allowed: a scene '// &
+        'whose estimate fits; fewer beads, &output diagnostics = .false. or a lighter &hydro '// &
+        'model need less)')
+    end if
+  end subroutine check_resources
+
+  !> Physical memory of this machine in bytes (MemTotal of /proc/meminfo), -1 when unknown.
+  function physical_memory() result(bytes)
+    integer(i8) :: bytes
+    character(len=256) :: line
+    integer :: unit, ios, k
+    integer(i8) :: kib
+    bytes = -1
+    open (newunit=unit, file='/proc/meminfo', status='old', action='read', iostat=ios)
+    if (ios /= 0) return
+    do
+      read (unit, '(a)', iostat=ios) line
+      if (ios /= 0) exit
+      if (index(line, 'MemTotal:') /= 1) cycle
+      k = index(line, 'kB')
+      if (k == 0) exit
+      read (line(10:k - 1), *, iostat=ios) kib
+      if (ios == 0 .and. kib > 0) bytes = 1024_i8*kib
+      exit
+    end do
+    close (unit)
+  end function physical_memory
+
+  !> Bytes as text with a binary-prefixed unit: '512 B', '3.2 GiB'.
+  function bytes_text(bytes) result(text)
+    integer(i8), intent(in) :: bytes
+    character(len=:), allocatable :: text
+    character(len=*), parameter :: units(5) = ['KiB', 'MiB', 'GiB', 'TiB', 'PiB']
+    character(len=32) :: buf
+    real(wp) :: x
+    integer :: k
+    if (bytes < 1024) then
+      text = to_str(bytes)//' B'
+      return
+    end if
+    x = real(bytes, wp)
+    k = 0
+    do while (x >= 1024.0_wp .and. k < size(units))
+      x = x/1024.0_wp
+      k = k + 1
+    end do
+    write (buf, '(f0.1)') x
+    text = trim(adjustl(buf))//' '//units(k)
+  end function bytes_text
+
+end module kf_resources
