@@ -35,7 +35,7 @@ for part in "${parts[@]}"; do
     velocity)
       bench velocity_trefoil velocity --config trefoil --t-end 10
       bench velocity_coil velocity --config coil --t-end 4
-      bench velocity_collapse velocity --config inputs/configs/candycane_A1_t250.xyz --t-end 60 --every 4 ;;
+      bench velocity_collapse velocity --config inputs/configs/candycane_A1_t250.xyz --t-end 30 --every 4 ;;
     trajectory) bench trajectory_trefoil trajectory --config trefoil --t-end 10 ;;
     speed) bench speed_trefoil speed --config trefoil --t-end 50 ;;
     overlaps)
