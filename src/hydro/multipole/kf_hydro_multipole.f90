@@ -449,8 +449,10 @@ contains
     this%n_overlaps = this%sys%n_clamped
     call this%sys%friction_coupling(this%zt, this%x6, error)
     if (allocated(error)) return
-    if (this%has_ref) then
-      ! history: the new part minus the old one seen from the new frame
+    this%has_prev = .false.
+    if (this%has_ref .and. t /= this%t_ref) then
+      ! history: the new part minus the old one seen from the new frame (two refreshes at
+      ! the same time, e.g. the last two stages of a step, give none)
       call best_rotation(this%r_ref, r, qrot, error)
       if (allocated(error)) return
       call rotate_friction(qrot, this%zl, this%zh)
@@ -460,6 +462,7 @@ contains
       this%has_prev = .true.
       this%t_prev = this%t_ref
     end if
+    this%has_ref = .false.   ! until the new reference is complete
     this%t_ref = t
     this%zl = this%zt
     this%xl = this%x6
