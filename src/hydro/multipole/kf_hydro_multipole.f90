@@ -4,30 +4,31 @@
 !>
 !> In parts: the many-body system (kf_multipole_system: assembly, p-moment elimination,
 !> Cholesky factorisation, then its friction zeta_L and strain coupling x_L), the lubrication
-!> corrections as a list of 12 x 12 pair blocks (kf_lubrication_pairs), and the corrected
-!> friction route zeta = zeta_L + sum dzeta, x = x_L + sum dx, U - U_inf = zeta^-1 (F + x:E).
+!> corrections as a list of 12 x 12 pair blocks (kf_pair_blocks), and the corrected friction
+!> route zeta = zeta_L + sum dzeta, x = x_L + sum dx, U - U_inf = zeta^-1 (F + x:E).
 !>
 !> Two ways to get velocities, chosen once at set-up (`&hydro update`):
 !> * 'stage': `prepare(r)` at every call does all of the above and caches the 3N x 3N mobility
 !>   and the strain disturbances (also what `prepare`/`apply_mobility`/`mobility_matrix` do in
 !>   either mode). The reference.
-!> * 'adaptive': the many-body part zeta_L, x_L is computed exactly at a reference
-!>   configuration (a refresh) and reused at later configurations, while the lubrication
-!>   corrections are computed exactly at every call. Reuse uses the covariance of Stokes
-!>   flow: the current configuration is rotated onto the reference by the best rigid rotation
-!>   Q (kf_rigid_fit), forces and strain are rotated with it, the velocities rotated back, so
-!>   the rigid tumbling of the chain costs no accuracy; what is left is the deformation since
-!>   the refresh, D = max_i |Q^T (r_i - c) + c_ref - r_ref,i|. The corrected system
-!>   (zeta_L(ref) + sum dzeta(r)) U = b is solved by conjugate gradients preconditioned with the
-!>   Cholesky factor of zeta_L(ref) + sum dzeta at the refresh (re-factorised when CG needs more
-!>   than `cg_refactor_iterations`), to a velocity error below cg_fraction of the budget.
-!>   Refresh rule: the error of a reused many-body part grows with D; at every refresh after
-!>   the first, the velocities of the reused part at the new configuration are computed too
-!>   and compared with the exact ones, which measures the growth rate coef = err/D (max norms
-!>   over beads). A call refreshes when coef D exceeds the budget
-!>   budget_fraction * tolerance / h (h the trial step of the stepper): a velocity error below
-!>   it moves a bead by less than budget_fraction of the integration tolerance in one step.
-!>   Without a step size (calls outside a stepper) every call is exact.
+!> * 'adaptive' (docs/multipole.md): the many-body part zeta_L, x_L is computed exactly at a
+!>   refresh and reused at later stages, while the lubrication corrections are exact at every
+!>   call. The current configuration is rotated onto the reference by the best rigid rotation
+!>   Q (kf_rigid_fit; Stokes flow is covariant, so rigid tumbling costs no accuracy), forces and
+!>   strain with it, the velocities back. After two refreshes the part is extrapolated linearly
+!>   in time: zeta_L(ref) + w zeta_hist, w = (t - t_ref)/(t_ref - t_prev). The corrected system
+!>   is solved by conjugate gradients preconditioned with the Cholesky factor at the refresh
+!>   (re-factorised when CG needs more than `cg_refactor_iterations`), to a velocity error below
+!>   cg_fraction of the budget.
+!>   Refresh rule: the budget on the velocity error of a stage is
+!>   budget_fraction * tolerance / h (h the stepper's trial step): it moves a bead by less than
+!>   budget_fraction of the tolerance in one step. The error is predicted as
+!>   coef1 |t - t_ref| (one refresh so far) or coef2 |t - t_ref| |t - t_prev| (extrapolated);
+!>   every refresh after the first also computes the reused velocities at the new
+!>   configuration and compares them with the exact ones, which recalibrates the coefficient
+!>   (max over beads). A call refreshes when the prediction exceeds the budget, |w| > 3, the
+!>   deformation after the rigid fit exceeds max_deformation, or CG does not converge.
+!>   Without a step size or a time (calls outside a stepper) every call is exact.
 module kf_hydro_multipole
   use kf_kinds, only: wp, i8
   use kf_strings, only: to_str
