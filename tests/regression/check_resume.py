@@ -91,7 +91,7 @@ for attempt in range(4):
     out, n_killed = kill_and_rerun(killed_name)
     if "resuming" in out:
         break
-    assert "does not match its digest" in out and "computing the case again" in out, out
+    assert "is damaged" in out and "computing the case again" in out, out
     assert os.path.exists(os.path.join(work, killed_name, "c.h5.damaged"))
     status, t, r = frames(killed_name)
     assert status in (b"finished", "finished") and np.array_equal(t, t_ref), (status, t)
