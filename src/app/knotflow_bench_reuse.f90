@@ -29,6 +29,8 @@ program knotflow_bench_reuse
   use kf_reuse_check, only: checked_dynamics_t
   use kf_hydro_multipole, only: multipole_model_t
   use kf_run_diagnostics, only: run_diagnostics_t
+  use kf_exit, only: exit_program
+  use kf_build_info, only: knotflow_version, knotflow_git_hash
   use kf_accuracy, only: wall_seconds, max_bead_deviation, loglog_slope
   implicit none
 
@@ -51,7 +53,7 @@ program knotflow_bench_reuse
   case ('overlaps')
     call run_overlaps()
   case default
-    call die("unknown part '"//part//"' (allowed: velocity, trajectory, speed, scaling)")
+    call die("unknown part '"//part//"' (allowed: velocity, trajectory, speed, scaling, overlaps, rigid)")
   end select
 
 contains
@@ -59,7 +61,7 @@ contains
   subroutine die(message)
     character(len=*), intent(in) :: message
     write (error_unit, '(a)') 'knotflow-bench-reuse: error: '//message
-    error stop 2
+    call exit_program(2)
   end subroutine die
 
   subroutine parse_arguments()
@@ -68,6 +70,17 @@ contains
     if (command_argument_count() < 1) call die('usage: knotflow-bench-reuse velocity|trajectory|speed|scaling [options]')
     call get_command_argument(1, arg)
     part = trim(arg)
+    select case (part)
+    case ('-h', '--help')
+      write (output_unit, '(a)') 'usage: knotflow-bench-reuse velocity|trajectory|speed|overlaps|scaling|rigid '// &
+        '[--config trefoil|coil|FILE] [--t-end T] [--every K] [--eps-lub E]'
+      write (output_unit, '(a)') '       knotflow-bench-reuse --help | --version'
+      write (output_unit, '(a)') 'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).'
+      call exit_program(0)
+    case ('--version')
+      write (output_unit, '(a)') 'knotflow-bench-reuse '//knotflow_version//' ('//knotflow_git_hash//')'
+      call exit_program(0)
+    end select
     config = 'trefoil'
     t_end = 10.0_wp
     every = 1
