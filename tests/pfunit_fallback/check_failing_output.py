@@ -3,8 +3,9 @@
 
 usage: check_failing_output.py <pf file> <command...>
 
-Runs the command and requires: a non-zero exit status; every line of the .pf file marked
-"! expect-fail" reported as "<file>.pf:<line>:"; no line marked "must-not-run" reported;
+Runs the command and requires: a non-zero exit status; the line after every comment line
+"! expect-fail" of the .pf file reported as "<file>.pf:<line>:"; the line after a comment line
+"! must-not-run" not reported;
 one FAIL line per test that has an expect-fail line, one PASS line per other test; and the
 closing line "<passed> passed, <failed> failed" with those counts.
 """
@@ -27,11 +28,12 @@ def main():
         if match and n > 1 and re.match(r"\s*@(mpi)?test", lines[n - 2], re.IGNORECASE):
             current = match.group(1)
             tests[current] = False
-        if "! expect-fail" in line:
-            expect.append(n)
+        mark = line.strip()
+        if mark.startswith("! expect-fail"):
+            expect.append(n + 1)
             tests[current] = True
-        if "! must-not-run" in line:
-            forbid.append(n)
+        if mark.startswith("! must-not-run"):
+            forbid.append(n + 1)
 
     proc = subprocess.run(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                           text=True, check=False)
