@@ -224,27 +224,32 @@ contains
     stats = dyn%model%statistics()
   end subroutine integrate
 
-  subroutine run_trajectory()
+  !> Integrate the configuration with one path (update, tolerance) to t_end from its start;
+  !> writes <label>.wall_s, <label>.steps (and the statistics of an adaptive path); r returns
+  !> the final state. eps_lub stays 1e-4 (the default tolerance) unless --eps-lub is given.
+  subroutine run_path(label, update, tol, r, wall)
+    character(len=*), intent(in) :: label, update
+    real(wp), intent(in) :: tol
+    real(wp), allocatable, intent(out) :: r(:, :)
+    real(wp), intent(out) :: wall
     type(scene_t) :: scene
-    real(wp), allocatable :: r_stage(:, :), r_adapt(:, :), r_fine(:, :)
-    real(wp) :: wall
     integer(i8) :: steps
     type(hydro_stats_t) :: stats
-    call header()
-    call study_scene(config, 1.0e-4_wp, 'stage', scene, r_stage)
-    call integrate(scene, r_stage, wall, steps, stats)
-    write (output_unit, '(a)') 'stage.wall_s = '//to_str(wall, '(f10.2)')
-    write (output_unit, '(a)') 'stage.steps = '//to_str(steps)
-    call study_scene(config, 1.0e-4_wp, 'adaptive', scene, r_adapt)
-    call integrate(scene, r_adapt, wall, steps, stats)
-    write (output_unit, '(a)') 'adaptive.wall_s = '//to_str(wall, '(f10.2)')
-    write (output_unit, '(a)') 'adaptive.steps = '//to_str(steps)
-    call print_stats('adaptive.', stats)
-    call study_scene(config, 1.0e-6_wp, 'stage', scene, r_fine)
+    call study_scene(config, tol, update, scene, r)
     if (eps_lub < 0.0_wp) scene%hydro%eps_lub = 1.0e-4_wp
-    call integrate(scene, r_fine, wall, steps, stats)
-    write (output_unit, '(a)') 'stage_tol1e-6.wall_s = '//to_str(wall, '(f10.2)')
-    write (output_unit, '(a)') 'stage_tol1e-6.steps = '//to_str(steps)
+    call integrate(scene, r, wall, steps, stats)
+    write (output_unit, '(a)') label//'.wall_s = '//to_str(wall, '(f10.2)')
+    write (output_unit, '(a)') label//'.steps = '//to_str(steps)
+    if (update == 'adaptive') call print_stats(label//'.', stats)
+  end subroutine run_path
+
+  subroutine run_trajectory()
+    real(wp), allocatable :: r_stage(:, :), r_adapt(:, :), r_fine(:, :)
+    real(wp) :: wall
+    call header()
+    call run_path('stage', 'stage', 1.0e-4_wp, r_stage, wall)
+    call run_path('adaptive', 'adaptive', 1.0e-4_wp, r_adapt, wall)
+    call run_path('stage_tol1e-6', 'stage', 1.0e-6_wp, r_fine, wall)
     write (output_unit, '(a)') 'deviation_adaptive_vs_stage = '// &
       to_str(max_bead_deviation(r_adapt, r_stage), '(es10.3)')
     write (output_unit, '(a)') 'deviation_stage_tol1e-4_vs_1e-6 = '// &
@@ -252,21 +257,11 @@ contains
   end subroutine run_trajectory
 
   subroutine run_speed()
-    type(scene_t) :: scene
     real(wp), allocatable :: r(:, :)
     real(wp) :: wall_stage, wall_adapt
-    integer(i8) :: steps
-    type(hydro_stats_t) :: stats
     call header()
-    call study_scene(config, 1.0e-4_wp, 'adaptive', scene, r)
-    call integrate(scene, r, wall_adapt, steps, stats)
-    write (output_unit, '(a)') 'adaptive.wall_s = '//to_str(wall_adapt, '(f10.2)')
-    write (output_unit, '(a)') 'adaptive.steps = '//to_str(steps)
-    call print_stats('adaptive.', stats)
-    call study_scene(config, 1.0e-4_wp, 'stage', scene, r)
-    call integrate(scene, r, wall_stage, steps, stats)
-    write (output_unit, '(a)') 'stage.wall_s = '//to_str(wall_stage, '(f10.2)')
-    write (output_unit, '(a)') 'stage.steps = '//to_str(steps)
+    call run_path('adaptive', 'adaptive', 1.0e-4_wp, r, wall_adapt)
+    call run_path('stage', 'stage', 1.0e-4_wp, r, wall_stage)
     write (output_unit, '(a)') 'ratio_stage_over_adaptive = '//to_str(wall_stage/wall_adapt, '(f8.2)')
   end subroutine run_speed
 

@@ -15,7 +15,7 @@
 !>   progress lines only) do not take part: they do not change what is computed.
 module kf_case_match
   use kf_kinds, only: wp, i4, i8
-  use kf_strings, only: to_str, to_str_exact
+  use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: scene_t
   use kf_scene_items, only: scene_item_t, scene_items, item_value_text, item_string, &
@@ -90,8 +90,8 @@ contains
         dot = index(wanted(k)%name, '.')
         if (len(differences) > 0) differences = differences//'; '
         differences = differences//'&'//wanted(k)%name(1:dot - 1)//': '// &
-          trim(wanted(k)%name(dot + 1:))//' = '//value_text(stored)//' in the file, '// &
-          value_text(wanted(k))//' requested'
+          trim(wanted(k)%name(dot + 1:))//' = '//item_value_text(stored, exact=.true.)//' in the file, '// &
+          item_value_text(wanted(k), exact=.true.)//' requested'
       end if
     end do
     call h5_close_file(file)
@@ -164,24 +164,6 @@ contains
     end do
   end function value_when_absent
 
-  !> A value for messages: reals in their shortest exact form.
-  function value_text(it) result(text)
-    type(scene_item_t), intent(in) :: it
-    character(len=:), allocatable :: text
-    integer :: k
-    select case (it%kind)
-    case (item_real)
-      text = to_str_exact(it%r)
-    case (item_real_array)
-      text = ''
-      do k = 1, size(it%ra)
-        if (k > 1) text = text//', '
-        text = text//to_str_exact(it%ra(k))
-      end do
-    case default
-      text = item_value_text(it)
-    end select
-  end function value_text
 
   !> Equal values (exact: the attributes hold the values the run used, bit for bit).
   pure logical function same_value(a, b)

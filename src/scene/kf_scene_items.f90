@@ -3,7 +3,7 @@
 !> allowed variable names per group.
 module kf_scene_items
   use kf_kinds, only: wp, i8
-  use kf_strings, only: to_str
+  use kf_strings, only: to_str, to_str_exact
   use kf_scene, only: scene_t
   implicit none
   private
@@ -116,10 +116,14 @@ contains
   end function scene_text
 
   !> The value of an item as namelist text.
-  function item_value_text(it) result(text)
+  function item_value_text(it, exact) result(text)
     type(scene_item_t), intent(in) :: it
+    logical, intent(in), optional :: exact   !< reals in their shortest exact form (messages)
     character(len=:), allocatable :: text
     integer :: k
+    logical :: ex
+    ex = .false.
+    if (present(exact)) ex = exact
     select case (it%kind)
     case (item_string)
       text = "'"//trim(it%s)//"'"
@@ -129,16 +133,26 @@ contains
       text = merge('.true. ', '.false.', it%i /= 0)
       text = trim(text)
     case (item_real)
-      text = to_str(it%r)
+      text = real_text(it%r)
     case (item_real_array)
       text = ''
       do k = 1, size(it%ra)
         if (k > 1) text = text//', '
-        text = text//to_str(it%ra(k))
+        text = text//real_text(it%ra(k))
       end do
     case default
       text = '?'
     end select
+  contains
+    function real_text(x) result(t)
+      real(wp), intent(in) :: x
+      character(len=:), allocatable :: t
+      if (ex) then
+        t = to_str_exact(x)
+      else
+        t = to_str(x)
+      end if
+    end function real_text
   end function item_value_text
 
   subroutine push(items, it)

@@ -424,12 +424,13 @@ contains
     class(multipole_model_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :), qrot(3, 3)
     real(wp), intent(out) :: deform
-    real(wp) :: c(3)
+    real(wp) :: c(3), qt(3, 3)
     integer :: i
     c = centroid(r)
+    qt = transpose(qrot)
     deform = 0.0_wp
     do i = 1, size(r, 2)
-      this%rp(:, i) = matmul(transpose(qrot), r(:, i) - c) + this%c_ref
+      this%rp(:, i) = matmul(qt, r(:, i) - c) + this%c_ref
       deform = max(deform, norm2(this%rp(:, i) - this%r_ref(:, i)))
     end do
   end subroutine align
