@@ -339,10 +339,12 @@ contains
     budget = 0.0_wp
     if (this%h > 0.0_wp .and. present(t)) budget = budget_fraction*this%tolerance/this%h
     if (.not. this%has_ref .or. budget <= 0.0_wp) then
-      this%has_ref = .false.
-      this%has_prev = .false.
-      call refresh(this, r, f, ez, 0.0_wp, u, error)
-      if (present(t)) this%t_ref = t
+      this%has_ref = .false.   ! no history across an exact call
+      if (present(t)) then
+        call refresh(this, r, f, ez, t, u, error)
+      else
+        call refresh(this, r, f, ez, 0.0_wp, u, error)
+      end if
       return
     end if
     call best_rotation(this%r_ref, r, qrot, error)
