@@ -14,8 +14,11 @@
 !> The initial configuration (`start`) counts as a step of the run for overlaps, distances and
 !> strain. The state can be saved and restored (`get_state` / `set_state`) so a resumed run
 !> continues the counters, ongoing episodes included.
-!> Cost per step: two vectorised passes over the pairs. Beads: squared distances only; a pair
-!> is looked at further only when its overlap status changes. Bonds: during the step every point
+!> Cost per step: beads: one pass over the close pairs (kf_pair_geometry, pairs closer than
+!> `diag_pair_cutoff`; the dynamics' own list of the step's end when it was built there with at
+!> least that cutoff, see `share_pairs`); the overlapping pairs are kept as a sorted list, so
+!> memory is O(N + overlapping pairs), not O(N^2). The smallest non-bonded distance comes from
+!> the list (a full scan only when no non-bonded pair is in it). Bonds: during the step every point
 !> of bond k stays within rho_k = l_k/2 + (largest displacement of its two beads) of the bond's
 !> midpoint at the start, so bonds i, j can only touch when their midpoints are closer than
 !> rho_i + rho_j + tolerance; only those pairs go through the exact test `segments_pass` of
@@ -26,6 +29,7 @@ module kf_run_diagnostics
   use kf_error, only: error_t, fatal_error
   use kf_step_monitor, only: step_monitor_t
   use kf_strand_passage, only: segments_pass
+  use kf_pair_geometry, only: pair_geometry_t
   implicit none
   private
 
@@ -33,6 +37,10 @@ module kf_run_diagnostics
 
   !> Sizes of the saved state (`get_state` / `set_state`).
   integer, parameter, public :: diag_n_counters = 5, diag_n_values = 5
+  !> Range of the pair list the diagnostics look at: every overlapping pair (< 1) and, on any
+  !> chain with bond strain below 20 %, the pairs (i, i + 2) (<= 2 l0 (1 + strain)), so the
+  !> smallest non-bonded distance is found in the list.
+  real(wp), parameter, public :: diag_pair_cutoff = 2.5_wp
 
   !> Diagnostics of one run; `init` before use, `start` with the initial configuration.
   type, extends(step_monitor_t), public :: run_diagnostics_t
@@ -49,11 +57,17 @@ module kf_run_diagnostics
     integer :: max_overlapping_pairs = 0
     real(wp) :: min_distance2 = huge(1.0_wp)     !< smallest squared distance, |i - j| > 1
     real(wp) :: max_bond_strain = 0.0_wp
-    logical, allocatable, private :: overlapping(:)    !< per pair (i < j), packed
-    real(wp), allocatable, private :: episode_start(:) !< per pair: start of the ongoing episode
+    integer, private :: n_over = 0                      !< ongoing episodes (overlapping pairs)
+    integer(i8), allocatable, private :: over_key(:)    !< their pair keys (pair_key), ascending
+    real(wp), allocatable, private :: over_start(:)     !< and the starts of their episodes
+    integer(i8), allocatable, private :: new_key(:)     !< work: the overlapping pairs now
+    real(wp), allocatable, private :: new_start(:)
     real(wp), allocatable, private :: work(:, :)       !< (N, 4) work space
+    type(pair_geometry_t), private :: own              !< the list when none is shared
+    type(pair_geometry_t), pointer, private :: shared => null()
   contains
     procedure :: init => diagnostics_init
+    procedure :: share_pairs
     procedure :: start => diagnostics_start
     procedure :: on_step => diagnostics_on_step
     procedure :: min_distance => diagnostics_min_distance
@@ -75,20 +89,14 @@ contains
     pair_count = n*max(0_i8, n - 1)/2
   end function pair_count
 
-  !> Bytes the run diagnostics of `n_beads` beads allocate (a flag and an episode start per
-  !> pair, four work columns per bead), for the memory estimate at set-up.
+  !> Bytes the run diagnostics of `n_beads` beads allocate, for the memory estimate at set-up:
+  !> four work columns and the pair list's search arrays per bead (11 words), and the close pairs
+  !> of a chain no denser than close packing (at most 46 per bead within diag_pair_cutoff, each
+  !> 48 bytes), of which at most 6 per bead overlap (16 bytes each, twice).
   pure integer(i8) function diagnostics_memory(n_beads) result(bytes)
     integer, intent(in) :: n_beads
-    logical :: flag
-    bytes = pair_count(n_beads)*(storage_size(flag)/8 + storage_size(1.0_wp)/8) + &
-            4_i8*max(1, n_beads)*(storage_size(1.0_wp)/8)
+    bytes = int(max(1, n_beads), i8)*(11_i8*8_i8 + 46_i8*48_i8 + 6_i8*32_i8)
   end function diagnostics_memory
-
-  !> Index of pair (i, j), i < j, in the packed pair arrays (64-bit: see `pair_count`).
-  pure integer(i8) function pair_index(i, j)
-    integer, intent(in) :: i, j
-    pair_index = (int(j, i8) - 1)*(int(j, i8) - 2)/2 + i
-  end function pair_index
 
   !> Reset for a chain of `n_beads` beads with rest length `bond_length`; `passage_tolerance`
   !> (default 1e-6) is the contact distance of the strand-passage test.
@@ -97,15 +105,22 @@ contains
     integer, intent(in) :: n_beads
     real(wp), intent(in) :: bond_length
     real(wp), intent(in), optional :: passage_tolerance
-    integer(i8) :: n_pairs
     this%n_beads = n_beads
     this%bond_length = bond_length
     if (present(passage_tolerance)) this%passage_tolerance = passage_tolerance
-    n_pairs = pair_count(n_beads)
-    allocate (this%overlapping(n_pairs), this%episode_start(n_pairs), this%work(max(n_beads, 1), 4))
-    this%overlapping = .false.
-    this%episode_start = 0.0_wp
+    allocate (this%work(max(n_beads, 1), 4), this%over_key(16), this%over_start(16), &
+              this%new_key(16), this%new_start(16))
   end subroutine diagnostics_init
+
+  !> Look at `pairs` (the dynamics' close pairs of its last evaluation) instead of finding the
+  !> pairs again whenever that list was built at the configuration of a step's end with a
+  !> cutoff of at least diag_pair_cutoff (a dopri45 step ends with an evaluation there).
+  !> `pairs` must outlive this object.
+  subroutine share_pairs(this, pairs)
+    class(run_diagnostics_t), intent(inout) :: this
+    type(pair_geometry_t), intent(in), target :: pairs
+    this%shared => pairs
+  end subroutine share_pairs
 
   !> Take the initial configuration r(3, N) at time t: overlaps present now start episodes at t.
   subroutine diagnostics_start(this, t, r)
@@ -136,46 +151,122 @@ contains
     class(run_diagnostics_t), intent(inout) :: this
     real(wp), intent(in) :: t
     real(wp), intent(in) :: r(:, :)
-    integer :: i, j, n, now
-    integer(i8) :: k0, k
+    logical :: use_shared
+    use_shared = .false.
+    if (associated(this%shared)) use_shared = this%shared%covers(r, diag_pair_cutoff)
+    if (use_shared) then
+      call observe_pairs(this, t, r, this%shared)
+    else
+      call this%own%build(r, diag_pair_cutoff)
+      call observe_pairs(this, t, r, this%own)
+    end if
+  end subroutine observe
+
+  !> `observe` with the close pairs g of r: the overlapping pairs now (sorted by key) merged with
+  !> the ongoing episodes (sorted): new ones start at t, vanished ones end at t.
+  subroutine observe_pairs(this, t, r, g)
+    class(run_diagnostics_t), intent(inout) :: this
+    real(wp), intent(in) :: t
+    real(wp), intent(in) :: r(:, :)
+    type(pair_geometry_t), intent(in) :: g
+    integer :: i, j, k, n, now, a, b
+    integer(i8) :: key, old_key
     real(wp) :: dmin2, duration
-    logical :: over
+    logical :: found
     n = min(this%n_beads, size(r, 2))
     now = 0
-    dmin2 = this%min_distance2
-    associate (x => this%work(:, 1), y => this%work(:, 2), z => this%work(:, 3), d2 => this%work(:, 4))
-      x(1:n) = r(1, 1:n)
-      y(1:n) = r(2, 1:n)
-      z(1:n) = r(3, 1:n)
-      do j = 2, n
-        k0 = pair_index(1, j) - 1
-        d2(1:j - 1) = (x(1:j - 1) - x(j))**2 + (y(1:j - 1) - y(j))**2 + (z(1:j - 1) - z(j))**2
-        if (j > 2) dmin2 = min(dmin2, minval(d2(1:j - 2)))
-        now = now + count(d2(1:j - 1) < 1.0_wp)
-        if (all((d2(1:j - 1) < 1.0_wp) .eqv. this%overlapping(k0 + 1:k0 + j - 1))) cycle
-        do i = 1, j - 1
-          k = k0 + i
-          over = d2(i) < 1.0_wp
-          if (over .eqv. this%overlapping(k)) cycle
-          ! the status of pair k changes: an episode starts or ends at t
-          this%overlapping(k) = over
-          if (over) then
-            this%episode_start(k) = t
-            this%overlap_episodes = this%overlap_episodes + 1
-          else
-            duration = t - this%episode_start(k)
-            this%completed_episodes = this%completed_episodes + 1
-            this%duration_sum = this%duration_sum + duration
-            this%duration_max = max(this%duration_max, duration)
-          end if
-        end do
-      end do
-    end associate
-    this%min_distance2 = dmin2
+    dmin2 = huge(1.0_wp)
+    found = .false.
+    do k = 1, g%size()
+      call g%pair(k, i, j)
+      if (j > n) cycle
+      if (j - i > 1) then
+        dmin2 = min(dmin2, g%distance(k)**2)
+        found = .true.
+      end if
+      if (g%distance(k) >= 1.0_wp) cycle
+      now = now + 1
+      call grow(this%new_key, this%new_start, now)
+      this%new_key(now) = pair_key(i, j, n)
+    end do
+    if (.not. found) dmin2 = full_scan_min_distance2(r(:, 1:n), this%work)
+    this%min_distance2 = min(this%min_distance2, dmin2)
+    ! merge the two sorted key lists
+    a = 1
+    b = 1
+    do while (a <= this%n_over .or. b <= now)
+      old_key = huge(1_i8)
+      if (a <= this%n_over) old_key = this%over_key(a)
+      key = huge(1_i8)
+      if (b <= now) key = this%new_key(b)
+      if (old_key < key) then
+        ! an ongoing episode ended
+        duration = t - this%over_start(a)
+        this%completed_episodes = this%completed_episodes + 1
+        this%duration_sum = this%duration_sum + duration
+        this%duration_max = max(this%duration_max, duration)
+        a = a + 1
+      else if (old_key == key) then
+        this%new_start(b) = this%over_start(a)   ! continues
+        a = a + 1
+        b = b + 1
+      else
+        this%new_start(b) = t                    ! starts now
+        this%overlap_episodes = this%overlap_episodes + 1
+        b = b + 1
+      end if
+    end do
+    call grow(this%over_key, this%over_start, now)
+    this%over_key(1:now) = this%new_key(1:now)
+    this%over_start(1:now) = this%new_start(1:now)
+    this%n_over = now
     this%overlapping_pairs = now
     this%max_overlapping_pairs = max(this%max_overlapping_pairs, now)
     this%max_bond_strain = max(this%max_bond_strain, max_strain(r(:, 1:n), this%bond_length))
-  end subroutine observe
+  end subroutine observe_pairs
+
+  !> Key of pair i < j of n beads, ascending in the (i, j) order of kf_pair_geometry's lists.
+  pure integer(i8) function pair_key(i, j, n)
+    integer, intent(in) :: i, j, n
+    pair_key = int(i - 1, i8)*int(n, i8) + int(j, i8)
+  end function pair_key
+
+  !> Room for m entries in a key list and its start times (contents kept).
+  subroutine grow(key, start, m)
+    integer(i8), allocatable, intent(inout) :: key(:)
+    real(wp), allocatable, intent(inout) :: start(:)
+    integer, intent(in) :: m
+    integer(i8), allocatable :: k2(:)
+    real(wp), allocatable :: s2(:)
+    integer :: cap
+    if (size(key) >= m) return
+    cap = max(2*size(key), m)
+    allocate (k2(cap), s2(cap))
+    k2(1:size(key)) = key
+    s2(1:size(start)) = start
+    call move_alloc(k2, key)
+    call move_alloc(s2, start)
+  end subroutine grow
+
+  !> Smallest squared distance over pairs with |i - j| > 1 of r(3, N) by a full (vectorised)
+  !> scan; huge when N < 3. `work` has at least N rows and 4 columns.
+  function full_scan_min_distance2(r, work) result(dmin2)
+    real(wp), intent(in) :: r(:, :)
+    real(wp), intent(inout) :: work(:, :)
+    real(wp) :: dmin2
+    integer :: j, n
+    n = size(r, 2)
+    dmin2 = huge(1.0_wp)
+    associate (x => work(:, 1), y => work(:, 2), z => work(:, 3), d2 => work(:, 4))
+      x(1:n) = r(1, 1:n)
+      y(1:n) = r(2, 1:n)
+      z(1:n) = r(3, 1:n)
+      do j = 3, n
+        d2(1:j - 2) = (x(1:j - 2) - x(j))**2 + (y(1:j - 2) - y(j))**2 + (z(1:j - 2) - z(j))**2
+        dmin2 = min(dmin2, minval(d2(1:j - 2)))
+      end do
+    end associate
+  end function full_scan_min_distance2
 
   !> Smallest distance over pairs with |i - j| > 1 seen so far (-1 when there is none: N < 3).
   pure real(wp) function diagnostics_min_distance(this) result(d)
@@ -208,23 +299,18 @@ contains
     integer(i8), intent(out) :: counters(diag_n_counters)
     real(wp), intent(out) :: values(diag_n_values)
     real(wp), allocatable, intent(out) :: ongoing(:, :)
-    integer :: i, j, m, n_on
-    integer(i8) :: k
-    n_on = count(this%overlapping)
+    integer :: m, n
+    integer(i8) :: key
+    n = max(this%n_beads, 1)
     counters = [this%strand_passages, this%overlap_episodes, this%completed_episodes, &
-                int(this%max_overlapping_pairs, i8), int(n_on, i8)]
+                int(this%max_overlapping_pairs, i8), int(this%n_over, i8)]
     values = [this%first_passage_time, this%duration_sum, this%duration_max, this%min_distance2, &
               this%max_bond_strain]
-    allocate (ongoing(3, max(1, n_on)))
+    allocate (ongoing(3, max(1, this%n_over)))
     ongoing = 0.0_wp
-    m = 0
-    do j = 2, this%n_beads
-      do i = 1, j - 1
-        k = pair_index(i, j)
-        if (.not. this%overlapping(k)) cycle
-        m = m + 1
-        ongoing(:, m) = [real(i, wp), real(j, wp), this%episode_start(k)]
-      end do
+    do m = 1, this%n_over
+      key = this%over_key(m)
+      ongoing(:, m) = [real((key - 1)/n + 1, wp), real(key - ((key - 1)/n)*n, wp), this%over_start(m)]
     end do
   end subroutine diagnostics_get_state
 
@@ -235,19 +321,19 @@ contains
     real(wp), intent(in) :: values(:)
     real(wp), intent(in) :: ongoing(:, :)
     type(error_t), allocatable, intent(out) :: error
-    integer :: i, j, m, n_on
+    integer :: i, j, k, m, n_on
+    integer(i8) :: key
     if (size(counters) /= diag_n_counters .or. size(values) /= diag_n_values .or. size(ongoing, 1) /= 3) then
       call fatal_error(error, 'diagnostics state: wrong sizes (counters '//to_str(size(counters))// &
         ', values '//to_str(size(values))//', ongoing rows '//to_str(size(ongoing, 1))//')')
       return
     end if
     n_on = int(counters(5))
-    if (n_on < 0 .or. n_on > size(ongoing, 2) .or. n_on > size(this%overlapping, kind=i8)) then
+    if (n_on < 0 .or. n_on > size(ongoing, 2) .or. int(n_on, i8) > pair_count(this%n_beads)) then
       call fatal_error(error, 'diagnostics state: '//to_str(n_on)//' ongoing episodes do not fit')
       return
     end if
-    this%overlapping = .false.
-    this%episode_start = 0.0_wp
+    call grow(this%over_key, this%over_start, n_on)
     do m = 1, n_on
       i = nint(ongoing(1, m))
       j = nint(ongoing(2, m))
@@ -256,9 +342,24 @@ contains
           to_str(j)//') is not a pair of '//to_str(this%n_beads)//' beads')
         return
       end if
-      this%overlapping(pair_index(i, j)) = .true.
-      this%episode_start(pair_index(i, j)) = ongoing(3, m)
+      ! insert in key order (files before the sorted list stored them column by column)
+      key = pair_key(i, j, this%n_beads)
+      k = m
+      do while (k > 1)
+        if (this%over_key(k - 1) < key) exit
+        if (this%over_key(k - 1) == key) then
+          call fatal_error(error, 'diagnostics state: pair ('//to_str(i)//', '//to_str(j)// &
+            ') has two ongoing episodes')
+          return
+        end if
+        this%over_key(k) = this%over_key(k - 1)
+        this%over_start(k) = this%over_start(k - 1)
+        k = k - 1
+      end do
+      this%over_key(k) = key
+      this%over_start(k) = ongoing(3, m)
     end do
+    this%n_over = n_on
     this%strand_passages = counters(1)
     this%overlap_episodes = counters(2)
     this%completed_episodes = counters(3)

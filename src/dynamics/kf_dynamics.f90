@@ -1,6 +1,9 @@
 !> The equations of motion (PHYSICS.md section 3): dr_i/dt = G r_i + sum_j mu_ij F_j(r)
 !> + sum_j C_ij : E, assembled from a forces_t, a hydrodynamic model and a flow_t that are
 !> all built once from the scene. As an ode_system_t the state y is r(3, N).
+!> One pair-geometry pass per evaluation (kf_pair_geometry, to the largest range the forces and
+!> the model need) serves the excluded volume and the lubrication corrections; the run
+!> diagnostics use it too when it was built at the configuration they look at (`pairs`).
 module kf_dynamics
   use kf_kinds, only: wp, i8
   use kf_error, only: error_t
@@ -10,6 +13,7 @@ module kf_dynamics
   use kf_hydro_model, only: hydro_model_t
   use kf_hydro_factory, only: make_hydro_model
   use kf_ode_system, only: ode_system_t
+  use kf_pair_geometry, only: pair_geometry_t
   implicit none
   private
 
@@ -20,11 +24,14 @@ module kf_dynamics
     type(flow_t) :: flow
     integer :: n = 0                     !< number of beads
     integer(i8) :: evaluations = 0       !< calls of velocity
+    real(wp) :: pair_cutoff = 0.0_wp     !< range of the pair list (0: none is built)
+    type(pair_geometry_t) :: pairs       !< close pairs of the last evaluation's positions
     real(wp), allocatable :: f(:, :)     !< work: forces of the last evaluation
     real(wp), allocatable :: u(:, :)     !< work: mu F + C:E of the last evaluation
   contains
     procedure :: init => dynamics_init
     procedure :: velocity => dynamics_velocity
+    procedure :: need_pairs
     procedure :: derivative => dynamics_derivative
     procedure :: step_begin => dynamics_step_begin
     procedure :: step_accepted => dynamics_step_accepted
@@ -46,8 +53,16 @@ contains
     call make_hydro_model(scene%hydro, scene%integrator%tolerance, this%model, error)
     if (allocated(error)) return
     this%n = n_beads
+    this%pair_cutoff = max(this%forces%pair_range(), this%model%pair_cutoff())
     allocate (this%f(3, n_beads), this%u(3, n_beads))
   end subroutine dynamics_init
+
+  !> Build the pair list of every evaluation to at least `cutoff` (for a monitor that shares it).
+  subroutine need_pairs(this, cutoff)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: cutoff
+    this%pair_cutoff = max(this%pair_cutoff, cutoff)
+  end subroutine need_pairs
 
   !> Bead velocities v(3, N) at positions r(3, N), at time t of an integration (optional; a
   !> hydrodynamic model that reuses work between the stages needs it).
@@ -58,11 +73,12 @@ contains
     type(error_t), allocatable, intent(out) :: error
     real(wp), intent(in), optional :: t
     this%evaluations = this%evaluations + 1
-    call this%forces%compute(r, this%f)
+    if (this%pair_cutoff > 0.0_wp) call this%pairs%build(r, this%pair_cutoff)
+    call this%forces%compute(r, this%f, this%pairs)
     if (this%flow%has_strain) then
-      call this%model%velocities(r, this%f, this%u, error, this%flow%e, t)
+      call this%model%velocities(r, this%f, this%u, error, this%flow%e, t, this%pairs)
     else
-      call this%model%velocities(r, this%f, this%u, error, t=t)
+      call this%model%velocities(r, this%f, this%u, error, t=t, pairs=this%pairs)
     end if
     if (allocated(error)) return
     call this%flow%velocity(r, v)

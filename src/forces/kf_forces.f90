@@ -11,6 +11,7 @@ module kf_forces
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: forces_params_t
+  use kf_pair_geometry, only: pair_geometry_t
   implicit none
   private
 
@@ -31,6 +32,7 @@ module kf_forces
     procedure :: init => forces_init
     procedure :: compute => forces_compute
     procedure :: energy => forces_energy
+    procedure :: pair_range
   end type forces_t
 
 contains
@@ -81,23 +83,43 @@ contains
     this%external = any(params%external_force /= 0.0_wp)
   end subroutine forces_init
 
-  !> Total force f(3, N) on each bead at positions r(3, N).
-  subroutine forces_compute(this, r, f)
+  !> Total force f(3, N) on each bead at positions r(3, N). The excluded volume takes its pairs
+  !> from `pairs` when that list covers r to pair_range() (kf_pair_geometry), else finds them.
+  subroutine forces_compute(this, r, f, pairs)
     class(forces_t), intent(in) :: this
     real(wp), intent(in) :: r(:, :)
     real(wp), intent(out) :: f(:, :)
+    type(pair_geometry_t), intent(in), optional :: pairs
+    type(pair_geometry_t) :: own
+    logical :: given
     integer :: n, i
     n = size(r, 2)
     f = 0.0_wp
     if (this%springs) call add_springs(this%k, this%l0, r, f)
     if (this%bending .and. n >= 3) call add_bending(this%a_over_l0, r, f)
-    if (this%excluded_volume) call add_excluded_volume(this%ev_strength, this%ev_range, r, f)
+    if (this%excluded_volume) then
+      given = .false.
+      if (present(pairs)) given = pairs%covers(r, this%ev_range)
+      if (given) then
+        call add_excluded_volume(this%ev_strength, this%ev_range, pairs, f)
+      else
+        call own%build(r, this%ev_range)
+        call add_excluded_volume(this%ev_strength, this%ev_range, own, f)
+      end if
+    end if
     if (this%external) then
       do i = 1, n
         f(:, i) = f(:, i) + this%f_ext
       end do
     end if
   end subroutine forces_compute
+
+  !> The largest centre distance at which a pair force acts (0 when none is enabled).
+  pure real(wp) function pair_range(this)
+    class(forces_t), intent(in) :: this
+    pair_range = 0.0_wp
+    if (this%excluded_volume) pair_range = this%ev_range
+  end function pair_range
 
   !> Potential energy of the enabled conservative terms (the external force is not included).
   function forces_energy(this, r) result(u)
@@ -198,26 +220,24 @@ contains
     end do
   end subroutine add_bending
 
-  !> Linear repulsion between non-bonded pairs closer than `range`.
-  pure subroutine add_excluded_volume(strength, range, r, f)
+  !> Linear repulsion between non-bonded pairs (|i - j| > 1) closer than `range`; `pairs` holds
+  !> (at least) every pair closer than `range`.
+  pure subroutine add_excluded_volume(strength, range, pairs, f)
     real(wp), intent(in) :: strength, range
-    real(wp), intent(in) :: r(:, :)
+    type(pair_geometry_t), intent(in) :: pairs
     real(wp), intent(inout) :: f(:, :)
-    real(wp) :: d(3), dist2, dist, fij(3), range2
-    integer :: i, j, n
-    n = size(r, 2)
-    range2 = range*range
-    do j = 3, n
-      do i = 1, j - 2
-        d = r(:, i) - r(:, j)
-        dist2 = d(1)**2 + d(2)**2 + d(3)**2
-        if (dist2 < range2 .and. dist2 > 0.0_wp) then
-          dist = sqrt(dist2)
-          fij = (strength*(range - dist)/dist)*d
-          f(:, i) = f(:, i) + fij
-          f(:, j) = f(:, j) - fij
-        end if
-      end do
+    real(wp) :: dist, fij(3)
+    integer :: i, j, k
+    do k = 1, pairs%size()
+      call pairs%pair(k, i, j)
+      if (j - i < 2) cycle
+      dist = pairs%distance(k)
+      if (dist < range .and. dist > 0.0_wp) then
+        ! repulsion along r_i - r_j = -(separation)
+        fij = (-strength*(range - dist)/dist)*pairs%separation(k)
+        f(:, i) = f(:, i) + fij
+        f(:, j) = f(:, j) - fij
+      end if
     end do
   end subroutine add_excluded_volume
 

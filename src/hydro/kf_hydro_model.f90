@@ -15,6 +15,7 @@
 module kf_hydro_model
   use kf_kinds, only: wp, i8
   use kf_error, only: error_t
+  use kf_pair_geometry, only: pair_geometry_t
   implicit none
   private
 
@@ -41,15 +42,19 @@ module kf_hydro_model
     procedure :: step_accepted
     procedure :: step_rejected
     procedure :: statistics
+    procedure :: pair_cutoff
   end type hydro_model_t
 
   abstract interface
-    !> Set up for bead centres r(3, N).
-    subroutine prepare_i(this, r, error)
-      import :: hydro_model_t, wp, error_t
+    !> Set up for bead centres r(3, N); `pairs`: the close pairs of r if the caller has them
+    !> (kf_pair_geometry; a model that needs them to pair_cutoff() and finds them not covering
+    !> r finds its own).
+    subroutine prepare_i(this, r, error, pairs)
+      import :: hydro_model_t, wp, error_t, pair_geometry_t
       class(hydro_model_t), intent(inout) :: this
       real(wp), intent(in) :: r(:, :)
       type(error_t), allocatable, intent(out) :: error
+      type(pair_geometry_t), intent(in), optional :: pairs
     end subroutine prepare_i
     !> u = mu f for forces f(3, N) (u is overwritten).
     subroutine apply_i(this, f, u)
@@ -95,14 +100,15 @@ contains
 
   !> u = mu(r) f + C(r) : e (u is overwritten; no strain term when e is absent) at time t of
   !> the integration (optional: a model that reuses work needs it). The default prepares at r
-  !> and applies: exact at every call.
-  subroutine velocities(this, r, f, u, error, e, t)
+  !> and applies: exact at every call. `pairs` as for prepare.
+  subroutine velocities(this, r, f, u, error, e, t, pairs)
     class(hydro_model_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :), f(:, :)
     real(wp), intent(out) :: u(:, :)
     type(error_t), allocatable, intent(out) :: error
     real(wp), intent(in), optional :: e(3, 3), t
-    call this%prepare(r, error)
+    type(pair_geometry_t), intent(in), optional :: pairs
+    call this%prepare(r, error, pairs)
     if (allocated(error)) return
     call this%apply_mobility(f, u)
     if (present(e)) call this%add_strain_disturbance(e, u)
@@ -130,5 +136,12 @@ contains
     type(hydro_stats_t) :: s
     s = hydro_stats_t()
   end function statistics
+
+  !> The largest centre distance at which the model treats pairs apart (lubrication); 0 when it
+  !> needs no pair list.
+  pure real(wp) function pair_cutoff(this)
+    class(hydro_model_t), intent(in) :: this
+    pair_cutoff = 0.0_wp
+  end function pair_cutoff
 
 end module kf_hydro_model

@@ -1,6 +1,7 @@
 !> Free draining (PHYSICS.md 3.1): mu_ij = delta_ij I/3, no strain disturbance.
 module kf_hydro_none
   use kf_kinds, only: wp
+  use kf_pair_geometry, only: pair_geometry_t
   use kf_error, only: error_t
   use kf_hydro_model, only: hydro_model_t
   implicit none
@@ -17,10 +18,11 @@ module kf_hydro_none
 
 contains
 
-  subroutine none_prepare(this, r, error)
+  subroutine none_prepare(this, r, error, pairs)
     class(none_model_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
+    type(pair_geometry_t), intent(in), optional :: pairs
     this%n = size(r, 2)
   end subroutine none_prepare
 

@@ -11,6 +11,7 @@
 !> allocate nothing (work arrays are allocated when N changes).
 module kf_hydro_rpy
   use kf_kinds, only: wp
+  use kf_pair_geometry, only: pair_geometry_t
   use kf_error, only: error_t
   use kf_hydro_model, only: hydro_model_t
   implicit none
@@ -57,10 +58,11 @@ contains
   !> d = r_i - r_j and the coefficients mu_ij = a I + bb d d^T, C_ij:E = c1 E d + c2 (d.E.d) d.
   !> The loops are branch-free so that they vectorise; coincident beads (r = 0) get the limits
   !> mu_ij = I/3 and C_ij:E = 0.
-  subroutine rpy_prepare(this, r, error)
+  subroutine rpy_prepare(this, r, error, pairs)
     class(rpy_model_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
+    type(pair_geometry_t), intent(in), optional :: pairs
     integer :: n
     n = size(r, 2)
     if (n /= this%n .or. .not. allocated(this%x)) call allocate_work(this, n)

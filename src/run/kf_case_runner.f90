@@ -16,7 +16,7 @@ module kf_case_runner
   use kf_stepper_factory, only: make_stepper
   use kf_shape, only: shape_t, compute_shape
   use kf_case_file, only: case_file_t, case_file_status, stepper_checkpoint_t, verify_case_file
-  use kf_run_diagnostics, only: run_diagnostics_t
+  use kf_run_diagnostics, only: run_diagnostics_t, diag_pair_cutoff
   use kf_fs, only: remove_file, move_aside
   use kf_case_match, only: check_reusable
   use kf_h5, only: h5_extend_truncated
@@ -56,7 +56,7 @@ contains
     character(len=:), allocatable, intent(out) :: message
     type(error_t), allocatable :: error
     type(case_file_t) :: file
-    type(dynamics_t) :: dyn
+    type(dynamics_t), target :: dyn
     class(stepper_t), allocatable :: integ
     type(stepper_checkpoint_t) :: saved
     integer(i8) :: hydro_base(4)   !< hydro counters of the run before a resume
@@ -167,6 +167,9 @@ contains
     if (with_diag) then
       allocate (diag)
       call diag%init(size(r, 2), sc%chain%bond_length)
+      ! one pair list per configuration: the dynamics' list also serves the diagnostics
+      call dyn%need_pairs(diag_pair_cutoff)
+      call diag%share_pairs(dyn%pairs)
     end if
     if (resumed) then
       if (with_diag) call file%restore_diagnostics(diag, error)

@@ -6,7 +6,7 @@
 !> Memory per case (bytes; N beads, P = N(N-1)/2 pairs, all sizes in 64-bit integers):
 !> - chain, forces, the stepper's stages and work arrays: `per_bead_bytes`*N (generous);
 !> - run diagnostics (`&output diagnostics`): kf_run_diagnostics' own `diagnostics_memory`
-!>   (a flag and a start time per pair);
+!>   (O(N): the close pairs of a chain no denser than close packing, about 2.4 KiB per bead);
 !> - hydrodynamic model: 'rpy' keeps 7 float64 pair tables (kf_hydro_rpy: 56 P); 'multipole'
 !>   the dense 3N x 3N mobility and 6N x 6N friction (360 N^2), three more 6N x 6N matrices
 !>   with update = 'adaptive' (864 N^2): a lower bound (the many-body system comes on top);

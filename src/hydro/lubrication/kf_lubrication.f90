@@ -19,6 +19,7 @@ module kf_lubrication
   use kf_two_sphere, only: n_functions, has_strain
   use kf_near_contact, only: singular_part, singular_weight, smoothstep
   use kf_pair_tensor, only: pair_tensors
+  use kf_pair_geometry, only: pair_geometry_t
   use kf_lubrication_data, only: lub_max_order, lub_cutoff, lub_n_grid, lubrication_table
   use kf_pair_blocks, only: pair_blocks_t
   implicit none
@@ -142,23 +143,41 @@ contains
   end subroutine pair_correction
 
   !> The corrections of every pair of r(3, N) closer than the cutoff, as a list of pair blocks.
-  subroutine pair_blocks(this, r, blocks)
+  !> The pairs come from `pairs` when that list covers r to the cutoff (kf_pair_geometry), else
+  !> they are found here. With `rotation` Q the blocks are those of the rotated configuration
+  !> Q r (each separation d becomes Q d).
+  subroutine pair_blocks(this, r, blocks, pairs, rotation)
     class(lubrication_t), intent(in) :: this
     real(wp), intent(in) :: r(:, :)
     type(pair_blocks_t), intent(inout) :: blocks
-    real(wp), pointer :: zeta(:, :), xe(:, :, :)
-    real(wp) :: d(3), rc2
-    integer :: i, j
-    rc2 = this%r_cut**2
-    call blocks%clear()
-    do i = 1, size(r, 2)
-      do j = i + 1, size(r, 2)
-        d = r(:, j) - r(:, i)
-        if (sum(d*d) >= rc2) cycle
+    type(pair_geometry_t), intent(in), optional :: pairs
+    real(wp), intent(in), optional :: rotation(3, 3)
+    type(pair_geometry_t) :: own
+    logical :: given
+    given = .false.
+    if (present(pairs)) given = pairs%covers(r, this%r_cut)
+    if (given) then
+      call fill(pairs)
+    else
+      call own%build(r, this%r_cut)
+      call fill(own)
+    end if
+  contains
+    subroutine fill(list)
+      type(pair_geometry_t), intent(in) :: list
+      real(wp), pointer :: zeta(:, :), xe(:, :, :)
+      real(wp) :: d(3)
+      integer :: i, j, k
+      call blocks%clear()
+      do k = 1, list%size()
+        if (list%distance(k) >= this%r_cut) cycle
+        call list%pair(k, i, j)
+        d = list%separation(k)
+        if (present(rotation)) d = matmul(rotation, d)
         call blocks%next_slot(i, j, zeta, xe)
         call this%pair_correction(d, zeta, xe)
       end do
-    end do
+    end subroutine fill
   end subroutine pair_blocks
 
   !> Second derivatives of the cubic spline through y on a uniform grid of step h, clamped with

@@ -39,6 +39,7 @@ module kf_hydro_multipole
   use kf_multipole_system, only: multipole_system_t, strain_coefficients, strain_basis
   use kf_lubrication, only: lubrication_t
   use kf_pair_blocks, only: pair_blocks_t
+  use kf_pair_geometry, only: pair_geometry_t
   use kf_rigid_fit, only: best_rotation, centroid
   implicit none
   private
@@ -99,6 +100,7 @@ module kf_hydro_multipole
     procedure :: mobility_matrix => multipole_mobility_matrix
     procedure :: friction_matrix => multipole_friction_matrix
     procedure :: velocities => multipole_velocities
+    procedure :: pair_cutoff => multipole_pair_cutoff
     procedure :: step_begin => multipole_step_begin
     procedure :: statistics => multipole_statistics
     procedure :: reused_velocities => multipole_reused_velocities
@@ -184,10 +186,11 @@ contains
 
   !> Assemble and factorise for bead centres r(3, N); cache mu and the strain disturbances
   !> (exact at r, in either update mode).
-  subroutine multipole_prepare(this, r, error)
+  subroutine multipole_prepare(this, r, error, pairs)
     class(multipole_model_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
+    type(pair_geometry_t), intent(in), optional :: pairs
     integer :: nb, j, i
 
     nb = size(r, 2)
@@ -206,7 +209,7 @@ contains
       this%n = nb
       return
     end if
-    call corrected_system(this, r, this%zt, this%x6, error)
+    call corrected_system(this, r, this%zt, this%x6, error, pairs)
     if (allocated(error)) return
     ! zt -> zeta^-1 (full), x6 -> zeta^-1 x: the translational blocks are mu and dist.
     call cholesky_solve(this%zt, this%x6)
@@ -223,11 +226,12 @@ contains
 
   !> For a factorised system at r: zeta = zeta_L + sum dzeta (Cholesky-factorised in place,
   !> lower triangle) and x = x_L + sum dx for the basis strains; the pair list is left at r.
-  subroutine corrected_system(this, r, zeta, x, error)
+  subroutine corrected_system(this, r, zeta, x, error, pairs)
     class(multipole_model_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     real(wp), intent(inout) :: zeta(:, :), x(:, :)
     type(error_t), allocatable, intent(out) :: error
+    type(pair_geometry_t), intent(in), optional :: pairs
     real(wp) :: bas(3, 3, 5)
     integer :: k
     integer(i8) :: c0, c1, crate
@@ -239,7 +243,7 @@ contains
       do k = 1, 5
         bas(:, :, k) = strain_basis(k)
       end do
-      call this%lub%pair_blocks(r, this%pairs)
+      call this%lub%pair_blocks(r, this%pairs, pairs)
       call this%pairs%add_friction(zeta)
       call this%pairs%add_strain_basis(bas, x)
       this%n_lub_pairs = this%pairs%n_pairs()
@@ -314,14 +318,22 @@ contains
     s = this%stats
   end function multipole_statistics
 
+  !> The lubrication cutoff when the corrections are on, else 0 (no pair list needed).
+  pure real(wp) function multipole_pair_cutoff(this) result(c)
+    class(multipole_model_t), intent(in) :: this
+    c = 0.0_wp
+    if (this%lubrication) c = this%lub%cutoff()
+  end function multipole_pair_cutoff
+
   !> u = mu(r) f + C(r):e at time t, exact ('stage') or with the adaptive reuse of the
   !> many-body part (which needs t and a step size from step_begin; else exact).
-  subroutine multipole_velocities(this, r, f, u, error, e, t)
+  subroutine multipole_velocities(this, r, f, u, error, e, t, pairs)
     class(multipole_model_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :), f(:, :)
     real(wp), intent(out) :: u(:, :)
     type(error_t), allocatable, intent(out) :: error
     real(wp), intent(in), optional :: e(3, 3), t
+    type(pair_geometry_t), intent(in), optional :: pairs
     real(wp) :: ez(3, 3), qrot(3, 3), deform, budget, err, predicted, w, g
     logical :: converged, had_prev
 
@@ -329,7 +341,7 @@ contains
     ez = 0.0_wp
     if (present(e)) ez = e
     if (.not. this%adaptive) then
-      call this%prepare(r, error)
+      call this%prepare(r, error, pairs)
       if (allocated(error)) return
       call this%apply_mobility(f, u)
       if (present(e)) call this%add_strain_disturbance(e, u)
@@ -341,9 +353,9 @@ contains
     if (.not. this%has_ref .or. budget <= 0.0_wp) then
       this%has_ref = .false.   ! no history across an exact call
       if (present(t)) then
-        call refresh(this, r, f, ez, t, u, error)
+        call refresh(this, r, f, ez, t, u, error, pairs)
       else
-        call refresh(this, r, f, ez, 0.0_wp, u, error)
+        call refresh(this, r, f, ez, 0.0_wp, u, error, pairs)
       end if
       return
     end if
@@ -358,18 +370,18 @@ contains
     if (.not. this%has_prev .and. this%coef1 >= 0.0_wp) predicted = this%coef1*g
     if (predicted >= 0.0_wp .and. predicted <= budget .and. deform <= max_deformation .and. &
         abs(w) <= max_extrapolation) then
-      call reused_solve(this, f, ez, qrot, w, budget, u, converged)
+      call reused_solve(this, r, f, ez, qrot, w, budget, u, converged, pairs)
       if (converged) then
         this%stats%reused = this%stats%reused + 1
         return
       end if
-      call refresh(this, r, f, ez, t, u, error)
+      call refresh(this, r, f, ez, t, u, error, pairs)
       return
     end if
     ! Refresh; measure first the error of the reused part here, to calibrate the rule.
-    call reused_solve(this, f, ez, qrot, w, budget, this%us, converged)
+    call reused_solve(this, r, f, ez, qrot, w, budget, this%us, converged, pairs)
     had_prev = this%has_prev
-    call refresh(this, r, f, ez, t, u, error)
+    call refresh(this, r, f, ez, t, u, error, pairs)
     if (allocated(error)) return
     if (.not. converged .or. g <= 0.0_wp) return
     err = maxval(norm2(this%us - u, dim=1))
@@ -405,7 +417,7 @@ contains
     call best_rotation(this%r_ref, r, qrot, error)
     if (allocated(error)) return
     call align(this, r, qrot, deform)
-    call reused_solve(this, f, ez, qrot, 0.0_wp, 1.0e-3_wp*this%tolerance, u, converged)
+    call reused_solve(this, r, f, ez, qrot, 0.0_wp, 1.0e-3_wp*this%tolerance, u, converged)
     if (.not. converged) call fatal_error(error, 'multipole: conjugate gradients did not converge')
   end subroutine multipole_reused_velocities
 
@@ -441,11 +453,12 @@ contains
   !> keep zeta_L and x_L (and, when there was a reference, their change since it, rotated into
   !> the new frame: the history for the extrapolation), factorise zeta_L + sum dzeta (the
   !> preconditioner) and solve; t is the time of r.
-  subroutine refresh(this, r, f, e, t, u, error)
+  subroutine refresh(this, r, f, e, t, u, error, pairs)
     class(multipole_model_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :), f(:, :), e(3, 3), t
     real(wp), intent(out) :: u(:, :)
     type(error_t), allocatable, intent(out) :: error
+    type(pair_geometry_t), intent(in), optional :: pairs
     real(wp) :: qrot(3, 3)
     integer :: i
     call this%sys%factorise(r, error)
@@ -472,7 +485,7 @@ contains
     this%xl = this%x6
     this%r_ref = r
     this%c_ref = centroid(r)
-    call factor_preconditioner(this, r, 0.0_wp, error)
+    call factor_preconditioner(this, r, 0.0_wp, error, pairs)
     if (allocated(error)) return
     call right_hand_side(this, f, e, 0.0_wp)
     this%x = this%b
@@ -514,19 +527,21 @@ contains
     end do
   end subroutine rotate_coupling
 
-  !> pf = Cholesky factor of zeta_L(ref) + w zeta_hist + sum dzeta(rr); the pair list is left
-  !> at rr.
-  subroutine factor_preconditioner(this, rr, w, error)
+  !> pf = Cholesky factor of zeta_L(ref) + w zeta_hist + sum dzeta(Q rr), Q = rotation or 1;
+  !> the pair list is left at Q rr. `pairs`: the close pairs of rr if the caller has them.
+  subroutine factor_preconditioner(this, rr, w, error, pairs, rotation)
     class(multipole_model_t), intent(inout) :: this
     real(wp), intent(in) :: rr(:, :), w
     type(error_t), allocatable, intent(out) :: error
+    type(pair_geometry_t), intent(in), optional :: pairs
+    real(wp), intent(in), optional :: rotation(3, 3)
     if (w /= 0.0_wp) then
       this%pf = this%zl + w*this%zh
     else
       this%pf = this%zl
     end if
     if (this%lubrication) then
-      call this%lub%pair_blocks(rr, this%pairs)
+      call this%lub%pair_blocks(rr, this%pairs, pairs, rotation)
       call this%pairs%add_friction(this%pf)
       this%n_lub_pairs = this%pairs%n_pairs()
     end if
@@ -551,15 +566,17 @@ contains
     if (this%lubrication) call this%pairs%add_strain(e, this%b)
   end subroutine right_hand_side
 
-  !> Velocities from the reused many-body part (extrapolated with weight w) at the aligned
-  !> configuration this%rp (rotation qrot): lubrication at rp, conjugate gradients on
-  !> (zeta_L(ref) + w zeta_hist + sum dzeta) U = b. `converged` is false when CG did not
-  !> reach the stopping error.
-  subroutine reused_solve(this, f, e, qrot, w, budget, u, converged)
+  !> Velocities from the reused many-body part (extrapolated with weight w) at r seen in the
+  !> reference frame (rotation qrot: the aligned configuration this%rp): lubrication of the
+  !> rotated pairs, conjugate gradients on (zeta_L(ref) + w zeta_hist + sum dzeta) U = b.
+  !> `converged` is false when CG did not reach the stopping error. `pairs`: the close pairs
+  !> of r if the caller has them.
+  subroutine reused_solve(this, r, f, e, qrot, w, budget, u, converged, pairs)
     class(multipole_model_t), intent(inout) :: this
-    real(wp), intent(in) :: f(:, :), e(3, 3), qrot(3, 3), w, budget
+    real(wp), intent(in) :: r(:, :), f(:, :), e(3, 3), qrot(3, 3), w, budget
     real(wp), intent(inout) :: u(:, :)
     logical, intent(out) :: converged
+    type(pair_geometry_t), intent(in), optional :: pairs
     type(error_t), allocatable :: error
     real(wp) :: qt(3, 3), rz, rz_new, alpha
     integer :: i, nb, it
@@ -569,7 +586,7 @@ contains
     do i = 1, nb
       this%fp(:, i) = matmul(qt, f(:, i))
     end do
-    if (this%lubrication) call this%lub%pair_blocks(this%rp, this%pairs)
+    if (this%lubrication) call this%lub%pair_blocks(r, this%pairs, pairs, qt)
     call right_hand_side(this, this%fp, matmul(qt, matmul(e, qrot)), w)
     this%w = w
     ! Preconditioned CG from x = P^-1 b.
@@ -602,7 +619,7 @@ contains
       u(:, i) = matmul(qrot, this%x(6*i - 5:6*i - 3))
     end do
     if (it > cg_refactor_iterations) then
-      call factor_preconditioner(this, this%rp, w, error)
+      call factor_preconditioner(this, r, w, error, pairs, qt)
       this%stats%preconditioners = this%stats%preconditioners + 1
       if (allocated(error)) this%has_ref = .false.   ! refresh at the next call
     end if
