@@ -27,6 +27,8 @@ module kf_hydro_model
     integer(i8) :: cg_iterations = 0   !< conjugate-gradient iterations of the reused evaluations
     integer(i8) :: preconditioners = 0 !< factorisations of the preconditioner between refreshes
     real(wp) :: max_error_ratio = 0.0_wp !< largest measured reuse error / error budget
+    real(wp) :: refresh_seconds = 0.0_wp !< wall time of the evaluations that refreshed
+    real(wp) :: reused_seconds = 0.0_wp  !< wall time of the evaluations that reused
   end type hydro_stats_t
 
   type, abstract, public :: hydro_model_t

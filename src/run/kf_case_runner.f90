@@ -356,7 +356,9 @@ contains
              ' rejected), elapsed '//to_str_short(elapsed)//' s, ETA '//to_str_short(eta)//' s'
       st = dyn%model%statistics()
       if (st%reused > 0) line = line//', hydro: '//to_str(hydro_base(2) + st%refreshes)//' refreshes, '// &
-        to_str(hydro_base(3) + st%reused)//' reused, '//to_str(hydro_base(4) + st%cg_iterations)//' CG iterations'
+        to_str(hydro_base(3) + st%reused)//' reused, '//to_str(hydro_base(4) + st%cg_iterations)// &
+        ' CG iterations, refreshing '//to_str(nint(100*st%refresh_seconds/ &
+        max(st%refresh_seconds + st%reused_seconds, tiny(1.0_wp))))//' % of the model time'
     end function progress_line
 
   end subroutine run_case

@@ -334,8 +334,8 @@ contains
     type(error_t), allocatable, intent(out) :: error
     real(wp), intent(in), optional :: e(3, 3), t
     type(pair_geometry_t), intent(in), optional :: pairs
-    real(wp) :: ez(3, 3), qrot(3, 3), deform, budget, err, predicted, w, g
-    logical :: converged, had_prev
+    real(wp) :: ez(3, 3)
+    integer(i8) :: c0, c1, crate, refreshes
 
     this%stats%evaluations = this%stats%evaluations + 1
     ez = 0.0_wp
@@ -347,6 +347,28 @@ contains
       if (present(e)) call this%add_strain_disturbance(e, u)
       return
     end if
+    call system_clock(c0, crate)
+    refreshes = this%stats%refreshes
+    call adaptive_velocities(this, r, f, ez, u, error, t, pairs)
+    call system_clock(c1)
+    if (this%stats%refreshes > refreshes) then
+      this%stats%refresh_seconds = this%stats%refresh_seconds + real(c1 - c0, wp)/real(crate, wp)
+    else
+      this%stats%reused_seconds = this%stats%reused_seconds + real(c1 - c0, wp)/real(crate, wp)
+    end if
+  end subroutine multipole_velocities
+
+  !> The adaptive path of multipole_velocities (ez: the rate of strain, zero without strain).
+  subroutine adaptive_velocities(this, r, f, ez, u, error, t, pairs)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :), f(:, :), ez(3, 3)
+    real(wp), intent(out) :: u(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), intent(in), optional :: t
+    type(pair_geometry_t), intent(in), optional :: pairs
+    real(wp) :: qrot(3, 3), deform, budget, err, predicted, w, g
+    logical :: converged, had_prev
+
     call ensure_work(this, size(r, 2))
     budget = 0.0_wp
     if (this%h > 0.0_wp .and. present(t)) budget = budget_fraction*this%tolerance/this%h
@@ -391,7 +413,7 @@ contains
     else
       this%coef1 = max(err/g, 0.5_wp*this%coef1)
     end if
-  end subroutine multipole_velocities
+  end subroutine adaptive_velocities
 
   !> u from the many-body part of the last refresh as it is (no extrapolation, no refresh):
   !> what the adaptive path returns when it reuses that part at r. For tests and measurements;
