@@ -39,7 +39,7 @@ if [[ -n "${MODULES}" ]]; then
 fi
 
 cd "${KNOTFLOW_DIR}"
-exe="${BUILD_DIR}/knotflow"
+exe="${BUILD_DIR}/bin/knotflow"
 if [[ ! -x "${exe}" ]]; then
   echo "ERROR: ${exe} not found or not executable (set BUILD_DIR; build with cmake first)" >&2
   exit 1

@@ -16,7 +16,7 @@ kf_ensure_system_packages
 kf_ensure_python
 kf_build "$KF_ROOT/build" Release knotflow-accuracy
 
-exe="$KF_ROOT/build/src/app/knotflow-accuracy"
+exe="$KF_ROOT/build/bin/knotflow-accuracy"
 [ -x "$exe" ] || kf_die "knotflow-accuracy was not built"
 out="${KNOTFLOW_ACCURACY_OUT:-$KF_ROOT/build/accuracy}"
 args=("$@")

@@ -15,7 +15,7 @@ kf_ensure_system_packages
 kf_ensure_python
 kf_build "$KF_ROOT/build" Release knotflow-bench-reuse knotflow
 
-exe="$KF_ROOT/build/src/app/knotflow-bench-reuse"
+exe="$KF_ROOT/build/bin/knotflow-bench-reuse"
 out="${KNOTFLOW_REUSE_OUT:-$KF_ROOT/build/accuracy/reuse}"
 mkdir -p "$out"
 parts=("$@")
@@ -67,7 +67,7 @@ NML
       start=$(date +%s)
       load0=$(cat /proc/loadavg)
       status=finished
-      taskset -c 0 "$KF_ROOT/build/knotflow" "$dir/trefoil.nml" | tee "$dir/log.txt" || status=failed
+      taskset -c 0 "$KF_ROOT/build/bin/knotflow" "$dir/trefoil.nml" | tee "$dir/log.txt" || status=failed
       { echo "part = case"; echo "config = trefoil"; echo "t_end = 1000";
         echo "loadavg_start = $load0"; echo "wall_s = $(( $(date +%s) - start ))";
         echo "loadavg_end = $(cat /proc/loadavg)";

@@ -45,7 +45,7 @@ kf_ensure_python
 kf_build "$KF_ROOT/build" Release
 kf_mpirun_flags
 mpi=(mpirun -n "$np" "${KF_MPIRUN_FLAGS[@]}")
-analyze="$KF_ROOT/build/src/app/knotflow-analyze"
+analyze="$KF_ROOT/build/bin/knotflow-analyze"
 
 # Sweeps: name of the input (inputs/<name>.nml) = name of the output directory (results/<name>).
 trefoil_sweeps=("trefoil_table2$suffix")
@@ -58,7 +58,7 @@ if [ "$run" = 1 ]; then
   for sweep in "${trefoil_sweeps[@]}" "${cane_sweeps[@]}"; do
     kf_log "knotflow inputs/$sweep.nml on $np rank(s)"
     # A failed case (exit 3) is reported in the summary; the others are still analysed.
-    "${mpi[@]}" build/knotflow "inputs/$sweep.nml" || [ $? -eq 3 ]
+    "${mpi[@]}" build/bin/knotflow "inputs/$sweep.nml" || [ $? -eq 3 ]
   done
 fi
 

@@ -6,8 +6,8 @@
 # (the program skips finished cases).
 #
 # Environment: KNOTFLOW_NP (MPI ranks, default 2), KNOTFLOW_JOBS (build jobs, default 2),
-#              KNOTFLOW_OUTPUT_DIR (sweep output directory for the report, if the namelist
-#              does not name it), KNOTFLOW_PYTHON, KNOTFLOW_NO_INSTALL=1.
+#              KNOTFLOW_OUTPUT_DIR (sweep output directory for the report; default: the one
+#              knotflow resolves from the namelist), KNOTFLOW_PYTHON, KNOTFLOW_NO_INSTALL=1.
 set -euo pipefail
 caller_dir="$(pwd)"
 # shellcheck source=scripts/lib.sh
@@ -27,13 +27,9 @@ kf_ensure_system_packages
 kf_ensure_python
 kf_build "$KF_ROOT/build" Release
 
-exe="$KF_ROOT/build/knotflow"
-if [ ! -x "$exe" ]; then
-  exe="$(find "$KF_ROOT/build" -name knotflow -type f -perm -u+x 2>/dev/null | head -n 1 || true)"
-fi
-if [ -z "$exe" ] || [ ! -x "$exe" ]; then
-  kf_die "the knotflow executable was not built"
-fi
+# every program of the build is in build/bin
+exe="$KF_ROOT/build/bin/knotflow"
+[ -x "$exe" ] || kf_die "the knotflow executable was not built ($exe)"
 
 # At the end: where the results are and how to reach the Python commands from a new shell.
 kf_where_tools() {
@@ -56,15 +52,16 @@ kf_where_tools() {
 }
 
 kf_mpirun_flags
+# Where the sweep writes its cases: KNOTFLOW_OUTPUT_DIR, else the directory knotflow itself
+# resolves (&output directory, or its default), from the first line of a dry run.
+outdir="${KNOTFLOW_OUTPUT_DIR:-}"
+if [ -z "$outdir" ]; then
+  outdir="$(mpirun -n 1 "${KF_MPIRUN_FLAGS[@]}" "$exe" "$sweep" --dry-run \
+            | sed -n 's/^knotflow .*, output in //p' | head -n 1)"
+fi
 kf_log "mpirun -n $np ${KF_MPIRUN_FLAGS[*]} $exe $sweep"
 mpirun -n "$np" "${KF_MPIRUN_FLAGS[@]}" "$exe" "$sweep"
 
-# Where the sweep wrote its cases: KNOTFLOW_OUTPUT_DIR, else the directory the namelist names.
-outdir="${KNOTFLOW_OUTPUT_DIR:-}"
-if [ -z "$outdir" ]; then
-  outdir="$(sed -n -E "s/^[[:space:]]*(output_dir|out_dir|outdir|output_directory|results_dir|directory)[[:space:]]*=[[:space:]]*['\"]([^'\"]+)['\"].*/\2/Ip" \
-            "$sweep" | head -n 1)"
-fi
 if [ -z "$outdir" ]; then
   kf_log "no output directory known (set KNOTFLOW_OUTPUT_DIR): report skipped"
   kf_where_tools ""
@@ -76,7 +73,7 @@ case "$outdir" in
 esac
 # The Fortran analysis tool fills /analysis in every case file (knots, events, modes, spectra,
 # the knot matrix of the last frame); it resumes, so re-running is cheap.
-analyze="$KF_ROOT/build/src/app/knotflow-analyze"
+analyze="$KF_ROOT/build/bin/knotflow-analyze"
 shopt -s nullglob
 cases=("$outdir"/*.h5)
 if [ -x "$analyze" ] && [ "${#cases[@]}" -gt 0 ]; then

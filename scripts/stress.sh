@@ -52,7 +52,7 @@ cd "$KF_ROOT"
 kf_ensure_system_packages
 kf_ensure_python
 kf_build "$KF_ROOT/build" Release knotflow
-exe="$KF_ROOT/build/knotflow"
+exe="$KF_ROOT/build/bin/knotflow"
 [ -x "$exe" ] || kf_die "the knotflow executable was not built"
 "$KF_PY" -c "import knotflow_tools.stress" 2>/dev/null \
   || kf_die "the tools package (knotflow_tools.stress) is not importable: pip install -e tools"

@@ -36,11 +36,15 @@ contains
     type(h5_file_t) :: file
     integer(i8) :: c, s
     integer :: k
+    logical :: stored
     allocate (prev%frame_index(0), prev%time(0), prev%kf(0), prev%spectrum(n_knot_types, 0), prev%dominant(0))
     call h5_open_file(file, path, .false., error)
     if (allocated(error)) return
-    if (h5_exists(file, '/analysis/knots/kf') .and. h5_attr_exists(file, '/analysis/knots', 'closures') &
-        .and. h5_attr_exists(file, '/analysis/knots', 'seed')) then
+    ! one query after the other (in one expression, the compiler may skip evaluating one)
+    stored = h5_exists(file, '/analysis/knots/kf')
+    if (stored) stored = h5_attr_exists(file, '/analysis/knots', 'closures')
+    if (stored) stored = h5_attr_exists(file, '/analysis/knots', 'seed')
+    if (stored) then
       call h5_read_attr(file, '/analysis/knots', 'closures', c, error)
       if (.not. allocated(error)) call h5_read_attr(file, '/analysis/knots', 'seed', s, error)
       if (.not. allocated(error) .and. c == closures .and. s == seed) then

@@ -5,7 +5,6 @@
 !> Exit status: 0 all cases finished, 2 bad input (nothing written), 3 some cases failed.
 program knotflow
   use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
-  use kf_kinds, only: wp
   use kf_strings, only: to_str
   use kf_memory, only: keep_freed_heap
   use kf_error, only: error_t
@@ -15,7 +14,7 @@ program knotflow
   use kf_fs, only: make_directory, check_writable_directory, lock_directory, rename_file, &
                    ignore_file_size_signal
   use kf_h5, only: h5_initialize, h5_finalize
-  use kf_case_runner, only: run_case, case_path, case_ok, case_failed, case_skipped
+  use kf_case_runner, only: case_path
   use kf_case_match, only: check_reusable
   use kf_resources, only: check_resources, physical_memory
   use kf_chain_shapes, only: chain_bead_count
@@ -24,6 +23,7 @@ program knotflow
   use kf_stepper_factory, only: make_stepper
   use kf_comm, only: comm_t, comm_init, comm_finalize
   use kf_task_farm, only: run_task_farm, task_result_t, task_ok, task_failed, task_skipped
+  use kf_sweep_tasks, only: sweep_tasks_t, status_word
   use kf_exit, only: exit_program, exit_program_now
   use kf_blas_threads, only: allowed_cpus, load_average, blas_threads_for, set_blas_threads
   implicit none
@@ -31,6 +31,7 @@ program knotflow
   type(comm_t) :: comm
   type(error_t), allocatable :: error
   type(sweep_t) :: sw
+  type(sweep_tasks_t) :: tasks
   type(task_result_t), allocatable :: results(:)
   character(len=:), allocatable :: scene_file, directory
   logical :: dry_run
@@ -90,7 +91,9 @@ program knotflow
     flush (output_unit)
   end if
 
-  call run_task_farm(comm, sw%n_cases(), run_one, results, error, progress)
+  tasks%sweep = sw
+  tasks%reporter%rank = me
+  call run_task_farm(comm, sw%n_cases(), tasks, results, error)
   if (allocated(error)) call die(error%message, 1)
   nfailed = count(results%status /= task_ok .and. results%status /= task_skipped)
   if (me == 0) call write_summary()
@@ -102,58 +105,6 @@ program knotflow
   call exit_program_now(merge(3, 0, nfailed > 0 .or. summary_failed))
 
 contains
-
-  !> One case of the sweep (called by the task farm).
-  subroutine run_one(itask, status, message)
-    integer, intent(in) :: itask
-    integer, intent(out) :: status
-    character(len=256), intent(out) :: message
-    type(scene_t) :: sc
-    character(len=:), allocatable :: name, msg
-    call sw%case_scene(itask, sc, name)
-    call report('case '//name//': started ('//case_path(sc)//')')
-    call run_case(sc, report, status, msg)
-    select case (status)
-    case (case_ok)
-      status = task_ok
-    case (case_skipped)
-      status = task_skipped
-    case default
-      status = task_failed
-    end select
-    message = msg
-  end subroutine run_one
-
-  subroutine report(line)
-    character(len=*), intent(in) :: line
-    write (output_unit, '(a)') '[rank '//to_str(me)//'] '//line
-    flush (output_unit)
-  end subroutine report
-
-  subroutine progress(done, ntasks, itask, status, message)
-    integer, intent(in) :: done, ntasks, itask, status
-    character(len=256), intent(in) :: message
-    type(scene_t) :: sc
-    character(len=:), allocatable :: name
-    call sw%case_scene(itask, sc, name)
-    call report(to_str(done)//' of '//to_str(ntasks)//' cases done; case '//name//' '// &
-                status_word(status)//': '//trim(message))
-  end subroutine progress
-
-  pure function status_word(status) result(word)
-    integer, intent(in) :: status
-    character(len=:), allocatable :: word
-    select case (status)
-    case (task_ok)
-      word = 'finished'
-    case (task_skipped)
-      word = 'skipped'
-    case (task_failed)
-      word = 'FAILED'
-    case default
-      word = 'not run'
-    end select
-  end function status_word
 
   subroutine list_cases()
     type(scene_t) :: sc

@@ -87,6 +87,7 @@ contains
     real(wp), allocatable :: r(:, :), v(:, :)
     real(wp) :: rot(3, 3), t0, samples(41), checksum
     integer :: n, batch, k, rep
+    t_eval = 0.0_wp   ! defined also when an error returns early
     call build_initial_chain(scene%chain, r, rot, error)
     if (allocated(error)) return
     n = size(r, 2)

@@ -75,6 +75,8 @@ contains
     real(wp), allocatable :: r(:, :), v(:, :), y_old(:, :)
     real(wp) :: rot(3, 3), t, t_old, s_eval(21), s_diag(21), t0, checksum
     integer :: n, k, rep, batch_eval, batch_diag
+    t_eval = 0.0_wp   ! defined also when an error returns early
+    t_diag = 0.0_wp
     call build_initial_chain(sc%chain, r, rot, error)
     if (allocated(error)) return
     n = size(r, 2)

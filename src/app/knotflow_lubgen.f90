@@ -191,7 +191,7 @@ contains
     integer :: l
     write (unit, '(a)') '!> GENERATED FILE - do not edit. Regenerate with'
     write (unit, '(a)') '!>   cmake --build build --target knotflow-lubgen'
-    write (unit, '(a)') '!>   ./build/src/app/knotflow-lubgen src/hydro/lubrication/kf_lubrication_data.f90'
+    write (unit, '(a)') '!>   ./build/bin/knotflow-lubgen src/hydro/lubrication/kf_lubrication_data.f90'
     write (unit, '(a)') '!> (a few minutes; see docs/lubrication.md). Produced by knotflow_lubgen.f90.'
     write (unit, '(a)') '!>'
     write (unit, '(a)') '!> Two-sphere lubrication correction tables for truncation orders L = 1..6: for each L and'

@@ -367,7 +367,10 @@ contains
     type(error_t), allocatable, intent(out) :: error
     integer(i8), allocatable :: counters(:)
     real(wp), allocatable :: values(:), ongoing(:, :)
-    if (.not. (this%diagnostics .and. h5_exists(this%file, '/checkpoint/diagnostics/counters'))) then
+    logical :: stored
+    stored = this%diagnostics   ! then the query: in one expression the compiler may skip it
+    if (stored) stored = h5_exists(this%file, '/checkpoint/diagnostics/counters')
+    if (.not. stored) then
       call fatal_error(error, "case file '"//this%file%name()//"' has no diagnostics checkpoint")
       return
     end if
@@ -570,6 +573,7 @@ contains
       '/frames/observables/close_pairs', '/frames/integrator/steps', '/frames/integrator/rejected']
     character(len=40) :: all_sets(size(frame_real_sets) + size(other_sets) + size(diag_sets))
     integer :: n_sets
+    logical :: with_diag
     call this%close()
     t = 0.0_wp
     dt = 0.0_wp
@@ -635,7 +639,9 @@ contains
       else
         digest = checkpoint_digest(nframes, t, r, dt, steps, rejected)
       end if
-      if (this%diagnostics .and. h5_exists(this%file, '/checkpoint/diagnostics/counters')) then
+      with_diag = .false.   ! then the query: in one expression the compiler may skip it
+      if (this%diagnostics) with_diag = h5_exists(this%file, '/checkpoint/diagnostics/counters')
+      if (with_diag) then
         call h5_read(this%file, '/checkpoint/diagnostics/counters', counters, error)
         if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/diagnostics/values', values, error)
         if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/diagnostics/ongoing', ongoing, error)

@@ -15,7 +15,7 @@ module kf_task_farm
   implicit none
   private
 
-  public :: run_task_farm, task_i, progress_i
+  public :: run_task_farm
 
   !> Task outcomes (set by the worker) and "never ran".
   integer, parameter, public :: task_ok = 0, task_failed = 1, task_skipped = 2, task_not_run = -1
@@ -28,33 +28,45 @@ module kf_task_farm
     character(len=task_message_len) :: message = '' !< the worker's message
   end type task_result_t
 
+  !> What the farm runs: `run` does one task, `progress` hears of each completion (by default
+  !> nothing). An object rather than procedure arguments, so the caller's state travels in it
+  !> (an internal procedure passed as an argument needs a trampoline on an executable stack).
+  type, abstract, public :: task_worker_t
+  contains
+    procedure(task_run_i), deferred :: run
+    procedure :: progress => no_progress
+  end type task_worker_t
+
   abstract interface
     !> Run task `itask` (1-based); status 0 ok, 1 failed, 2 skipped; a one-line message.
-    subroutine task_i(itask, status, message)
+    subroutine task_run_i(this, itask, status, message)
+      import :: task_worker_t
+      class(task_worker_t), intent(inout) :: this
       integer, intent(in) :: itask
       integer, intent(out) :: status
       character(len=256), intent(out) :: message
-    end subroutine task_i
-    !> Called on the rank that just finished task `itask`: `done` tasks of `ntasks` are
-    !> complete over all ranks (done counts every completion exactly once, 1..ntasks).
-    subroutine progress_i(done, ntasks, itask, status, message)
-      integer, intent(in) :: done, ntasks, itask, status
-      character(len=256), intent(in) :: message
-    end subroutine progress_i
+    end subroutine task_run_i
   end interface
 
   integer, parameter :: next_counter = 1, done_counter = 2
 
 contains
 
+  !> Called on the rank that just finished task `itask`: `done` tasks of `ntasks` are complete
+  !> over all ranks (done counts every completion exactly once, 1..ntasks). This one does nothing.
+  subroutine no_progress(this, done, ntasks, itask, status, message)
+    class(task_worker_t), intent(inout) :: this
+    integer, intent(in) :: done, ntasks, itask, status
+    character(len=256), intent(in) :: message
+  end subroutine no_progress
+
   !> Run `worker` on tasks 1..ntasks across all ranks of `comm`; results(ntasks) on every rank.
-  subroutine run_task_farm(comm, ntasks, worker, results, error, progress)
+  subroutine run_task_farm(comm, ntasks, worker, results, error)
     type(comm_t), intent(in) :: comm
     integer, intent(in) :: ntasks
-    procedure(task_i) :: worker
+    class(task_worker_t), intent(inout) :: worker
     type(task_result_t), allocatable, intent(out) :: results(:)
     type(error_t), allocatable, intent(out) :: error
-    procedure(progress_i), optional :: progress
     type(shared_counter_t) :: counter
     type(error_t), allocatable :: free_error
     integer, allocatable :: status(:), owner(:)
@@ -82,13 +94,13 @@ contains
       itask = int(next) + 1
       st = task_failed
       message = ''
-      call worker(itask, st, message)
+      call worker%run(itask, st, message)
       status(itask) = st
       owner(itask) = me
       messages(itask) = message
       call counter%fetch_add(done_counter, 1_i8, done, error)
       if (allocated(error)) exit
-      if (present(progress)) call progress(int(done) + 1, ntasks, itask, st, message)
+      call worker%progress(int(done) + 1, ntasks, itask, st, message)
     end do
     ! An MPI failure above is fatal under the default error handler; with MPI_ERRORS_RETURN
     ! the ranks may disagree here, which the caller must treat as fatal (MPI_Abort).

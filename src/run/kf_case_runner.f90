@@ -1,6 +1,6 @@
 !> Running one case: initial chain (or the checkpoint of an interrupted run), the time loop with
 !> frames, checkpoints and progress reports, and the final status in the case file.
-!> The library never prints: progress lines go to a procedure supplied by the program.
+!> The library never prints: progress lines go to a reporter (case_reporter_t) the program supplies.
 module kf_case_runner
   use, intrinsic :: iso_fortran_env, only: int64
   use kf_kinds, only: wp, i8
@@ -25,14 +25,23 @@ module kf_case_runner
 
   integer, parameter, public :: case_ok = 0, case_failed = 1, case_skipped = 2
 
+  !> Receives the progress lines of a case (an object, not a procedure argument: the program's
+  !> reporter carries its state, e.g. the rank, without an internal procedure and its trampoline).
+  type, abstract, public :: case_reporter_t
+  contains
+    procedure(report_line_i), deferred :: line
+  end type case_reporter_t
+
   abstract interface
     !> Receives one progress line.
-    subroutine report_i(line)
+    subroutine report_line_i(this, line)
+      import :: case_reporter_t
+      class(case_reporter_t), intent(inout) :: this
       character(len=*), intent(in) :: line
-    end subroutine report_i
+    end subroutine report_line_i
   end interface
 
-  public :: run_case, case_path, report_i
+  public :: run_case, case_path
 
   !> Root attributes of the hydrodynamic model's counters, in the order of hydro_stats_t.
   character(len=*), parameter :: hydro_counters(4) = [character(len=20) :: 'hydro.evaluations', &
@@ -51,7 +60,7 @@ contains
   !> case_skipped and a one-line message. Failures are recorded in the case file's status.
   subroutine run_case(sc, report, status, message)
     type(scene_t), intent(in) :: sc
-    procedure(report_i) :: report
+    class(case_reporter_t), intent(inout) :: report
     integer, intent(out) :: status
     character(len=:), allocatable, intent(out) :: message
     type(error_t), allocatable :: error
@@ -88,7 +97,7 @@ contains
       call h5_extend_truncated(path, extended, old_size, new_size, error)
       if (allocated(error)) deallocate (error)
       if (extended) then
-        call report('case '//name//': '//path//' was cut short by a failed write ('//to_str(old_size)//' of '// &
+        call report%line('case '//name//': '//path//' was cut short by a failed write ('//to_str(old_size)//' of '// &
                     to_str(new_size)//' bytes): extended to its recorded size to read its checkpoint')
         call case_file_status(path, state, error)
         if (allocated(error)) then
@@ -139,7 +148,7 @@ contains
         message = path//' is damaged ('//state(10:)//') and cannot be moved aside: '//error%message
         return
       end if
-      call report('case '//name//': '//path//' is damaged ('//state(10:)//'): moved to '//moved_to// &
+      call report%line('case '//name//': '//path//' is damaged ('//state(10:)//'): moved to '//moved_to// &
                   '; computing the case again')
     else if (state /= 'missing' .and. .not. resumed) then
       ! Failed cases are recomputed from scratch.
@@ -184,7 +193,7 @@ contains
 
     saved%name = trim(sc%integrator%method)
     if (resumed) then
-      call report('case '//name//': resuming at t = '//to_str_short(t)//' from its checkpoint ('// &
+      call report%line('case '//name//': resuming at t = '//to_str_short(t)//' from its checkpoint ('// &
                   to_str(nframes)//' frames)')
     else
       call file%create(path, name, size(r, 2), scene_text(sc), rotation, error)
@@ -240,7 +249,7 @@ contains
       call system_clock(clock_now)
       if (real(clock_now - clock_last, wp)/rate >= sc%output%progress_interval) then
         clock_last = clock_now
-        call report(progress_line())
+        call report%line(progress_line())
       end if
     end do
     ! 'finished' only after the last frame is flushed and the file read back and verified.

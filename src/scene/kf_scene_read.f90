@@ -43,26 +43,62 @@ contains
     call check_names(path, groups, catalogue, error, extra_groups)
     if (allocated(error)) return
     do k = 1, size(groups)
-      select case (groups(k)%name)
-      case ('chain')
-        call read_group(path, groups(k), catalogue, read_chain, error)
-      case ('forces')
-        call read_group(path, groups(k), catalogue, read_forces, error)
-      case ('flow')
-        call read_group(path, groups(k), catalogue, read_flow, error)
-      case ('hydro')
-        call read_group(path, groups(k), catalogue, read_hydro, error)
-      case ('integrator')
-        call read_group(path, groups(k), catalogue, read_integrator, error)
-      case ('output')
-        call read_group(path, groups(k), catalogue, read_output, error)
-      end select
+      call read_group(groups(k), error)
       if (allocated(error)) return
     end do
     call validate_scene(sc, error)
     if (present(scanned)) call move_alloc(groups, scanned)
 
   contains
+
+    ! The readers are called, never passed as arguments: an internal procedure passed as an
+    ! argument needs a trampoline on the stack, which makes the stack executable.
+
+    !> Read one group; on failure, find the assignment that fails and name it.
+    subroutine read_group(g, error)
+      type(nml_group_t), intent(in) :: g
+      type(error_t), allocatable, intent(out) :: error
+      integer :: ios, m
+      character(len=512) :: msg
+
+      msg = ''
+      call read_text(g%name, group_text(g), ios, msg)
+      if (ios == 0) return
+      do m = 1, size(g%items)
+        msg = ''
+        call read_text(g%name, group_text(g, only=m), ios, msg)
+        if (ios /= 0) then
+          call fatal_error(error, trim(path)//': &'//g%name//': '//g%items(m)%lhs//' = '// &
+            g%items(m)%value//' is not valid (expected '// &
+            expected_type(catalogue, g%name//'.'//g%items(m)%name)//')')
+          return
+        end if
+      end do
+      call fatal_error(error, trim(path)//': &'//g%name//': cannot read the group: '//trim(msg))
+    end subroutine read_group
+
+    !> The namelist text of group `name` into the scene; groups of other readers (`extra_groups`)
+    !> are left alone.
+    subroutine read_text(name, text, ios, msg)
+      character(len=*), intent(in) :: name, text
+      integer, intent(out) :: ios
+      character(len=*), intent(inout) :: msg
+      ios = 0
+      select case (name)
+      case ('chain')
+        call read_chain(text, ios, msg)
+      case ('forces')
+        call read_forces(text, ios, msg)
+      case ('flow')
+        call read_flow(text, ios, msg)
+      case ('hydro')
+        call read_hydro(text, ios, msg)
+      case ('integrator')
+        call read_integrator(text, ios, msg)
+      case ('output')
+        call read_output(text, ios, msg)
+      end select
+    end subroutine read_text
 
     ! Each reader declares the namelist over local copies of one parameter type.
     subroutine read_chain(text, ios, msg)
@@ -175,38 +211,6 @@ contains
     end subroutine read_output
 
   end subroutine read_scene
-
-  !> Read one group; on failure, find the assignment that fails and name it.
-  subroutine read_group(path, g, catalogue, reader, error)
-    character(len=*), intent(in) :: path
-    type(nml_group_t), intent(in) :: g
-    type(scene_item_t), intent(in) :: catalogue(:)
-    interface
-      subroutine reader(text, ios, msg)
-        character(len=*), intent(in) :: text
-        integer, intent(out) :: ios
-        character(len=*), intent(inout) :: msg
-      end subroutine reader
-    end interface
-    type(error_t), allocatable, intent(out) :: error
-    integer :: ios, k
-    character(len=512) :: msg
-
-    msg = ''
-    call reader(group_text(g), ios, msg)
-    if (ios == 0) return
-    do k = 1, size(g%items)
-      msg = ''
-      call reader(group_text(g, only=k), ios, msg)
-      if (ios /= 0) then
-        call fatal_error(error, trim(path)//': &'//g%name//': '//g%items(k)%lhs//' = '// &
-          g%items(k)%value//' is not valid (expected '// &
-          expected_type(catalogue, g%name//'.'//g%items(k)%name)//')')
-        return
-      end if
-    end do
-    call fatal_error(error, trim(path)//': &'//g%name//': cannot read the group: '//trim(msg))
-  end subroutine read_group
 
   function expected_type(catalogue, name) result(text)
     type(scene_item_t), intent(in) :: catalogue(:)

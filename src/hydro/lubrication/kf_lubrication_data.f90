@@ -1,6 +1,6 @@
 !> GENERATED FILE - do not edit. Regenerate with
 !>   cmake --build build --target knotflow-lubgen
-!>   ./build/src/app/knotflow-lubgen src/hydro/lubrication/kf_lubrication_data.f90
+!>   ./build/bin/knotflow-lubgen src/hydro/lubrication/kf_lubrication_data.f90
 !> (a few minutes; see docs/lubrication.md). Produced by knotflow_lubgen.f90.
 !>
 !> Two-sphere lubrication correction tables for truncation orders L = 1..6: for each L and

@@ -27,8 +27,10 @@ contains
     z = r(3)
     r2 = sum(r**2)
     rh(0, 0) = (1.0_wp, 0.0_wp)
+    do m = 1, nmax   ! the diagonal first: each column below starts from it
+      rh(m, m) = -xp/real(2*m, wp)*rh(m - 1, m - 1)
+    end do
     do m = 0, nmax
-      if (m > 0) rh(m, m) = -xp/real(2*m, wp)*rh(m - 1, m - 1)
       do n = m + 1, nmax
         if (n - 2 >= m) then
           rh(n, m) = (real(2*n - 1, wp)*z*rh(n - 1, m) - r2*rh(n - 2, m))/real(n*n - m*m, wp)
@@ -55,8 +57,10 @@ contains
     r2 = sum(r**2)
     rinv2 = 1.0_wp/r2
     ih(0, 0) = cmplx(1.0_wp/sqrt(r2), 0.0_wp, kind=wp)
+    do m = 1, nmax   ! the diagonal first: each column below starts from it
+      ih(m, m) = -real(2*m - 1, wp)*xp*rinv2*ih(m - 1, m - 1)
+    end do
     do m = 0, nmax
-      if (m > 0) ih(m, m) = -real(2*m - 1, wp)*xp*rinv2*ih(m - 1, m - 1)
       do n = m + 1, nmax
         if (n - 2 >= m) then
           ih(n, m) = (real(2*n - 1, wp)*z*ih(n - 1, m) &
