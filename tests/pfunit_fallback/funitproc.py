@@ -16,7 +16,19 @@ Two sub-commands:
       stops with code 2 when anything failed).
 
 The accepted syntax is the subset described in tests/README.md, which real pFUnit 4 also
-accepts.  Anything else that looks like a directive is rejected with file:line and a reason.
+accepts.  Anything else that looks like a directive is rejected with file:line and a reason,
+and so is what real pFUnit 4.12 does not compile although a lenient preprocessor could:
+
+  - an ``@assert...`` continued over several lines (pFUnit parses one line only);
+  - a comment after an ``@assert...(...)`` (pFUnit then passes the line through unchanged);
+  - an array where pFUnit takes a scalar: ``@assertTrue``, ``@assertFalse``, ``@assertIsNaN``,
+    ``@assertIsFinite`` given an array section (``x(:)``, ``a(1:3, 2)``), an array constructor
+    (``[a, b]``) or a name declared as an array in the procedure or the module, outside any
+    function call.  Detected syntactically: an array made by a function (``abs(x)``) or held in
+    a component (``s%values``) is not seen;
+  - in a module that uses ``pfunit`` (which re-exports the ``mpi`` module): ``use mpi_f08``
+    without ``only:``, an MPI name imported from ``mpi_f08`` without a rename, and a local
+    entity or procedure named ``MPI_...`` / ``PMPI_...`` (the names ``mpi`` exports).
 """
 
 import argparse
@@ -32,6 +44,22 @@ SUBROUTINE_RE = re.compile(
     r"subroutine\s+(\w+)\s*(\(([^)]*)\))?", re.IGNORECASE)
 PRIVATE_RE = re.compile(r"^\s*private\s*(!.*)?$", re.IGNORECASE)
 
+# The highest rank of the (first) argument pFUnit 4.12's assertions take (AssertBasic:
+# assertTrue_/assertTrue_1d_, assertFalse_/assertFalse_1d_; assertIsNaN and assertIsFinite
+# for single and double precision scalars only).
+MAX_RANK = {"asserttrue": 1, "assertfalse": 1, "assertisnan": 0, "assertisfinite": 0}
+IDENT_RE = re.compile(r"[A-Za-z]\w*")
+DECL_RE = re.compile(
+    r"^\s*(?:real|integer|logical|complex|character|double\s+precision|type\s*\(|class\s*\()"
+    r"[^:]*::(.*)$", re.IGNORECASE)
+PROC_START_RE = re.compile(
+    r"^\s*(?:(?:recursive|impure|pure|elemental|non_recursive|module)\s+)*"
+    r"(?:(?:real|integer|logical|complex|character|type\s*\([^)]*\))(?:\s*\([^)]*\))?\s+)?"
+    r"(subroutine|function)\s+(\w+)", re.IGNORECASE)
+USE_RE = re.compile(r"^\s*use\s*(?:,\s*\w+\s*)?(?:::)?\s*(\w+)\s*(,\s*only\s*:(.*))?$",
+                    re.IGNORECASE)
+MPI_NAME_RE = re.compile(r"^p?mpi_", re.IGNORECASE)
+
 # Procedure names pFUnit's generated code reserves (see the project's PFUNIT.md).
 RESERVED = {"cases", "suite", "t", "testparameter", "testparameters", "iparam", "icase"}
 MAX_TEST_NAME = 40
@@ -41,22 +69,123 @@ class PfError(Exception):
     """A problem in a .pf file, reported as file:line: message."""
 
 
-def split_comment(line):
-    """Split a free-form line into (code, comment) at the first '!' outside quotes."""
-    quote = None
-    for i, ch in enumerate(line):
+def code_chars(text):
+    """(index, character, nesting depth in () and []) of every character outside quotes."""
+    quote, depth = None, 0
+    for i, ch in enumerate(text):
         if quote:
             if ch == quote:
                 quote = None
         elif ch in ("'", '"'):
             quote = ch
-        elif ch == "!":
+        else:
+            depth -= ch in ")]"
+            yield i, ch, depth
+            depth += ch in "(["
+
+
+def split_comment(line):
+    """Split a free-form line into (code, comment) at the first '!' outside quotes."""
+    for i, ch, _ in code_chars(line):
+        if ch == "!":
             return line[:i], line[i:]
     return line, ""
 
 
-def is_blank_or_comment(line):
-    return split_comment(line)[0].strip() == ""
+def split_top(text, sep=","):
+    """Split at `sep` outside parentheses, brackets and quotes."""
+    cuts = [i for i, ch, depth in code_chars(text) if ch == sep and depth == 0]
+    return [text[a + 1:b] for a, b in zip([-1] + cuts, cuts + [len(text)])]
+
+
+def top_colons(subscripts):
+    """How many subscripts of a subscript list are ranges (hold a colon at their own level)."""
+    return sum(any(ch == ":" and depth == 0 for _, ch, depth in code_chars(part))
+               for part in split_top(subscripts))
+
+
+def array_rank_at_top(expr, decls):
+    """(rank, what) of the highest-rank array in `expr` outside any function call, found
+    syntactically, or (0, None).
+
+    `decls` maps the names declared in the procedure and the module (lower case) to their
+    rank (0: scalar). An array section counts with its number of ranges (a name declared as a
+    scalar takes a substring instead), an array constructor as rank 1, a name declared as an
+    array with its rank. Whatever sits inside the arguments of a call (all(...), size(...)),
+    an array made by a function and a component (s%values) are not seen.
+    """
+    expr = re.sub(r"'[^']*'|\"[^\"]*\"", "''", expr)
+    best = (0, None)
+    i, n = 0, len(expr)
+    while i < n:
+        if expr[i] == "[" or expr.startswith("(/", i):
+            close = expr.find("]" if expr[i] == "[" else "/)", i)
+            best = max(best, (1, "an array constructor"), key=lambda b: b[0])
+            i = n if close < 0 else close + 1
+            continue
+        m = IDENT_RE.match(expr, i)
+        if not m:
+            i += 1                  # operators, literals, a grouping parenthesis: look inside
+            continue
+        name = m.group(0)
+        j = m.end()
+        while j < n and expr[j] == " ":
+            j += 1
+        paren = j < n and expr[j] == "("
+        close = matching_paren(expr, j) if paren else j - 1
+        if i > 0 and (expr[i - 1].isalnum() or expr[i - 1] in "_%."):
+            # .and., a kind suffix, 1e5, a component (with its subscripts or arguments)
+            i = close + 1 if paren and expr[i - 1] == "%" else m.end()
+            continue
+        component = expr[close + 1:close + 2] == "%"
+        rank = decls.get(name.lower())
+        if paren:
+            ranges = top_colons(expr[j + 1:close])
+            if ranges and rank != 0 and not component:
+                what = f"the array section '{name}({expr[j + 1:close].strip()})'"
+                best = max(best, (ranges, what), key=lambda b: b[0])
+            i = close + 1           # an element, a substring or a call: its arguments are inside
+            continue
+        if rank and not component:
+            best = max(best, (rank, f"the array '{name}' (rank {rank})"), key=lambda b: b[0])
+        i = m.end()
+    return best
+
+
+def matching_paren(text, start):
+    depth = 0
+    for k in range(start, len(text)):
+        if text[k] == "(":
+            depth += 1
+        elif text[k] == ")":
+            depth -= 1
+            if depth == 0:
+                return k
+    return len(text) - 1
+
+
+def declared_names(statement):
+    """{name: rank} for the entities a type declaration statement declares (lower case)."""
+    m = DECL_RE.match(statement)
+    if not m:
+        return {}
+    attrs = statement[:statement.index("::")]
+    dim = re.search(r"\bdimension\s*\(", attrs, re.IGNORECASE)
+    whole = len(split_top(attrs[dim.end():matching_paren(attrs, dim.end() - 1)])) if dim else 0
+    names = {}
+    for ent in split_top(m.group(1)):
+        ent = ent.split("=", 1)[0].strip()
+        e = IDENT_RE.match(ent)
+        if not e:
+            continue
+        rest = ent[e.end():].lstrip()
+        if rest.startswith("*"):                   # character(len) form: c*10
+            rest = re.sub(r"^\*\s*(\(\*\)|\d+)", "", rest).lstrip()
+        if rest.startswith("("):
+            names[e.group(0).lower()] = len(split_top(rest[1:matching_paren(rest, 0)]))
+        else:
+            names[e.group(0).lower()] = whole
+    return names
 
 
 def parse_options(text):
@@ -109,6 +238,9 @@ class PfFile:
 
         out = [f'# 1 "{os.path.abspath(self.path)}"']
         pending = None           # (directive, options, line) waiting for its subroutine
+        module_decls, proc_decls = {}, {}   # name -> is an array
+        mpi_names = []           # (line, name) of every declared entity and procedure
+        uses = []                # (line, module, only-list or None)
         disable_next = False
         in_type = 0
         seen_contains = False
@@ -120,29 +252,33 @@ class PfFile:
 
             astart = ASSERT_START_RE.match(line)
             if astart:
-                # Gather continuation lines (comment-only lines may sit in between).
-                j = i
-                while split_comment(lines[j])[0].rstrip().endswith("&"):
-                    j += 1
-                    while j < len(lines) and is_blank_or_comment(lines[j]):
-                        j += 1
-                    if j >= len(lines):
-                        raise self.error(lineno, "assertion continued past the end of file")
-                block = lines[i:j + 1]
-                block[0] = ASSERT_START_RE.sub(
-                    lambda m: f"{m.group(1)}call {m.group(2)}(", block[0], count=1)
-                last_code, last_comment = split_comment(block[-1])
+                last_code, last_comment = split_comment(line)
                 last_code = last_code.rstrip()
+                if last_code.endswith("&"):
+                    raise self.error(lineno, "an @assert must be on one line: real pFUnit 4.12 "
+                                             "does not join continuation lines")
                 if not last_code.endswith(")"):
-                    raise self.error(j + 1, "assertion must end with ')'")
+                    raise self.error(lineno, "assertion must end with ')'")
+                if last_comment:
+                    raise self.error(lineno, "no comment after an @assert...(...): real pFUnit "
+                                             "4.12 then leaves the line as it is and it does "
+                                             "not compile")
+                args = last_code[last_code.index("(") + 1:-1]
+                kind = astart.group(2).lower()
+                if kind in MAX_RANK and args.strip():
+                    rank, what = array_rank_at_top(split_top(args)[0],
+                                                   {**module_decls, **proc_decls})
+                    if rank > MAX_RANK[kind]:
+                        takes = "a scalar" if MAX_RANK[kind] == 0 else "a scalar or a 1-D array"
+                        raise self.error(lineno, f"@{astart.group(2)} takes {takes}, not {what} "
+                                                 "(real pFUnit 4.12 has no such version; use "
+                                                 "@assertTrue(all(...)))")
+                code = ASSERT_START_RE.sub(lambda m: f"{m.group(1)}call {m.group(2)}(",
+                                           last_code, count=1)
                 location = f"location=SourceLocation('{self.fname}', {lineno})"
-                joined = " ".join(split_comment(b)[0] for b in block)
-                inner = joined[joined.index("(") + 1:joined.rindex(")")]
-                sep = ", " if inner.strip() else ""
-                block[-1] = (f"{last_code[:-1]}{sep}{location}); if (anyExceptions()) return"
-                             + (f" {last_comment}" if last_comment else ""))
-                out.extend(block)
-                i = j + 1
+                sep = ", " if args.strip() else ""
+                out.append(f"{code[:-1]}{sep}{location}); if (anyExceptions()) return")
+                i += 1
                 continue
 
             directive = DIRECTIVE_RE.match(line)
@@ -179,6 +315,23 @@ class PfFile:
                 pending = None
                 disable_next = False
 
+            # Declarations (joined over continuation lines), procedures and use statements,
+            # for the scalar and name-clash rules.
+            statement, k = code, i
+            while statement.rstrip().endswith("&") and k + 1 < len(lines):
+                k += 1
+                statement = statement.rstrip()[:-1] + " " + split_comment(lines[k])[0].lstrip().lstrip("&")
+            proc = PROC_START_RE.match(statement)
+            if proc and not re.match(r"^\s*end\b", statement, re.IGNORECASE):
+                proc_decls = {}
+                mpi_names.append((lineno, proc.group(2)))
+            names = declared_names(statement)
+            (proc_decls if seen_contains else module_decls).update(names)
+            mpi_names.extend((lineno, n) for n in names)
+            use = USE_RE.match(statement)
+            if use:
+                uses.append((lineno, use.group(1).lower(), use.group(3)))
+
             mod = MODULE_RE.match(code)
             if mod and mod.group(1).lower() != "procedure" and self.module is None:
                 self.module = mod.group(1)
@@ -200,11 +353,36 @@ class PfFile:
 
         if pending:
             raise self.error(pending[2], f"'@{pending[0]}' is not followed by a subroutine")
+        if any(module == "pfunit" for _, module, _ in uses):
+            self._check_mpi_clashes(uses, mpi_names)
         if self.module is None:
             raise self.error(1, "no 'module <name>' statement found")
         if not self.tests:
             raise self.error(1, "no @test or @mpitest found")
         self.lines_out = out
+
+    def _check_mpi_clashes(self, uses, names):
+        """Module pfunit re-exports module mpi: its MPI_* / PMPI_* names must not meet others."""
+        why = ("real pFUnit's module pfunit re-exports module mpi, so the name would be "
+               "ambiguous")
+        for lineno, module, only in uses:
+            if module != "mpi_f08":
+                continue
+            if only is None:
+                raise self.error(lineno, f"'use mpi_f08' without 'only:' beside 'use pfunit': "
+                                         f"{why}; import with renames "
+                                         "(f08_comm => MPI_Comm)")
+            for item in split_top(only):
+                item = item.strip()
+                local = item.split("=>", 1)[0].strip()
+                if MPI_NAME_RE.match(local):
+                    raise self.error(lineno, f"'{item}' imported from mpi_f08 beside "
+                                             f"'use pfunit': {why}; rename it on import "
+                                             f"(f08_{local.split('_', 1)[1].lower()} => {local})")
+        for lineno, name in names:
+            if MPI_NAME_RE.match(name):
+                raise self.error(lineno, f"'{name}' is named like an MPI entity in a module "
+                                         f"that uses pfunit: {why}")
 
     def _register(self, pending, sub, lineno, disabled):
         kind, opts, dline = pending

@@ -4,6 +4,7 @@
 Each bad input must be rejected with its file:line, and the transformation must keep the
 line numbers of the .pf file.
 """
+import glob
 import os
 import subprocess
 import sys
@@ -40,6 +41,11 @@ class PreprocessorTest(unittest.TestCase):
         self.assertIn(fragment, proc.stderr)
         self.assertFalse(os.path.exists(out))
 
+    def assert_accepted(self, name, text):
+        path = self.write(name, text)
+        proc = self.run_tool("preprocess", path, os.path.join(self.tmp.name, "out.F90"))
+        self.assertEqual(proc.returncode, 0, proc.stderr)
+
     def test_assert_keeps_line_numbers(self):
         path = self.write("test_a.pf", """
             module test_a
@@ -48,10 +54,9 @@ class PreprocessorTest(unittest.TestCase):
             contains
               @test
               subroutine test_x()
-                @assertEqual(1, 1, message='it''s fine!') ! trailing comment
-                @assertEqual(1, &
-                     ! a comment line inside
-                     1)
+                ! a comment line
+                @assertEqual(1, 1, message='it''s fine!')
+                @assertTrue(.true.)
               end subroutine test_x
             end module test_a
             """)
@@ -64,13 +69,147 @@ class PreprocessorTest(unittest.TestCase):
         body = lines[1:]                           # body[k] is line k+1 of the .pf
         self.assertEqual(body[4].strip(), "!@test")
         self.assertEqual(
-            body[6].strip(),
-            "call assertEqual(1, 1, message='it''s fine!', location=SourceLocation('test_a.pf', 7));"
-            " if (anyExceptions()) return ! trailing comment")
-        self.assertEqual(body[7].strip(), "call assertEqual(1, &")
-        self.assertEqual(body[9].strip(),
-                         "1, location=SourceLocation('test_a.pf', 8)); if (anyExceptions()) return")
-        self.assertEqual(body[10].strip(), "end subroutine test_x")
+            body[7].strip(),
+            "call assertEqual(1, 1, message='it''s fine!', location=SourceLocation('test_a.pf', 8));"
+            " if (anyExceptions()) return")
+        self.assertEqual(body[8].strip(),
+                         "call assertTrue(.true., location=SourceLocation('test_a.pf', 9));"
+                         " if (anyExceptions()) return")
+        self.assertEqual(body[9].strip(), "end subroutine test_x")
+
+    # What real pFUnit 4.12 does not compile (tests/README.md, PFUNIT.md).
+
+    def test_multi_line_assert(self):
+        self.assert_rejected("test_m.pf", """
+            module test_m
+              use funit
+            contains
+              @test
+              subroutine test_x()
+                @assertEqual(1, &
+                     1)
+              end subroutine test_x
+            end module test_m
+            """, 6, "must be on one line")
+
+    def test_comment_after_assert(self):
+        self.assert_rejected("test_n.pf", """
+            module test_n
+              use funit
+            contains
+              @test
+              subroutine test_x()
+                @assertEqual(1, 1, message='a ! in a string is fine') ! but not this
+              end subroutine test_x
+            end module test_n
+            """, 6, "no comment after an @assert")
+
+    def scalar_module(self, name, assertion):
+        return f"""
+            module {name}
+              use funit
+              use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+              implicit none
+              real :: table(3, 3)
+            contains
+              @test
+              subroutine test_x()
+                real :: x(3), y, m(2, 2)
+                character(len=8) :: s
+                x = 1.0
+                y = 1.0
+                m = 1.0
+                s = 'abc'
+                table = 1.0
+                {assertion}
+              end subroutine test_x
+            end module {name}
+            """
+
+    def test_array_where_a_scalar_is_taken(self):
+        bad = {
+            "@assertIsFinite(x)": "the array 'x'",
+            "@assertIsNaN(x(2:3))": "array section 'x(2:3)'",
+            "@assertIsFinite([y, y])": "array constructor",
+            "@assertIsFinite(2*x + y)": "the array 'x'",
+            "@assertTrue(m > 0)": "the array 'm' (rank 2)",
+            "@assertFalse(table(:, :) < 0, message='no')": "array section 'table(:, :)'",
+            "@assertTrue(ieee_is_finite(y) .and. (m(1:2, :) > 0))": "array section",
+        }
+        for k, (assertion, fragment) in enumerate(bad.items()):
+            with self.subTest(assertion=assertion):
+                self.assert_rejected(f"test_s{k}.pf", self.scalar_module(f"test_s{k}", assertion),
+                                     16, fragment)
+
+    def test_scalars_and_what_pfunit_accepts(self):
+        good = ["@assertIsFinite(x(2))", "@assertIsNaN(sum(x))", "@assertIsFinite(y)",
+                "@assertTrue(all(ieee_is_finite(x)))", "@assertTrue(all(m(:, 1) > 0))",
+                "@assertTrue(x > 0)", "@assertTrue([.true., .true.])", "@assertFalse(x(1:2) < 0)",
+                "@assertTrue(s(1:2) == 'ab')", "@assertTrue(size(table, 1) == 3)",
+                "@assertEqual(x, x)", "@assertTrue(table(1, 1) == 1.0, message='x(:)')"]
+        for k, assertion in enumerate(good):
+            with self.subTest(assertion=assertion):
+                self.assert_accepted(f"test_g{k}.pf", self.scalar_module(f"test_g{k}", assertion))
+
+    def mpi_module(self, name, lines):
+        return f"""
+            module {name}
+              use funit
+              use pfunit
+              {lines}
+              implicit none
+            contains
+              @mpitest(npes=[1])
+              subroutine test_x(this)
+                class(MpiTestMethod), intent(inout) :: this
+              end subroutine test_x
+            end module {name}
+            """
+
+    def test_names_that_clash_with_pfunit(self):
+        self.assert_rejected("test_p1.pf", self.mpi_module("test_p1", "use mpi_f08"), 4,
+                             "without 'only:'")
+        self.assert_rejected("test_p2.pf", self.mpi_module(
+            "test_p2", "use mpi_f08, only: f08_comm => MPI_Comm, MPI_SUM"), 4, "'MPI_SUM'")
+        self.assert_rejected("test_p3.pf", self.mpi_module(
+            "test_p3", "integer :: nprocs, mpi_comm_world"), 4, "'mpi_comm_world'")
+        self.assert_accepted("test_p4.pf", self.mpi_module(
+            "test_p4", "use mpi_f08, only: f08_comm => MPI_Comm, f08_sum => MPI_SUM"))
+        # without pfunit, mpi_f08 names are the module's own business
+        self.assert_accepted("test_p5.pf", """
+            module test_p5
+              use funit
+              use mpi_f08, only: MPI_Comm
+            contains
+              @test
+              subroutine test_x()
+              end subroutine test_x
+            end module test_p5
+            """)
+
+    def test_procedure_named_like_mpi(self):
+        self.assert_rejected("test_p6.pf", """
+            module test_p6
+              use funit
+              use pfunit
+            contains
+              subroutine MPI_helper()
+              end subroutine MPI_helper
+              @test
+              subroutine test_x()
+              end subroutine test_x
+            end module test_p6
+            """, 5, "'MPI_helper'")
+
+    def test_project_pf_files_pass(self):
+        """Every .pf file of the project passes the rules (real pFUnit compiles them)."""
+        root = os.path.dirname(os.path.dirname(HERE))
+        files = sorted(glob.glob(os.path.join(root, "tests", "**", "*.pf"), recursive=True))
+        self.assertGreater(len(files), 30)
+        for path in files:
+            with self.subTest(pf=os.path.relpath(path, root)):
+                proc = self.run_tool("preprocess", path, os.path.join(self.tmp.name, "out.F90"))
+                self.assertEqual(proc.returncode, 0, proc.stderr)
 
     def test_module_name_must_match_file(self):
         self.assert_rejected("test_b.pf", """
