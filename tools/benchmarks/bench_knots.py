@@ -2,7 +2,7 @@
 """Timing of k_f (1000 closures, N = 99 open trefoil) and of a knot matrix (N = 152 frame).
 
 Compares knotflow_tools (Python), topoly (if installed) and the Fortran `knotflow-analyze`
-(if found on PATH or in ../build/bin, ../build/src/app, ../build).  Not part of the test suite.
+(if found on PATH or in build/bin of the checkout).  Not part of the test suite.
 
     python tools/benchmarks/bench_knots.py [--closures 1000] [--matrix-closures 20]
                                            [--matrix-stride 4] [--skip-matrix]
@@ -22,8 +22,9 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tests"))
 
-from helpers import open_trefoil  # noqa: E402
 from knotflow_tools import io, knots  # noqa: E402
+
+from helpers import open_trefoil  # noqa: E402
 
 
 def candy_cane_knotted():
@@ -40,11 +41,8 @@ def find_fortran():
     if exe:
         return exe
     root = os.path.abspath(os.path.join(HERE, "..", ".."))
-    for sub in ("build/bin", "build/src/app", "build/app", "build"):
-        p = os.path.join(root, sub, "knotflow-analyze")
-        if os.path.isfile(p) and os.access(p, os.X_OK):
-            return p
-    return None
+    p = os.path.join(root, "build", "bin", "knotflow-analyze")
+    return p if os.path.isfile(p) and os.access(p, os.X_OK) else None
 
 
 def timed(fn):

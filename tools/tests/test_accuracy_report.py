@@ -7,7 +7,8 @@ import pytest
 
 from knotflow_tools import accuracy
 
-META = "key,value\nquick,0\nref_order,3\nbending_a_models,1.40\ncoil_file,c.xyz\nloadavg_start,0.50 0.40 0.30 1/2 3\n"
+META = ("key,value\nquick,0\nref_order,3\nbending_a_models,1.40\ncoil_file,c.xyz\n"
+        "loadavg_start,0.50 0.40 0.30 1/2 3\n")
 MODELS = """config,n,model,order,lubrication,rms_rel,max_rel,rms_force,rms_shear,t_eval,n_evals,status
 trefoil,99,none,0,0,9.90000E-01,9.20000E-01,6.80000E-01,1.00000E+00,6.50000E-06,100,ok
 trefoil,99,rpy,0,0,8.70000E-01,7.60000E-01,1.30000E+00,8.80000E-01,6.00000E-05,100,ok

@@ -4,10 +4,11 @@ import h5py
 import numpy as np
 import pytest
 
-from conftest import unknotting_trefoil_frames, write_case
 from knotflow_tools import io
 from knotflow_tools.analysis import analyze_case
 from knotflow_tools.knots import KNOT_TYPES
+
+from conftest import unknotting_trefoil_frames, write_case
 
 
 def tumbling_rod_frames(n=30, period=50.0, nframes=101, tmax=200.0):

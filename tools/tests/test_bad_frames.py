@@ -5,10 +5,11 @@ import h5py
 import numpy as np
 import pytest
 
-from conftest import unknotting_trefoil_frames, write_case
-from helpers import open_trefoil
 from knotflow_tools import cli, io, knots
 from knotflow_tools.report import build_report
+
+from conftest import unknotting_trefoil_frames, write_case
+from helpers import open_trefoil
 
 
 def nan_case(path, frame=2, nframes=5):

@@ -5,9 +5,10 @@ import os
 
 import numpy as np
 
+from knotflow_tools import cli, io, knots
+
 from conftest import unknotting_trefoil_frames, write_case
 from helpers import open_from_closed, open_trefoil, torus_knot
-from knotflow_tools import cli, io, knots
 
 
 def test_kf_json_on_xyz(tmp_path, capsys):

@@ -4,8 +4,9 @@ absent from older files without any error, and shown in the report's table."""
 import h5py
 import numpy as np
 
-from conftest import unknotting_trefoil_frames, write_case
 from knotflow_tools import io, report
+
+from conftest import unknotting_trefoil_frames, write_case
 
 
 def add_diagnostics(path, positions, passages, episodes, totals):

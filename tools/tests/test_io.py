@@ -4,11 +4,12 @@ import h5py
 import numpy as np
 import pytest
 
-from conftest import write_case
-from helpers import open_trefoil
 from knotflow_tools import io
 from knotflow_tools.knots import KNOT_TYPES
 from knotflow_tools.transitions import Event
+
+from conftest import write_case
+from helpers import open_trefoil
 
 
 def test_read_case_schema(tmp_path):

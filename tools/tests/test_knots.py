@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from helpers import (figure_eight, knot_5_2, open_from_closed, open_trefoil, random_walk,
-                     torus_knot)
 from knotflow_tools import knots as K
+
+from helpers import figure_eight, knot_5_2, open_from_closed, open_trefoil, random_walk, torus_knot
 
 CLOSED = [("3_1", torus_knot(2, 3, 120)), ("3_1", torus_knot(3, 2, 120)),
           ("5_1", torus_knot(2, 5, 150)), ("4_1", figure_eight(150)), ("5_2", knot_5_2(200)),

@@ -9,8 +9,9 @@ import subprocess
 import numpy as np
 import pytest
 
-from conftest import unknotting_trefoil_frames, write_case
 from knotflow_tools import io, movie
+
+from conftest import unknotting_trefoil_frames, write_case
 
 needs_ffmpeg = pytest.mark.skipif(
     shutil.which("ffmpeg") is None or shutil.which("ffprobe") is None,

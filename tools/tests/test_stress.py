@@ -5,8 +5,9 @@ configurations) and the step counters are n/a; wall times, status and the Markdo
 import h5py
 import numpy as np
 
-from conftest import write_case
 from knotflow_tools import stress
+
+from conftest import write_case
 
 
 def two_strands(gap):

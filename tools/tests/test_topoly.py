@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from helpers import figure_eight, open_from_closed, open_trefoil, random_walk, torus_knot
 from knotflow_tools import knots as K
+
+from helpers import figure_eight, open_from_closed, open_trefoil, random_walk, torus_knot
 
 topoly = pytest.importorskip("topoly")
 pytestmark = pytest.mark.topoly

@@ -3,8 +3,7 @@
 import numpy as np
 import pytest
 
-from knotflow_tools.transitions import (Event, detect_events, final_state, states,
-                                        unknot_then_knot)
+from knotflow_tools.transitions import Event, detect_events, final_state, states, unknot_then_knot
 
 
 def kinds(events):

@@ -1,17 +1,15 @@
 """Interactive 3-D viewer: the plotly figure, report.html offline, and a real headless browser."""
 
-import html as _html
 import os
 import re
-import shutil
-import subprocess
 
 import numpy as np
 import pytest
 
-from conftest import unknotting_trefoil_frames, write_case
 from knotflow_tools import io, viewer
 from knotflow_tools.report import build_report
+
+from conftest import unknotting_trefoil_frames, write_case
 
 PROBE = os.path.join(os.path.dirname(__file__), "data", "viewer_probe.html")
 
@@ -112,6 +110,7 @@ def test_viewer_in_headless_chromium(tmp_path):
     """report.html in a real browser: the chain is drawn on the 3-D canvas, a click on the time
     slider shows another frame (title with its k_f, different pixels), a drag rotates."""
     import json
+
     from browser import Browser, find_chromium
     exe = find_chromium()
     if exe is None:

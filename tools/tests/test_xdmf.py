@@ -7,8 +7,9 @@ import h5py
 import numpy as np
 import pytest
 
-from conftest import unknotting_trefoil_frames, write_case
 from knotflow_tools import io, xdmf
+
+from conftest import unknotting_trefoil_frames, write_case
 
 
 def _resolve(item, root, base):

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import math
 import os
 import sys
 
@@ -260,23 +259,23 @@ def build_markdown(directory: str, figdir_rel: str) -> tuple[str, str]:
                 names.append(label(r))
         t = {(label(r), int(r["n"])): r for r in scaling}
         slope = {label(r): r for r in fits}
-        rows = []
+        table: list[list[str]] = []
         for m in names:
             row = [m]
             for n in sizes:
-                r = t.get((m, n))
-                row.append(fmt_time(_num(r["t_eval"])) if r and r["status"] == "ok"
-                           else (r["status"] if r else "–"))
+                cell = t.get((m, n))
+                row.append(fmt_time(_num(cell["t_eval"])) if cell and cell["status"] == "ok"
+                           else (cell["status"] if cell else "–"))
             f = slope.get(m)
             row.append("%.2f (N = %s–%s)" % (_num(f["exponent"]), f["n_min"], f["n_max"])
                        if f else "–")
-            rows.append(row)
+            table.append(row)
         out += ["## Scaling with N", "",
                 "Time per evaluation for self-avoiding random walks (bond 1.02, non-bonded beads "
                 "≥ 1 apart, fixed seed). Sizes predicted (N³ from the previous size) to exceed "
                 "the limit per evaluation are skipped. Exponent: least-squares line in log-log "
                 "through the (up to) three largest measured sizes.", "",
-                _md_table(["model"] + ["N = %d" % n for n in sizes] + ["exponent"], rows), "",
+                _md_table(["model"] + ["N = %d" % n for n in sizes] + ["exponent"], table), "",
                 "![scaling](%s/accuracy_scaling.png)" % figdir_rel, ""]
     if case:
         out += ["## What it means: one reference-study case", "",

@@ -9,7 +9,6 @@ import numpy as np
 from . import knots, shape, transitions
 from .io import Case
 
-
 AUTO_MAX_FRAMES = 100   #: stride <= 0: analyse at most about this many frames
 
 

@@ -172,8 +172,9 @@ def main_report(argv=None) -> int:
     p.add_argument("--no-viewer", action="store_true",
                    help="no interactive 3-D viewer in report.html")
     args = p.parse_args(argv)
-    from .report import build_report
     import os
+
+    from .report import build_report
     if not os.path.isdir(args.sweep_dir):
         print(f"knotflow-report: error: not a directory: {args.sweep_dir}", file=sys.stderr)
         return 2

@@ -313,14 +313,14 @@ def alexander_matrix(under_pos, over_pos, sign, t: int) -> list[list[int]]:
     over_arc = np.searchsorted(upos, opos) % n
     mat = [[0] * n for _ in range(n)]
     for k in range(n):
-        i, j, l = int(over_arc[k]), k, (k + 1) % n
+        i, j, nxt = int(over_arc[k]), k, (k + 1) % n
         mat[k][i] += 1 - t
         if sg[k] > 0:
             mat[k][j] += t
-            mat[k][l] -= 1
+            mat[k][nxt] -= 1
         else:
             mat[k][j] -= 1
-            mat[k][l] += t
+            mat[k][nxt] += t
     return mat
 
 

@@ -250,6 +250,7 @@ def render_movie(case: Case, out, frames=None, kf=None, fps: int = 10, width: in
     width, height = _even(width), _even(height)
     mf = MovieFigure(case, frames, kf=kf, width=width, height=height, elev=elev, azim=azim,
                      cores=knot_cores(case) if knot_core else None)
+    writer: animation.AbstractMovieWriter
     if fmt == "mp4":
         writer = animation.FFMpegWriter(fps=fps, codec="libx264",
                                         extra_args=["-pix_fmt", "yuv420p", "-preset", "fast"])
@@ -286,6 +287,7 @@ def case_kf(case: Case, closures: int = 0, frames=None, seed: int = 1):
 def main(argv=None) -> int:
     """knotflow-movie entry point."""
     import argparse
+
     from .io import read_case
     p = argparse.ArgumentParser(
         prog="knotflow-movie",

@@ -9,6 +9,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.cm import ScalarMappable  # noqa: E402
 
 from .analysis import CaseAnalysis  # noqa: E402
 from .io import Case  # noqa: E402
@@ -95,6 +96,7 @@ def plot_knot_matrix(mat: np.ndarray, path, title: str = "") -> str:
     cols = np.nonzero(fin.any(axis=0))[0]
     fig, ax = plt.subplots(figsize=(5.4, 4.6), constrained_layout=True)
     cmap = plt.get_cmap("Greys").with_extremes(bad="#dde8f4")
+    im: ScalarMappable
     if len(rows) and len(cols):
         sub = np.ma.masked_invalid(mat[np.ix_(rows, cols)])
 

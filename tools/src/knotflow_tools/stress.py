@@ -15,6 +15,7 @@ import argparse
 import glob
 import os
 import sys
+from typing import Any
 
 import h5py
 import numpy as np
@@ -44,9 +45,9 @@ def read_wall_times(path) -> dict:
     times = {}
     with open(path) as f:
         for line in f:
-            line = line.split("#", 1)[0].split()
-            if len(line) >= 2:
-                times[line[0]] = float(line[1])
+            fields = line.split("#", 1)[0].split()
+            if len(fields) >= 2:
+                times[fields[0]] = float(fields[1])
     return times
 
 
@@ -73,7 +74,7 @@ def summarise_case(path, wall_times=None) -> dict:
     case = io.read_case(path)
     a = case.attrs
     name = case.name
-    row = {"case": name, "file": str(path), "status": case.status}
+    row: dict[str, Any] = {"case": name, "file": str(path), "status": case.status}
     row["wall_s"] = (wall_times or {}).get(name)
     integ = {}
     with h5py.File(path, "r") as h:
