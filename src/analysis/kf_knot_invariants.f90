@@ -7,6 +7,7 @@
 !> collision with probability below 1e-30, and everything else is 'other'.
 module kf_knot_invariants
   use kf_kinds, only: wp, i8
+  use kf_vector_ops, only: cross, sort_index
   use kf_error, only: error_t, fatal_error
   use kf_knot_rng, only: knot_rng_t, rng_sphere_point
   use kf_knot_reduce, only: reduce_polygon
@@ -376,24 +377,6 @@ contains
     end do
   end function powmod
 
-  !> Indices that sort v ascending (insertion sort: the lists are short).
-  function sort_index(v) result(idx)
-    real(wp), intent(in) :: v(:)
-    integer :: idx(size(v))
-    integer :: i, j, key
-    idx = [(i, i=1, size(v))]
-    do i = 2, size(v)
-      key = idx(i)
-      j = i - 1
-      do while (j >= 1)
-        if (v(idx(j)) <= v(key)) exit
-        idx(j + 1) = idx(j)
-        j = j - 1
-      end do
-      idx(j + 1) = key
-    end do
-  end function sort_index
-
   subroutine grow(v, cap)
     real(wp), allocatable, intent(inout) :: v(:)
     integer, intent(in) :: cap
@@ -411,11 +394,5 @@ contains
     w(1:size(v)) = v
     call move_alloc(w, v)
   end subroutine grow_int
-
-  pure function cross(u, v) result(w)
-    real(wp), intent(in) :: u(3), v(3)
-    real(wp) :: w(3)
-    w = [u(2)*v(3) - u(3)*v(2), u(3)*v(1) - u(1)*v(3), u(1)*v(2) - u(2)*v(1)]
-  end function cross
 
 end module kf_knot_invariants

@@ -5,6 +5,7 @@
 !> tolerance of the triangle, coplanar neighbours) count as piercing, so the vertex is kept.
 module kf_knot_reduce
   use kf_kinds, only: wp
+  use kf_vector_ops, only: cross
   implicit none
   private
 
@@ -110,11 +111,5 @@ contains
     end function pierces
 
   end subroutine reduce_polygon
-
-  pure function cross(u, v) result(w)
-    real(wp), intent(in) :: u(3), v(3)
-    real(wp) :: w(3)
-    w = [u(2)*v(3) - u(3)*v(2), u(3)*v(1) - u(1)*v(3), u(1)*v(2) - u(2)*v(1)]
-  end function cross
 
 end module kf_knot_reduce

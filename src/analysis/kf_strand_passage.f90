@@ -7,6 +7,7 @@
 !> A swept bounding-box test discards distant pairs first.
 module kf_strand_passage
   use kf_kinds, only: wp
+  use kf_vector_ops, only: cross
   implicit none
   private
 
@@ -142,12 +143,6 @@ contains
     end subroutine positions
 
   end function segments_pass
-
-  pure function cross(u, v) result(w)
-    real(wp), intent(in) :: u(3), v(3)
-    real(wp) :: w(3)
-    w = [u(2)*v(3) - u(3)*v(2), u(3)*v(1) - u(1)*v(3), u(1)*v(2) - u(2)*v(1)]
-  end function cross
 
   !> Shortest distance between segments [p1, p2] and [q1, q2].
   pure real(wp) function segment_distance(p1, p2, q1, q2) result(dist)

@@ -8,6 +8,7 @@
 !> Units: force F0 = pi eta d^2 gamma_dot, k per pi eta d gamma_dot, A per pi eta d^4 gamma_dot.
 module kf_forces
   use kf_kinds, only: wp
+  use kf_vector_ops, only: cross
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: forces_params_t
@@ -155,12 +156,6 @@ contains
       end do
     end if
   end function forces_energy
-
-  pure function cross(a, b) result(c)
-    real(wp), intent(in) :: a(3), b(3)
-    real(wp) :: c(3)
-    c = [a(2)*b(3) - a(3)*b(2), a(3)*b(1) - a(1)*b(3), a(1)*b(2) - a(2)*b(1)]
-  end function cross
 
   !> Harmonic springs between consecutive beads.
   pure subroutine add_springs(k, l0, r, f)

@@ -6,6 +6,7 @@
 module kf_accuracy
   use, intrinsic :: iso_fortran_env, only: int64
   use kf_kinds, only: wp, i8
+  use kf_vector_ops, only: sort_index
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: scene_t
   use kf_dynamics, only: dynamics_t
@@ -132,20 +133,10 @@ contains
   pure function median(a) result(m)
     real(wp), intent(in) :: a(:)
     real(wp) :: m
-    real(wp) :: s(size(a)), x
-    integer :: i, j, n
-    s = a
+    real(wp) :: s(size(a))
+    integer :: n
+    s = a(sort_index(a))
     n = size(s)
-    do i = 2, n
-      x = s(i)
-      j = i - 1
-      do while (j >= 1)
-        if (s(j) <= x) exit
-        s(j + 1) = s(j)
-        j = j - 1
-      end do
-      s(j + 1) = x
-    end do
     if (mod(n, 2) == 1) then
       m = s((n + 1)/2)
     else

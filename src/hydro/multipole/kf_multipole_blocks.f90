@@ -10,6 +10,7 @@
 !> the identity plus -c_n between (phi,n,m) and (p,n,m).
 module kf_multipole_blocks
   use kf_kinds, only: wp
+  use kf_vector_ops, only: sort_small
   use kf_constants, only: pi
   implicit none
   private
@@ -87,7 +88,7 @@ contains
           this%sigma(t) = kappa*exp(-0.5_wp*lognu)
         end do
         do q = 0, 2*n
-          this%sigma_real(this%index(n, s, q)) = this%sigma(this%index(n, s, n + (q + 1)/2))
+          this%sigma_real(this%index(n, s, q)) = this%sigma(this%index(n, s, n + q/2 + mod(q, 2)))   ! m = ceiling(q/2)
         end do
         ! Real form rows (section 7): x_0 = F_0, x_{2m-1} = (F_m + (-1)^m F_-m)/sqrt2,
         ! x_{2m} = (F_m - (-1)^m F_-m)/(i sqrt2).
@@ -125,7 +126,6 @@ contains
     integer, intent(in) :: n, s, q
     t = 3*(n*n - 1) + s*(2*n + 1) + q + 1
   end function layout_index
-
 
   !> The grouped local order of the real unknowns of one sphere.
   subroutine build_grouped(this)
@@ -258,22 +258,6 @@ contains
     this%term_slot = slots(1:nterm)
     this%term_coef = coefs(1:nterm)
   end subroutine build_real_terms
-
-  !> Insertion sort of a few integers.
-  pure subroutine sort_small(v)
-    integer, intent(inout) :: v(:)
-    integer :: i, j, x
-    do i = 2, size(v)
-      x = v(i)
-      j = i - 1
-      do while (j >= 1)
-        if (v(j) <= x) exit
-        v(j + 1) = v(j)
-        j = j - 1
-      end do
-      v(j + 1) = x
-    end do
-  end subroutine sort_small
 
   !> Scaled real translation block in grouped order for displacement d (receiver - source):
   !> ihf = irregular harmonics of d (shape (0:2L, -2L:2L), passed whole), y = work of size
