@@ -151,7 +151,7 @@ class PreprocessorTest(unittest.TestCase):
             with self.subTest(assertion=assertion):
                 self.assert_accepted(f"test_g{k}.pf", self.scalar_module(f"test_g{k}", assertion))
 
-    def mpi_module(self, name, lines):
+    def mpi_module(self, name, lines="", npes="1"):
         return f"""
             module {name}
               use funit
@@ -159,7 +159,7 @@ class PreprocessorTest(unittest.TestCase):
               {lines}
               implicit none
             contains
-              @mpitest(npes=[1])
+              @mpitest(npes=[{npes}])
               subroutine test_x(this)
                 class(MpiTestMethod), intent(inout) :: this
               end subroutine test_x
@@ -302,17 +302,7 @@ class PreprocessorTest(unittest.TestCase):
             """, 1, "no @test")
 
     def test_mpitest_in_serial_driver(self):
-        path = self.write("test_j.pf", """
-            module test_j
-              use funit
-              use pfunit
-            contains
-              @mpitest(npes=[1, 2])
-              subroutine test_x(this)
-                class(MpiTestMethod), intent(inout) :: this
-              end subroutine test_x
-            end module test_j
-            """)
+        path = self.write("test_j.pf", self.mpi_module("test_j", npes="1, 2"))
         out = os.path.join(self.tmp.name, "drv.F90")
         proc = self.run_tool("driver", "--name", "t", "-o", out, path)
         self.assertNotEqual(proc.returncode, 0)
@@ -324,21 +314,11 @@ class PreprocessorTest(unittest.TestCase):
                           handle.read())
 
     def test_npes_larger_than_mpi_pes(self):
-        path = self.write("test_k.pf", """
-            module test_k
-              use funit
-              use pfunit
-            contains
-              @mpitest(npes=[4])
-              subroutine test_x(this)
-                class(MpiTestMethod), intent(inout) :: this
-              end subroutine test_x
-            end module test_k
-            """)
+        path = self.write("test_k.pf", self.mpi_module("test_k", npes="4"))
         out = os.path.join(self.tmp.name, "drv.F90")
         proc = self.run_tool("driver", "--mpi", "--np", "2", "--name", "t", "-o", out, path)
         self.assertNotEqual(proc.returncode, 0)
-        self.assertIn("test_k.pf:6:", proc.stderr)
+        self.assertIn("test_k.pf:8:", proc.stderr)
         self.assertIn("raise MPI_PES", proc.stderr)
 
     def test_options(self):
