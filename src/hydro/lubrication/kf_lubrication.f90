@@ -18,7 +18,8 @@ module kf_lubrication
   use kf_error, only: error_t, fatal_error
   use kf_two_sphere, only: n_functions, has_strain
   use kf_near_contact, only: singular_part, singular_weight, smoothstep
-  use kf_pair_tensor, only: pair_tensors
+  use kf_pair_tensor, only: pair_tensors, pair_strain_stresslet
+  use kf_strain_basis, only: strain_basis
   use kf_lubrication_data, only: lub_max_order, lub_cutoff, lub_n_grid, lubrication_table
   use kf_pair_blocks, only: pair_blocks_t
   implicit none
@@ -45,6 +46,7 @@ module kf_lubrication
     procedure :: correction_functions
     procedure :: pair_correction
     procedure :: pair_blocks
+    procedure :: stresslet_correction
   end type lubrication_t
 
 contains
@@ -160,6 +162,42 @@ contains
       end do
     end do
   end subroutine pair_blocks
+
+  !> The correction of the strain-stresslet coupling summed over every pair of r(3, N) closer
+  !> than the cutoff, as pairings sm(k, l) = B_k : (sum over pairs of dS_1 + dS_2 for the strain
+  !> B_l) with B_k = strain_basis(k), project units (the M functions; BWE rule as in
+  !> pair_correction). Zero at L = 1 (no strain functions).
+  subroutine stresslet_correction(this, r, sm)
+    class(lubrication_t), intent(in) :: this
+    real(wp), intent(in) :: r(:, :)
+    real(wp), intent(out) :: sm(5, 5)
+    real(wp) :: d(3), dist, dhat(3), df(n_functions), rc2, b(3, 3, 5)
+    integer :: i, j, k, l
+    sm = 0.0_wp
+    if (.not. has_strain(this%order)) return
+    do k = 1, 5
+      b(:, :, k) = strain_basis(k)
+    end do
+    rc2 = this%r_cut**2
+    do i = 1, size(r, 2)
+      do j = i + 1, size(r, 2)
+        d = r(:, j) - r(:, i)
+        if (sum(d*d) >= rc2) cycle
+        dist = norm2(d)
+        if (dist > 0.0_wp) then
+          dhat = d/dist
+        else
+          dhat = [0.0_wp, 0.0_wp, 1.0_wp]
+        end if
+        call this%correction_functions(max(dist, 1.0_wp + this%eps_lub), df)
+        do l = 1, 5
+          do k = 1, 5
+            sm(k, l) = sm(k, l) + sum(b(:, :, k)*pair_strain_stresslet(df, dhat, b(:, :, l)))
+          end do
+        end do
+      end do
+    end do
+  end subroutine stresslet_correction
 
   !> Second derivatives of the cubic spline through y on a uniform grid of step h, clamped with
   !> zero slope at the first point and natural at the last.
