@@ -1,0 +1,43 @@
+"""The fibre's stresslet series: read when present (cut to the checkpoint's frames), absent
+from files without it, and averaged (running and late-time means)."""
+
+import h5py
+import numpy as np
+
+from conftest import unknotting_trefoil_frames, write_case
+from knotflow_tools import io, rheology
+
+
+def add_stresslet(path, nframes):
+    """/frames/stresslet as knotflow writes it (values made up, known)."""
+    k = np.arange(nframes, dtype=float)
+    tensor = np.zeros((nframes, 3, 3))
+    tensor[:, 0, 2] = tensor[:, 2, 0] = k
+    with h5py.File(path, "a") as f:
+        g = f["frames"].create_group("stresslet")
+        g["hydrodynamic"] = tensor
+        g["elastic"] = 2.0 * tensor
+        g["viscosity"] = 2.5 + k
+        g["psi1"] = -k
+        g["psi2"] = 0.5 * k
+
+
+def test_read_and_average(tmp_path):
+    frames = unknotting_trefoil_frames(5)
+    plain = write_case(tmp_path / "plain.h5", frames)
+    case = io.read_case(plain)
+    assert case.stresslet is None and rheology.rheology_summary(case, 0.0) is None
+    path = write_case(tmp_path / "stresslet.h5", frames)
+    add_stresslet(path, 5)
+    with h5py.File(path, "a") as f:            # a killed run: one frame beyond the checkpoint
+        f["checkpoint/nframes"][()] = 4
+    case = io.read_case(path)
+    assert set(case.stresslet) == set(io.STRESSLET)
+    assert case.stresslet["hydrodynamic"].shape == (4, 3, 3)
+    assert list(case.stresslet["viscosity"]) == [2.5, 3.5, 4.5, 5.5]
+    assert np.allclose(rheology.running_mean(case.stresslet["viscosity"]), [2.5, 3.0, 3.5, 4.0])
+    t_from = case.time[2]
+    summary = rheology.rheology_summary(case, t_from)
+    assert summary["viscosity"] == (5.0, 0.5, 2)
+    assert summary["psi1"] == (-2.5, 0.5, 2)
+    assert rheology.late_time_mean(case.time, case.stresslet["psi2"], case.time[-1] + 1.0)[2] == 0
