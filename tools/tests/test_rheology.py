@@ -41,3 +41,30 @@ def test_read_and_average(tmp_path):
     assert summary["viscosity"] == (5.0, 0.5, 2)
     assert summary["psi1"] == (-2.5, 0.5, 2)
     assert rheology.late_time_mean(case.time, case.stresslet["psi2"], case.time[-1] + 1.0)[2] == 0
+
+
+def test_report_shows_rheology(tmp_path):
+    from knotflow_tools import report
+    sweep = tmp_path / "sweep"
+    sweep.mkdir()
+    frames = unknotting_trefoil_frames(4)
+    write_case(sweep / "old.h5", frames)
+    new = write_case(sweep / "new.h5", frames)
+    add_stresslet(new, 4)
+    out = report.build_report(str(sweep), closures=10, movie=False, viewer=False)
+    rows = {r["name"]: r for r in out["rows"]}
+    assert rows["old"]["rheology"] is None
+    with h5py.File(new, "r") as f:
+        t = f["frames/time"][:]
+    late = t >= 0.5 * t[-1]
+    v = 2.5 + np.arange(4.0)
+    assert rows["new"]["rheology"]["viscosity"] == (v[late].mean(), v[late].std(), int(late.sum()))
+    with open(out["md"], encoding="utf-8") as fh:
+        md = fh.read()
+    with open(out["html"], encoding="utf-8") as fh:
+        html = fh.read()
+    assert "## Rheology" in md and "| case | viscosity | psi1 | psi2 | frames |" in md
+    section = md.split("## Rheology")[1].split("##")[0]
+    assert next(line for line in section.splitlines() if line.startswith("| new | ")).endswith(
+        "| %d |" % late.sum())
+    assert "<h2>Rheology</h2>" in html and "| old | " not in section
