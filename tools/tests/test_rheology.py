@@ -68,3 +68,5 @@ def test_report_shows_rheology(tmp_path):
     assert next(line for line in section.splitlines() if line.startswith("| new | ")).endswith(
         "| %d |" % late.sum())
     assert "<h2>Rheology</h2>" in html and "| old | " not in section
+    assert any(f.endswith("new_rheology.png") for f in rows["new"]["figures"])
+    assert not any(f.endswith("_rheology.png") for f in rows["old"]["figures"])
