@@ -67,3 +67,30 @@ kf_slurm_same_job() {
   [[ -n "${SLURM_CPUS_PER_TASK:-}" ]] && KF_SAME_JOB+=(--cpus-per-task="${SLURM_CPUS_PER_TASK}")
   return 0
 }
+
+# qsub options that give a follow-up job the resources of this one (qstat -f of this job: the
+# select or nodes request, walltime, queue, account, name). Sets the array KF_SAME_JOB.
+kf_pbs_same_job() {
+  local info key
+  info="$(qstat -f "${PBS_JOBID}" 2>/dev/null | sed -e ':a' -e 'N' -e '$!ba' -e 's/\n\t//g' || true)"
+  KF_SAME_JOB=(-N "${PBS_JOBNAME:-knotflow-sweep}")
+  [[ -n "${PBS_QUEUE:-}" ]] && KF_SAME_JOB+=(-q "${PBS_QUEUE}")
+  for key in select nodes walltime; do
+    local value
+    value="$(sed -n "s/^ *Resource_List\.${key} = //p" <<<"${info}" | head -n 1)"
+    [[ -n "${value}" ]] && KF_SAME_JOB+=(-l "${key}=${value}")
+  done
+  local account
+  account="$(sed -n 's/^ *Account_Name = //p' <<<"${info}" | head -n 1)"
+  [[ -n "${account}" ]] && KF_SAME_JOB+=(-A "${account}")
+  return 0
+}
+
+# Did knotflow run to its end? Status 2 (input refused) or 0/3 with its closing line
+# ("knotflow: N finished, M skipped ...") in its output, the file $2. Status 0 without that line
+# is a launch that failed (srun 22.05 reports a failed step launch with status 0).
+kf_sweep_ended() {
+  local status="$1" out="$2"
+  (( status == 2 )) && return 0
+  (( status == 0 || status == 3 )) && grep -qE '^knotflow: [0-9]+ finished, [0-9]+ skipped' "${out}"
+}

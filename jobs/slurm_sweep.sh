@@ -62,14 +62,19 @@ fi
 
 echo "knotflow sweep ${SWEEP}: job ${SLURM_JOB_ID:-none}, ${SLURM_NTASKS:-?} ranks on ${SLURM_JOB_NUM_NODES:-?} node(s), launcher ${KF_LAUNCH[*]}, $(date -u)"
 status=0
-"${KF_LAUNCH[@]}" "${exe}" "${SWEEP}" || status=$?
+out="$(mktemp)"
+"${KF_LAUNCH[@]}" "${exe}" "${SWEEP}" | tee "${out}" || status=$?
 echo "knotflow exited with status ${status} at $(date -u)"
 
 # A walltime kill ends this script before this point, and the follow-up continues the sweep.
-# Here knotflow has ended by itself: status 0 (every case finished), 3 (cases failed for good: a
-# follow-up would fail them again) or 2 (bad input): the follow-up has nothing to do. Only a
-# knotflow killed by a signal (status > 128) leaves it to continue.
-if [[ -n "${next}" ]] && (( status <= 128 )); then
+# Here knotflow has ended: it ran to its end when it printed its closing line (status 0: every case
+# finished; 3: cases failed for good, a follow-up would fail them again), or refused its input
+# (2). Then the follow-up has nothing to do. Otherwise (killed by a signal, or the launcher
+# failed to start it, which srun may report with status 0) the follow-up continues the sweep.
+kf_sweep_ended "${status}" "${out}" && ended=1 || ended=0
+rm -f "${out}"
+if [[ -n "${next}" ]] && (( ended )); then
   scancel "${next}" && echo "sweep ended (status ${status}): follow-up job ${next} cancelled"
 fi
+(( ended || status != 0 )) || status=1
 exit "${status}"

@@ -41,7 +41,7 @@ KF_APT_PACKAGES=(gcc gfortran cmake make git pkg-config openssh-client libopenmp
 
 # Optional system packages: ffmpeg (MP4 movies; without it GIFs), chromium (the browser test
 # of the report's 3-D viewer), a single-node SLURM with munge (the scheduler test of the job
-# scripts, tests/slurm) and shellcheck (the lint tests); those tests are skipped without them.
+# scripts, tests/jobs) and shellcheck (the lint tests); those tests are skipped without them.
 # Installed when missing; a failure is only a warning.
 KF_APT_OPTIONAL=(ffmpeg chromium munge slurmctld slurmd slurm-client shellcheck)
 

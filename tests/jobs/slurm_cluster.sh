@@ -46,8 +46,12 @@ kf_slurm_start() {
   [ "$cpus" -ge 2 ] || cpus=2
   ctl_port="$(kf_slurm_free_port)"
   d_port="$(kf_slurm_free_port)"
+  # Job ids unique across runs: slurmstepd's PMIx directories (/tmp/spmix_appdir_<uid>_<job>.<step>)
+  # of an earlier run with the same ids would make the step launch fail.
+  first_id=$(( ($(date +%s) % 600000) * 100 + 1 ))
   cat >"$dir/slurm.conf" <<CONF
 ClusterName=kftest
+FirstJobId=$first_id
 SlurmctldHost=$host
 SlurmctldPort=$ctl_port
 SlurmdPort=$d_port

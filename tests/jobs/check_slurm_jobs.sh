@@ -1,5 +1,5 @@
 #!/bin/bash
-# The job scripts under a real SLURM (a single node started here: tests/slurm/slurm_cluster.sh),
+# The job scripts under a real SLURM (a single node started here: tests/jobs/slurm_cluster.sh),
 # jobs submitted by an ordinary user from a copy of the project whose job scripts are edited
 # only where jobs/README.md says (account, partition, tasks per node, time):
 #   1. a small sweep with the srun launcher (SRUN_MPI=auto picks the PMI type srun offers):
@@ -7,22 +7,25 @@
 #      PMI type, the old script's call) fails: the choice of the PMI type is what makes it work;
 #   2. scancel of a running sweep (CANCELLED, the case file left 'running'), resubmission: the
 #      case resumes and finishes with every frame exactly once;
-#   3. a walltime kill (--time=1 given to sbatch) with MAX_RESUBMITS=2: the first job ends in
-#      TIMEOUT, its follow-up inherits the time limit and task count given on the command line,
-#      resumes and completes, and the second follow-up is cancelled (CANCELLED, never ran);
+#   3. a walltime kill (--time=1 given to sbatch) with MAX_RESUBMITS=6: the first job ends in
+#      TIMEOUT, its follow-ups inherit the time limit and task count given on the command line
+#      and resume (on a busy machine more than one ends in TIMEOUT), one completes, and its own
+#      follow-up is cancelled (CANCELLED, never ran);
 #   4. a sweep whose case fails for good (max_steps): exit status 3, the follow-up cancelled;
 #   5. jobs/submit_study.sh with a refused analysis job (too many tasks): exit 2, no job queued;
 #   6. the shortened study (--time-scale) with a follow-up per sweep: in its own directory, the
 #      analysis job starts only after every sweep job (follow-ups included) has ended, COMPLETED,
-#      analysing exactly the two sweeps it submitted (results.json); nothing written to results/.
+#      analysing exactly the two sweeps it submitted (results.json); nothing written to results/;
+#      the analysis re-run while a sweep job of the study is queued moves behind it, then reuses
+#      everything stored;
 # Every job state is read with scontrol show job (the controller keeps finished jobs for an
 # hour: MinJobAge) and checked again in the job completion log (jobcomp/filetxt).
 # Exit status 77 (ctest: skipped) with the reason when the daemons cannot start.
-# Usage: check_slurm_jobs.sh SOURCE_DIR BUILD_DIR PYTHON WORKDIR
+# Usage: check_slurm_jobs.sh SOURCE_DIR BUILD_DIR WORKDIR
 set -uo pipefail
-src="$(cd "$1" && pwd)" build="$(cd "$2" && pwd)" python="$3" work="$4"
+src="$(cd "$1" && pwd)" build="$(cd "$2" && pwd)" work="$3"
 here="$(dirname "${BASH_SOURCE[0]}")"
-# shellcheck source=tests/slurm/slurm_cluster.sh
+# shellcheck source=tests/jobs/slurm_cluster.sh
 source "${here}/slurm_cluster.sh"
 
 t_start=$(date +%s)
@@ -94,7 +97,7 @@ expect_state() {   # expect_state JOBID STATE [EXIT]
   grep -q "JobId=$1 .*JobState=$2" "${work}/slurm/log/jobcomp.txt" || fail "job $1: no JobState=$2 in the job completion log"
   log "job $1 ($(field "$1" JobName)): $2 exit $(field "$1" ExitCode)"
 }
-h5() { "${python}" - "$@"; }
+h5() { "${proj}/build/venv/bin/python" - "$@"; }   # the venv made above has h5py
 frames_check() {   # frames_check FILE T_END INTERVAL: status finished, frames 0, dt, ..., t_end once each
   h5 "$1" "$2" "$3" <<'PY' || fail "case file $1 is not a finished sweep case with every frame once"
 import sys, h5py, numpy as np
@@ -117,9 +120,9 @@ PY
 
 # --- 3. (started first: it is the longest) walltime kill with follow-ups ----------------------
 scene walltime "" "t_end = 5000.0" 40 50.0
-w1=$(as_user "sbatch --parsable --time=1 --ntasks=1 --export=ALL,MAX_RESUBMITS=2 jobs/slurm_sweep.sh inputs/walltime.nml") \
+w1=$(as_user "sbatch --parsable --time=1 --ntasks=1 --export=ALL,MAX_RESUBMITS=6 jobs/slurm_sweep.sh inputs/walltime.nml") \
   || fail "sbatch of the walltime sweep"
-log "walltime sweep: job ${w1} (--time=1 --ntasks=1, MAX_RESUBMITS=2)"
+log "walltime sweep: job ${w1} (--time=1 --ntasks=1, MAX_RESUBMITS=6)"
 
 # --- 1. a small sweep with srun ---------------------------------------------------------------
 scene tiny "&sweep orientation = 'b', 'c' /" "t_end = 4.0"
@@ -212,26 +215,55 @@ grep -q "candycane_seeds\|trefoil_table2_p24" "${proj}/knotflow-study-${last}.ou
 [[ ! -e "${proj}/results/trefoil_table2" && ! -e "${proj}/results/reproduction" ]] || fail "the shortened study wrote into results/ of the real run"
 log "shortened study: sweeps ${sa} ${sb} (and follow-ups), analysis ${last} COMPLETED after all of them; ${study}/reproduction/results.json"
 
-# --- 3. (end) the walltime chain --------------------------------------------------------------
-wait_end "${w1}" 300 >/dev/null
+# --- 6b. re-running the analysis while a sweep job of the study is queued: it moves behind it,
+# and runs when that job has ended (reusing everything stored: no new frame analysed) ---------
+hold=$(as_user "sbatch --parsable --hold --job-name=knotflow-rpy-t0.004-sweep --ntasks=1 --output=/dev/null --wrap true") \
+  || fail "sbatch of the held job"
+r1=$(as_user "sbatch --parsable --ntasks=2 --export=ALL,STUDY_DIR=results/study_rpy_t0.004,WAIT_FOR=knotflow-rpy-t0.004-sweep,STUDY_QUICK=1 jobs/slurm_study.sh rpy") \
+  || fail "sbatch of the analysis re-run"
+wait_end "${r1}" 120 >/dev/null
+expect_state "${r1}" COMPLETED 0:0
+r2=$(sed -n 's/.*analysis moved to job \([0-9]*\).*/\1/p' "${proj}/knotflow-study-${r1}.out")
+[[ -n "${r2}" ]] || fail "the analysis ${r1} ran while sweep job ${hold} was queued: $(head -n 5 "${proj}/knotflow-study-${r1}.out")"
+sleep 3
+[[ "$(state "${r2}")" == PENDING && "$(field "${r2}" Dependency)" == *"${hold}"* ]] \
+  || fail "the moved analysis ${r2} does not wait for ${hold}: $(state "${r2}") $(field "${r2}" Dependency)"
+as_user "scontrol release ${hold}"
+wait_end "${hold}" 60 >/dev/null
+wait_end "${r2}" 300 >/dev/null
+expect_state "${r2}" COMPLETED 0:0
+grep -q "0 new)" "${proj}/knotflow-study-${r2}.out" && ! grep -qE "\(([1-9][0-9]*) new\)" "${proj}/knotflow-study-${r2}.out" \
+  || fail "the re-run analysis ${r2} recomputed stored frames: $(grep new "${proj}/knotflow-study-${r2}.out" | head -n 3)"
+log "analysis re-run ${r1} moved behind the queued sweep job ${hold} to ${r2}, which ran after it and reused everything"
+
+# --- 3. (end) the walltime chain: TIMEOUT, follow-ups that resume (more TIMEOUTs on a slow or
+# busy machine), one COMPLETED, and its own follow-up CANCELLED ----------------------------------
+follow() { grep -o 'follow-up job [0-9]*' "${proj}/knotflow-sweep-$1.out" 2>/dev/null | awk 'NR == 1 {print $3}'; }
+wait_end "${w1}" 400 >/dev/null
 expect_state "${w1}" TIMEOUT
-w2=$(grep -o 'follow-up job [0-9]*' "${proj}/knotflow-sweep-${w1}.out" | awk 'NR == 1 {print $3}')
-[[ -n "${w2}" ]] || fail "walltime job ${w1} submitted no follow-up"
-[[ "$(field "${w2}" TimeLimit)" == 00:01:00 ]] \
-  || fail "follow-up ${w2} did not inherit --time=1: TimeLimit=$(field "${w2}" TimeLimit)"
-wait_end "${w2}" 300 >/dev/null
-grep -q "job ${w2}, 1 ranks" "${proj}/knotflow-sweep-${w2}.out" || fail "follow-up ${w2} did not inherit --ntasks=1: $(grep ranks "${proj}/knotflow-sweep-${w2}.out")"
-s2="$(state "${w2}")"
-w3=$(grep -o 'follow-up job [0-9]*' "${proj}/knotflow-sweep-${w2}.out" | awk 'NR == 1 {print $3}')
-grep -q "resum" "${proj}/knotflow-sweep-${w2}.out" || fail "follow-up ${w2} did not resume: $(cat "${proj}/knotflow-sweep-${w2}.out")"
-if [[ "${s2}" == TIMEOUT ]]; then   # a slow machine: the second follow-up finishes it
-  wait_end "${w3}" 300 >/dev/null
-  expect_state "${w3}" COMPLETED 0:0
-else
-  expect_state "${w2}" COMPLETED 0:0
-  wait_end "${w3}" 30 >/dev/null
-  expect_state "${w3}" CANCELLED
+chain="${w1} TIMEOUT"
+prev="${w1}"
+while true; do
+  next="$(follow "${prev}")"
+  [[ -n "${next}" ]] || fail "job ${prev} (TIMEOUT) submitted no follow-up: $(head -n 3 "${proj}/knotflow-sweep-${prev}.out")"
+  [[ "$(field "${next}" TimeLimit)" == 00:01:00 ]] \
+    || fail "follow-up ${next} did not inherit --time=1: TimeLimit=$(field "${next}" TimeLimit)"
+  s="$(wait_end "${next}" 400)"
+  grep -q "job ${next}, 1 ranks" "${proj}/knotflow-sweep-${next}.out" \
+    || fail "follow-up ${next} did not inherit --ntasks=1: $(grep ranks "${proj}/knotflow-sweep-${next}.out")"
+  grep -q "resum" "${proj}/knotflow-sweep-${next}.out" || fail "follow-up ${next} did not resume: $(cat "${proj}/knotflow-sweep-${next}.out")"
+  chain="${chain}, ${next} ${s}"
+  [[ "${s}" == TIMEOUT ]] || break
+  expect_state "${next}" TIMEOUT
+  prev="${next}"
+done
+expect_state "${next}" COMPLETED 0:0
+last_follow="$(follow "${next}")"
+if [[ -n "${last_follow}" ]]; then
+  wait_end "${last_follow}" 30 >/dev/null
+  expect_state "${last_follow}" CANCELLED
+  chain="${chain}, ${last_follow} CANCELLED"
 fi
 frames_check "${proj}/results/walltime/case.h5" 5000 50
-log "walltime: ${w1} TIMEOUT, follow-up ${w2} ${s2} (inherited --time=1 --ntasks=1, resumed), ${w3} $(state "${w3}")"
+log "walltime chain (--time=1 --ntasks=1 inherited, each follow-up resumed): ${chain}"
 log "all SLURM checks passed"
