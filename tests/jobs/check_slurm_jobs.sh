@@ -232,7 +232,7 @@ as_user "scontrol release ${hold}"
 wait_end "${hold}" 60 >/dev/null
 wait_end "${r2}" 300 >/dev/null
 expect_state "${r2}" COMPLETED 0:0
-grep -q "0 new)" "${proj}/knotflow-study-${r2}.out" && ! grep -qE "\(([1-9][0-9]*) new\)" "${proj}/knotflow-study-${r2}.out" \
+{ grep -q "0 new)" "${proj}/knotflow-study-${r2}.out" && ! grep -qE "\(([1-9][0-9]*) new\)" "${proj}/knotflow-study-${r2}.out"; } \
   || fail "the re-run analysis ${r2} recomputed stored frames: $(grep new "${proj}/knotflow-study-${r2}.out" | head -n 3)"
 log "analysis re-run ${r1} moved behind the queued sweep job ${hold} to ${r2}, which ran after it and reused everything"
 
