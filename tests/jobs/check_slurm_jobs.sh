@@ -142,15 +142,18 @@ log "the same sweep with srun --mpi=none fails (the old script's srun call on th
 # --- 2. scancel and resubmit ------------------------------------------------------------------
 scene cancel "" "t_end = 600.0" 40 5.0
 c1=$(as_user "sbatch --parsable --ntasks=1 jobs/slurm_sweep.sh inputs/cancel.nml") || fail "sbatch cancel"
-for (( k = 0; k < 120; k++ )); do
+for (( k = 0; k < 240; k++ )); do   # until the case has written frames up to t = 20
   [[ -f "${proj}/results/cancel/case.h5" ]] && grep -q "t = 20.0" "${proj}/knotflow-sweep-${c1}.out" 2>/dev/null && break
-  [[ "$(state "${c1}")" == RUNNING || "$(state "${c1}")" == PENDING ]] || break
-  sleep 1
+  case "$(state "${c1}")" in COMPLETED|FAILED|CANCELLED|TIMEOUT) fail "job ${c1} ended before it could be cancelled" ;; esac
+  sleep 0.5
 done
 as_user "scancel ${c1}"
 wait_end "${c1}" 60 >/dev/null
 expect_state "${c1}" CANCELLED
-s="$(status_of "${proj}/results/cancel/case.h5")"
+for (( k = 0; k < 20; k++ )); do   # the killed process may hold the file (HDF5 lock) a moment
+  s="$(status_of "${proj}/results/cancel/case.h5" 2>/dev/null)" && break
+  sleep 0.5
+done
 [[ "${s}" == running ]] || fail "after scancel the case file says '${s}', expected running"
 c2=$(as_user "sbatch --parsable --ntasks=1 jobs/slurm_sweep.sh inputs/cancel.nml") || fail "sbatch resubmit"
 wait_end "${c2}" 240 >/dev/null
