@@ -7,7 +7,7 @@
 #      PMI type, the old script's call) fails: the choice of the PMI type is what makes it work;
 #   2. scancel of a running sweep (CANCELLED, the case file left 'running'), resubmission: the
 #      case resumes and finishes with every frame exactly once;
-#   3. a walltime kill (--time=1 given to sbatch) with MAX_RESUBMITS=6: the first job ends in
+#   3. a walltime kill (--time=1 given to sbatch) with MAX_RESUBMITS=12: the first job ends in
 #      TIMEOUT, its follow-ups inherit the time limit and task count given on the command line
 #      and resume (on a busy machine more than one ends in TIMEOUT), one completes, and its own
 #      follow-up is cancelled (CANCELLED, never ran);
@@ -120,9 +120,9 @@ PY
 
 # --- 3. (started first: it is the longest) walltime kill with follow-ups ----------------------
 scene walltime "" "t_end = 5000.0" 40 50.0
-w1=$(as_user "sbatch --parsable --time=1 --ntasks=1 --export=ALL,MAX_RESUBMITS=6 jobs/slurm_sweep.sh inputs/walltime.nml") \
+w1=$(as_user "sbatch --parsable --time=1 --ntasks=1 --export=ALL,MAX_RESUBMITS=12 jobs/slurm_sweep.sh inputs/walltime.nml") \
   || fail "sbatch of the walltime sweep"
-log "walltime sweep: job ${w1} (--time=1 --ntasks=1, MAX_RESUBMITS=6)"
+log "walltime sweep: job ${w1} (--time=1 --ntasks=1, MAX_RESUBMITS=12)"
 
 # --- 1. a small sweep with srun ---------------------------------------------------------------
 scene tiny "&sweep orientation = 'b', 'c' /" "t_end = 4.0"
