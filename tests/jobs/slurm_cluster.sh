@@ -5,7 +5,7 @@
 # scripts/lib.sh), started directly (no systemd) with everything under one directory:
 #   kf_slurm_start DIR   writes DIR/slurm.conf, starts the daemons, exports SLURM_CONF;
 #                        returns 1 with KF_SLURM_WHY set when they cannot start (the caller skips)
-#   kf_slurm_stop        stops the daemons it started (by their pid files)
+#   kf_slurm_stop        cancels the jobs left, stops the daemons it started (by their pid files)
 # The node declares the CPUs the machine has (at least 2, with oversubscription of cores), the
 # daemons run as root, and jobs are submitted by an ordinary user (kf_slurm_user).
 
@@ -102,7 +102,18 @@ CONF
 
 kf_slurm_stop() {
   [ -n "$KF_SLURM_DIR" ] || return 0
-  local f pid
+  local f pid ids
+  # Jobs still queued or running (a failed test) are cancelled first: a slurmstepd left behind by
+  # a stopped slurmd would live on with its job.
+  ids="$(squeue -h -o %i 2>/dev/null | tr '\n' ' ')"
+  if [ -n "${ids// /}" ]; then
+    # shellcheck disable=SC2086  # a list of job ids
+    scancel $ids 2>/dev/null || true
+    for _ in $(seq 1 30); do
+      [ -z "$(squeue -h -o %i 2>/dev/null)" ] && ! pgrep -f "slurmstepd: \[" >/dev/null 2>&1 && break
+      sleep 1
+    done
+  fi
   for f in slurmd slurmctld munged; do
     [ -r "$KF_SLURM_DIR/run/$f.pid" ] || continue
     pid="$(cat "$KF_SLURM_DIR/run/$f.pid")"
