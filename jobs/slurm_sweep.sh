@@ -6,6 +6,7 @@
 # HDF5 file with a checkpoint at every frame. Re-submitting the same script continues the sweep:
 # knotflow skips cases whose file says 'finished', resumes 'running' ones from their checkpoint
 # and recomputes failed or corrupt ones. Submit from the project directory (or set KNOTFLOW_DIR).
+# jobs/README.md explains every setting.
 #
 # ---- edit these for your site ------------------------------------------------------------
 #SBATCH --job-name=knotflow-sweep
@@ -24,60 +25,56 @@ KNOTFLOW_DIR="${KNOTFLOW_DIR:-${SLURM_SUBMIT_DIR:-$PWD}}"
 BUILD_DIR="${BUILD_DIR:-build}"
 # Modules to load (space-separated, empty for none), e.g. "gcc/12 openmpi/4.1 hdf5/1.10 openblas".
 MODULES="${MODULES:-}"
-# Launcher: srun (preferred under SLURM) or "mpirun" (e.g. when Open MPI lacks PMI support).
+# Launcher: srun (default) or mpirun. srun needs the PMI type of your MPI library: SRUN_MPI=auto
+# takes pmix when srun offers it (Open MPI), else pmi2 (MPICH, Intel MPI); or name it.
 LAUNCHER="${LAUNCHER:-srun}"
+SRUN_MPI="${SRUN_MPI:-auto}"
+# HDF5 file locking: on, or off for a file system where it fails (every case file has one writer).
+HDF5_FILE_LOCKING="${HDF5_FILE_LOCKING:-on}"
 # Automatic follow-up jobs: submit up to this many more jobs that continue the sweep after this
-# one ends (each one re-runs this script; 0 = off). Stops early once every case is finished.
+# one ends (each one re-runs this script with this job's resources; 0 = off). A follow-up is
+# cancelled when the sweep has run to its end (cases finished, or failed for good).
 MAX_RESUBMITS="${MAX_RESUBMITS:-0}"
 # --------------------------------------------------------------------------------------------
 
 set -euo pipefail
-
-if [[ -n "${MODULES}" ]]; then
-  # shellcheck disable=SC2086  # word splitting of the module list is intended
-  module load ${MODULES}
-fi
-
+export SWEEP KNOTFLOW_DIR BUILD_DIR MODULES LAUNCHER SRUN_MPI HDF5_FILE_LOCKING
 cd "${KNOTFLOW_DIR}"
+# shellcheck source=jobs/job_lib.sh
+source "${KNOTFLOW_DIR}/jobs/job_lib.sh"
+kf_job_environment
 exe="${BUILD_DIR}/bin/knotflow"
-if [[ ! -x "${exe}" ]]; then
-  echo "ERROR: ${exe} not found or not executable (set BUILD_DIR; build with cmake first)" >&2
-  exit 1
-fi
-if [[ ! -r "${SWEEP}" ]]; then
-  echo "ERROR: sweep file ${SWEEP} not found in ${KNOTFLOW_DIR}" >&2
-  exit 1
-fi
-
-# One thread per rank: the ranks already fill the cores.
-export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1
-# HDF5 file locking fails on some parallel file systems; every case file has a single writer.
-export HDF5_USE_FILE_LOCKING=FALSE
+[[ -x "${exe}" ]] || kf_job_die "${exe} not found or not executable (set BUILD_DIR; build with scripts/build.sh)"
+[[ -r "${SWEEP}" ]] || kf_job_die "sweep file ${SWEEP} not found in ${KNOTFLOW_DIR}"
+[[ "${MAX_RESUBMITS}" =~ ^[0-9]+$ ]] || kf_job_die "MAX_RESUBMITS must be a number >= 0, not '${MAX_RESUBMITS}'"
+kf_slurm_launcher
 
 # Chain a follow-up job before starting, so it also runs when this job hits its walltime.
-# (SLURM runs a spooled copy of this script: resubmit the one in the checkout when it exists.)
-script="${KNOTFLOW_DIR}/jobs/slurm_sweep.sh"
-[[ -r "${script}" ]] || script="$0"
+# (SLURM runs a spooled copy of this script: the follow-up runs the one in the checkout.)
+next=""
 if (( MAX_RESUBMITS > 0 )); then
-  next=$(sbatch --parsable --dependency="afterany:${SLURM_JOB_ID}" \
-    --export="ALL,MAX_RESUBMITS=$(( MAX_RESUBMITS - 1 )),KNOTFLOW_DIR=${KNOTFLOW_DIR},BUILD_DIR=${BUILD_DIR}" \
-    "${script}" "${SWEEP}")
+  kf_slurm_same_job
+  next=$(sbatch --parsable "${KF_SAME_JOB[@]}" --dependency="afterany:${SLURM_JOB_ID}" \
+    --export="ALL,MAX_RESUBMITS=$(( MAX_RESUBMITS - 1 ))" \
+    "${KNOTFLOW_DIR}/jobs/slurm_sweep.sh" "${SWEEP}")
   echo "follow-up job ${next} submitted (${MAX_RESUBMITS} resubmissions left before it)"
 fi
 
-echo "knotflow sweep ${SWEEP}: job ${SLURM_JOB_ID:-none}, ${SLURM_NTASKS:-?} ranks on ${SLURM_JOB_NUM_NODES:-?} node(s), $(date -u)"
+echo "knotflow sweep ${SWEEP}: job ${SLURM_JOB_ID:-none}, ${SLURM_NTASKS:-?} ranks on ${SLURM_JOB_NUM_NODES:-?} node(s), launcher ${KF_LAUNCH[*]}, $(date -u)"
 status=0
-case "${LAUNCHER}" in
-  srun) srun --kill-on-bad-exit=1 "${exe}" "${SWEEP}" || status=$? ;;
-  mpirun) mpirun -n "${SLURM_NTASKS}" "${exe}" "${SWEEP}" || status=$? ;;
-  *) echo "ERROR: LAUNCHER must be srun or mpirun, not '${LAUNCHER}'" >&2; exit 1 ;;
-esac
+out="$(mktemp)"
+"${KF_LAUNCH[@]}" "${exe}" "${SWEEP}" | tee "${out}" || status=$?
 echo "knotflow exited with status ${status} at $(date -u)"
 
-# knotflow exits with status 0 when the sweep ran to its end: the follow-up job has nothing
-# left to do (cases that failed would fail again), cancel it. After a walltime kill the status
-# is non-zero and the follow-up job continues the sweep.
-if (( status == 0 )) && [[ -n "${next:-}" ]]; then
-  scancel "${next}" && echo "sweep complete: follow-up job ${next} cancelled"
+# A walltime kill ends this script before this point, and the follow-up continues the sweep.
+# Here knotflow has ended: it ran to its end when it printed its closing line (status 0: every case
+# finished; 3: cases failed for good, a follow-up would fail them again), or refused its input
+# (2). Then the follow-up has nothing to do. Otherwise (killed by a signal, or the launcher
+# failed to start it, which srun may report with status 0) the follow-up continues the sweep.
+kf_sweep_ended "${status}" "${out}" && ended=1 || ended=0
+rm -f "${out}"
+if [[ -n "${next}" ]] && (( ended )); then
+  scancel "${next}" && echo "sweep ended (status ${status}): follow-up job ${next} cancelled"
 fi
+(( ended || status != 0 )) || status=1
 exit "${status}"

@@ -6,10 +6,16 @@
 #   KNOTFLOW_JOBS      parallel build/test jobs (default 2)
 #   KNOTFLOW_PYTHON    Python interpreter to use (default: python3 on PATH)
 #   KNOTFLOW_NO_INSTALL=1  never install anything (only check and report what is missing)
-#   KNOTFLOW_NO_OPTIONAL=1 skip the optional system packages (ffmpeg, chromium)
+#   KNOTFLOW_NO_OPTIONAL=1 skip the optional system packages (ffmpeg, chromium, SLURM, shellcheck)
+#   KNOTFLOW_NO_APT=1  the compilers and libraries come from environment modules (or elsewhere):
+#                      never call dpkg or apt-get, only check that the tools are on PATH
+#   KNOTFLOW_BUILD_DIR the Release build directory of build.sh and reproduce.sh, and the home of
+#                      the Python virtual environment (<dir>/venv); default build
 
 KF_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 KF_JOBS="${KNOTFLOW_JOBS:-2}"
+KF_BUILD_DIR="${KNOTFLOW_BUILD_DIR:-$KF_ROOT/build}"
+case "$KF_BUILD_DIR" in /*) ;; *) KF_BUILD_DIR="$KF_ROOT/$KF_BUILD_DIR" ;; esac
 export DEBIAN_FRONTEND=noninteractive
 # One thread per MPI rank: every rank runs one serial case, and idle OpenBLAS threads spin
 # (sched_yield) and steal the cores the other ranks need. Set them yourself to override.
@@ -33,14 +39,18 @@ kf_as_root() {
 KF_APT_PACKAGES=(gcc gfortran cmake make git pkg-config openssh-client libopenmpi-dev openmpi-bin libhdf5-dev
                  libopenblas-dev liblapack-dev libfftw3-dev python3 python3-pip python3-venv)
 
-# Optional system packages: ffmpeg (MP4 movies; without it GIFs) and chromium (the browser test
-# of the report's 3-D viewer; skipped without it).  Installed when missing; a failure is only a
-# warning.
-KF_APT_OPTIONAL=(ffmpeg chromium)
+# Optional system packages: ffmpeg (MP4 movies; without it GIFs), chromium (the browser test
+# of the report's 3-D viewer), a single-node SLURM with munge (the scheduler test of the job
+# scripts, tests/jobs, whose jobs run as another user: their Python tools use the system's
+# numpy, h5py and matplotlib) and shellcheck (the lint tests); those tests are skipped without
+# them. Installed when missing; a failure is only a warning.
+KF_APT_OPTIONAL=(ffmpeg chromium munge slurmctld slurmd slurm-client python3-numpy python3-h5py
+                 python3-matplotlib python3-setuptools shellcheck)
 
 kf_ensure_optional_packages() {
   [ "${KNOTFLOW_NO_OPTIONAL:-0}" = 1 ] && return 0
   command -v dpkg >/dev/null 2>&1 || return 0
+  [ "${KNOTFLOW_NO_APT:-0}" = 1 ] && return 0
   local missing=() pkg
   for pkg in "${KF_APT_OPTIONAL[@]}"; do
     dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
@@ -53,15 +63,15 @@ kf_ensure_optional_packages() {
   kf_log "installing optional packages: ${missing[*]}"
   { kf_as_root apt-get update -q </dev/null \
       && kf_as_root apt-get install -y -q --no-install-recommends "${missing[@]}" </dev/null; } \
-    || kf_log "WARNING: could not install ${missing[*]} (movies as GIF, browser test skipped)"
+    || kf_log "WARNING: could not install ${missing[*]} (movies as GIF; browser, SLURM, lint tests skipped)"
   return 0
 }
 
 kf_ensure_system_packages() {
-  if ! command -v dpkg >/dev/null 2>&1; then
-    kf_log "no dpkg (not Debian-like): skipping system packages; checking the tools instead"
+  if [ "${KNOTFLOW_NO_APT:-0}" = 1 ] || ! command -v dpkg >/dev/null 2>&1; then
+    kf_log "KNOTFLOW_NO_APT=1 or no dpkg: no system packages installed; checking the tools instead"
     local tool
-    for tool in gfortran cmake make mpirun pkg-config python3; do
+    for tool in gfortran cmake make mpirun python3; do
       command -v "$tool" >/dev/null 2>&1 || kf_die "'$tool' not found; install it first"
     done
     return 0
@@ -99,10 +109,10 @@ kf_ensure_python() {
   in_venv="$("$py" -c 'import sys; print(int(sys.prefix != sys.base_prefix))')" \
     || kf_die "cannot run $py"
   if [ "$in_venv" = 0 ]; then
-    local venv="$KF_ROOT/build/venv"
+    local venv="$KF_BUILD_DIR/venv"
     if [ ! -x "$venv/bin/python" ]; then
       kf_log "creating the virtual environment $venv (sees $py's packages)"
-      mkdir -p "$KF_ROOT/build"
+      mkdir -p "$KF_BUILD_DIR"
       "$py" -m venv --system-site-packages "$venv" </dev/null \
         || kf_die "$py -m venv failed (Debian: apt-get install python3-venv)"
     fi

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Reproduce the reference study: run the trefoil Table 2 sweep (29 cases, N = 99) and the
 # candy-cane sweep (A = 1, 1.4, 3; N = 152), analyse them, and write the comparison.
-#   scripts/reproduce.sh [--hydro rpy|multipole] [--no-run] [--no-extras]
+#   scripts/reproduce.sh [--hydro rpy|multipole] [--no-run] [--no-extras] [--no-build]
+#                        [--results DIR] [--quick]
 #
 #   --hydro rpy        (default) inputs/trefoil_table2.nml and inputs/candycane.nml:
 #                      RPY + excluded volume, about 30 s per trefoil case on one core.
@@ -11,11 +12,21 @@
 #   --no-extras        (rpy) skip the two checks beyond the study's inputs: the candy-cane with 5
 #                      random rotations (inputs/candycane_seeds.nml) and Table 2 with the open
 #                      trefoil whose k_f(0) = 0.98 (inputs/trefoil_table2_p24.nml).
+#   --no-build         install and build nothing: use the existing build (KNOTFLOW_BUILD_DIR,
+#                      default build/) and its Python tools (<build>/venv); a batch job's way.
+#   --results DIR      the sweeps' output directories are DIR/<sweep> (default results; a
+#                      shortened study of jobs/submit_study.sh has its own), the comparison goes
+#                      to DIR/reproduction[_multipole].
+#   --quick            a trial of the workflow (with a shortened study): 20 closures per frame
+#                      and 5 per subchain for knot matrices instead of 200 and 20-100; the
+#                      numbers are then too noisy to compare with the study.
 #
 # Re-running continues: finished cases are skipped, killed ones resumed, and knotflow-analyze
 # reuses the k_f and knot matrices it already stored. Output: results/<sweep>/ (case files,
 # report/) and results/reproduction[_multipole]/ (figures, results.md, results.json).
-# Environment: KNOTFLOW_NP (MPI ranks, default 2), KNOTFLOW_NO_INSTALL=1 (see scripts/lib.sh).
+# Environment: KNOTFLOW_NP (MPI ranks, default 2), KNOTFLOW_NO_INSTALL=1 (see scripts/lib.sh),
+# KNOTFLOW_BUILD_DIR, KNOTFLOW_LAUNCHER (the command that starts an MPI program, e.g.
+# "srun --mpi=pmix" in a SLURM job; default mpirun -n KNOTFLOW_NP).
 set -euo pipefail
 # shellcheck source=scripts/lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
@@ -23,12 +34,20 @@ source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 hydro=rpy
 run=1
 extras=1
+build=1
+results=results
+# closures per frame, per subchain of a knot matrix (trefoil last frame, candy-cane frames,
+# slipknot confirmation)
+closures=200 mat_trefoil=100 mat_cane=20 mat_confirm=100
 while [ $# -gt 0 ]; do
   case "$1" in
     --hydro) [ $# -ge 2 ] || kf_die "--hydro needs a value (rpy or multipole)"; hydro="$2"; shift 2 ;;
     --no-run) run=0; shift ;;
     --no-extras) extras=0; shift ;;
-    *) kf_die "unknown argument '$1' (allowed: --hydro rpy|multipole, --no-run, --no-extras)" ;;
+    --no-build) build=0; shift ;;
+    --quick) closures=20 mat_trefoil=5 mat_cane=5 mat_confirm=5; shift ;;
+    --results) [ $# -ge 2 ] || kf_die "--results needs a directory"; results="$2"; shift 2 ;;
+    *) kf_die "unknown argument '$1' (allowed: --hydro rpy|multipole, --no-run, --no-extras, --no-build, --results DIR, --quick)" ;;
   esac
 done
 case "$hydro" in
@@ -40,12 +59,26 @@ np="${KNOTFLOW_NP:-2}"
 [[ "$np" =~ ^[1-9][0-9]*$ ]] || kf_die "KNOTFLOW_NP must be a positive integer (got '$np')"
 
 cd "$KF_ROOT"
-kf_ensure_system_packages
-kf_ensure_python
-kf_build "$KF_ROOT/build" Release
-kf_mpirun_flags
-mpi=(mpirun -n "$np" "${KF_MPIRUN_FLAGS[@]}")
-analyze="$KF_ROOT/build/bin/knotflow-analyze"
+if [ "$build" = 1 ]; then
+  kf_ensure_system_packages
+  kf_ensure_python
+  kf_build "$KF_BUILD_DIR" Release
+else
+  [ -d "$KF_BUILD_DIR/venv/bin" ] && PATH="$KF_BUILD_DIR/venv/bin:$PATH"
+  for exe in "$KF_BUILD_DIR/bin/knotflow" "$KF_BUILD_DIR/bin/knotflow-analyze"; do
+    [ -x "$exe" ] || kf_die "--no-build: $exe not found (build first: KNOTFLOW_BUILD_DIR=$KF_BUILD_DIR bash scripts/build.sh)"
+  done
+  command -v knotflow-study >/dev/null 2>&1 \
+    || kf_die "--no-build: knotflow-study not found in $KF_BUILD_DIR/venv (bash scripts/build.sh installs it)"
+fi
+if [ -n "${KNOTFLOW_LAUNCHER:-}" ]; then
+  # shellcheck disable=SC2206  # the launcher is a command with its options
+  mpi=(${KNOTFLOW_LAUNCHER})
+else
+  kf_mpirun_flags
+  mpi=(mpirun -n "$np" "${KF_MPIRUN_FLAGS[@]}")
+fi
+analyze="$KF_BUILD_DIR/bin/knotflow-analyze"
 
 # Sweeps: name of the input (inputs/<name>.nml) = name of the output directory (results/<name>).
 trefoil_sweeps=("trefoil_table2$suffix")
@@ -58,52 +91,52 @@ if [ "$run" = 1 ]; then
   for sweep in "${trefoil_sweeps[@]}" "${cane_sweeps[@]}"; do
     kf_log "knotflow inputs/$sweep.nml on $np rank(s)"
     # A failed case (exit 3) is reported in the summary; the others are still analysed.
-    "${mpi[@]}" build/bin/knotflow "inputs/$sweep.nml" || [ $? -eq 3 ]
+    "${mpi[@]}" "$KF_BUILD_DIR/bin/knotflow" "inputs/$sweep.nml" || [ $? -eq 3 ]
   done
 fi
 
 shopt -s nullglob
-# Trefoils: k_f of every frame (200 closures), knot matrix of the last frame.
+# Trefoils: k_f of every frame (200 closures), knot matrix of the last frame (100 per subchain).
 for sweep in "${trefoil_sweeps[@]}"; do
-  files=("results/$sweep"/*.h5)
-  [ "${#files[@]}" -gt 0 ] || { kf_log "no case files in results/$sweep: skipped"; continue; }
-  kf_log "knotflow-analyze: ${#files[@]} case(s) of results/$sweep"
-  "${mpi[@]}" "$analyze" "${files[@]}" --closures 200 --stride 1 --matrix-frames last
+  files=("$results/$sweep"/*.h5)
+  [ "${#files[@]}" -gt 0 ] || { kf_log "no case files in $results/$sweep: skipped"; continue; }
+  kf_log "knotflow-analyze: ${#files[@]} case(s) of $results/$sweep"
+  "${mpi[@]}" "$analyze" "${files[@]}" --closures "$closures" --stride 1 --matrix-frames last --matrix-closures "$mat_trefoil"
 done
 # Candy-canes: k_f of every frame; for the main sweep also knot matrices (20 closures per
 # subchain) every 50 frames and at the 5 most entangled frames: the slipknot search.
 for sweep in "${cane_sweeps[@]}"; do
-  for f in "results/$sweep"/*.h5; do
+  for f in "$results/$sweep"/*.h5; do
     if [ "$sweep" = "candycane$suffix" ]; then
       frames="$(knotflow-study --select-frames "$f")"
       kf_log "knotflow-analyze $f (knot matrices of frames $frames)"
-      "${mpi[@]}" "$analyze" "$f" --closures 200 --stride 1 --matrix-frames "$frames" --matrix-closures 20
+      "${mpi[@]}" "$analyze" "$f" --closures "$closures" --stride 1 --matrix-frames "$frames" --matrix-closures "$mat_cane"
     else
       kf_log "knotflow-analyze $f (ensemble: 100 closures, every 2nd frame)"
       "${mpi[@]}" "$analyze" "$f" --closures 100 --stride 2
     fi
   done
 done
-out="results/reproduction$suffix"
+out="$results/reproduction$suffix"
 # Slipknot candidates of the screen (20 closures per subchain: its largest K over ~10^4
 # subchains is biased upwards) are recomputed with 100 closures per subchain.
 mkdir -p "$out/confirm"
-for f in "results/candycane$suffix"/*.h5; do
+for f in "$results/candycane$suffix"/*.h5; do
   name="$(basename "$f" .h5)"
   for k in $(knotflow-study --slip-candidates "$f"); do
     json="$out/confirm/${name}_frame$k.json"
     [ -s "$json" ] && continue
-    kf_log "slipknot candidate $name frame $k: knot matrix with 100 closures per subchain"
+    kf_log "slipknot candidate $name frame $k: knot matrix with $mat_confirm closures per subchain"
     knotflow-study --write-frame "$f" "$k" "$out/confirm/${name}_frame$k.xyz"
-    "${mpi[@]}" "$analyze" "$out/confirm/${name}_frame$k.xyz" --matrix --matrix-closures 100 --json > "$json.tmp"
+    "${mpi[@]}" "$analyze" "$out/confirm/${name}_frame$k.xyz" --matrix --matrix-closures "$mat_confirm" --json > "$json.tmp"
     mv "$json.tmp" "$json"
   done
 done
 kf_log "knotflow-study -> $out"
-args=(--trefoil "results/${trefoil_sweeps[0]}" --candycane "results/${cane_sweeps[0]}")
-[ "$extras" = 1 ] && args+=(--ensemble results/candycane_seeds)
+args=(--trefoil "$results/${trefoil_sweeps[0]}" --candycane "$results/${cane_sweeps[0]}" --closures "$closures")
+[ "$extras" = 1 ] && args+=(--ensemble "$results/candycane_seeds")
 knotflow-study "${args[@]}" --out "$out"
 if [ "$extras" = 1 ]; then
   kf_log "knotflow-study -> ${out}_p24 (the open trefoil with k_f(0) = 0.98)"
-  knotflow-study --trefoil results/trefoil_table2_p24 --out "${out}_p24"
+  knotflow-study --trefoil "$results/trefoil_table2_p24" --out "${out}_p24"
 fi

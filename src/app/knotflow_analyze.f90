@@ -1,6 +1,10 @@
 !> knotflow-analyze: knot analysis of a coordinate file (text + --json), or of HDF5 case files
 !> (the /analysis group). A thin program: parse and validate options, run the library, report.
-!> Errors become one line on stderr and a non-zero exit.
+!> Errors become one line on stderr and a non-zero exit: 2 for a usage error or a refused directory
+!> (nothing written), 1 for a failure while analysing.
+!> With several MPI ranks every decision (an error, what is already stored) is taken once and
+!> shared, so that the ranks always meet in the same collective call. Rank 0 alone reads the
+!> stored analysis and writes /analysis, holding the directory lock knotflow's sweeps take.
 program knotflow_analyze
   use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
   use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
@@ -16,7 +20,8 @@ program knotflow_analyze
     default_matrix_closures
   use kf_text_coords, only: read_coordinates
   use kf_analysis_farm, only: analysis_farm_t, farm_start, farm_stop, farm_max, farm_sum, farm_any, &
-    farm_barrier
+    farm_share
+  use kf_fs, only: lock_directory
   use kf_h5, only: h5_initialize, h5_finalize
   use kf_case_file, only: read_frames
   use kf_knot_case, only: frame_knots_t, shape_analysis_t, select_frames, analyse_frame_knots, analyse_shapes
@@ -47,18 +52,22 @@ program knotflow_analyze
   type(options_t) :: opt
   type(error_t), allocatable :: error
   type(analysis_farm_t) :: farm
+  !> Exit status: a failure while analysing; bad usage or a refused directory (nothing written).
+  integer, parameter :: status_failed = 1, status_refused = 2
+  integer :: status
 
   call parse_options(opt, error)
-  if (allocated(error)) call die(error%message)
+  if (allocated(error)) call die(error%message, status_refused)
   call farm_start(farm, error)
-  if (allocated(error)) call die(error%message)
+  if (allocated(error)) call die(error%message, status_failed)
   call keep_freed_heap()   ! after MPI start-up, which sets its own allocator options
+  status = status_failed
   if (is_case_file(opt%files(1))) then
-    call analyse_case_files(opt, farm, error)
+    call analyse_case_files(opt, farm, status, error)
   else
     call analyse_coordinates(opt, farm, error)
   end if
-  if (allocated(error)) call die(error%message)
+  if (allocated(error)) call die(error%message, status)
   call farm_stop(farm)
 
 contains
@@ -72,11 +81,22 @@ contains
     if (n >= 5) is_case_file = is_case_file .or. path(n - 4:n) == '.hdf5'
   end function is_case_file
 
-  subroutine die(message)
+  subroutine die(message, code)
     character(len=*), intent(in) :: message
+    integer, intent(in) :: code
     write (error_unit, '(a)') 'knotflow-analyze: error: '//message
-    call exit_program(1)       ! flushes; one line and a non-zero exit status, no runtime backtrace
+    call exit_program(code)    ! flushes; one line and a non-zero exit status, no runtime backtrace
   end subroutine die
+
+  !> True on every rank when `error` is set on any rank (a collective call: every rank makes it
+  !> at the same point); a rank without an error of its own gets one naming `what`.
+  logical function failed(farm, error, what)
+    type(analysis_farm_t), intent(in) :: farm
+    type(error_t), allocatable, intent(inout) :: error
+    character(len=*), intent(in) :: what
+    failed = farm_any(farm, allocated(error))
+    if (failed .and. .not. allocated(error)) call fatal_error(error, what//': failed on another rank')
+  end function failed
 
   subroutine usage()
     write (output_unit, '(a)') &
@@ -214,23 +234,23 @@ contains
     integer :: core(2), n
     logical :: found, slip
     call read_coordinates(opt%files(1), r, error)
-    if (allocated(error)) return
+    if (.not. allocated(error) .and. len_trim(opt%closure_points) > 0) &
+      call read_coordinates(opt%closure_points, pts, error)
+    if (failed(farm, error, trim(opt%files(1)))) return
     n = size(r, 2)
     if (len_trim(opt%closure_points) > 0) then
-      call read_coordinates(opt%closure_points, pts, error)
-      if (allocated(error)) return
       call analyse_closures(r, size(pts, 2), opt%seed, st, error, points=pts, per_closure=.true.)
     else
       call analyse_closures(r, opt%closures, opt%seed, st, error, per_closure=.true.)
     end if
-    if (allocated(error)) return
+    if (failed(farm, error, trim(opt%files(1)))) return
     found = .false.
     slip = .false.
     if (opt%matrix) then
       allocate (kmat(n, n))
       call knot_matrix(r, opt%matrix_closures, opt%seed, opt%min_length, kmat, error, &
                        part=farm%rank, nparts=farm%size)
-      if (allocated(error)) return
+      if (failed(farm, error, trim(opt%files(1)))) return
       flat = reshape(kmat, [n*n])
       where (ieee_is_nan(flat)) flat = -huge(1.0_wp)
       call farm_max(farm, flat)
@@ -331,75 +351,139 @@ contains
   end subroutine print_json
 
   !> Mode 2: HDF5 case files; writes /analysis of each (the trajectory is never touched).
-  subroutine analyse_case_files(opt, farm, error)
+  !> Rank 0 first takes the directory lock of every directory holding a case file (the lock a
+  !> knotflow sweep holds while it writes there): a directory being written is refused
+  !> (`status` = 2) before anything is read or written.
+  subroutine analyse_case_files(opt, farm, status, error)
     type(options_t), intent(in) :: opt
     type(analysis_farm_t), intent(in) :: farm
+    integer, intent(out) :: status
     type(error_t), allocatable, intent(out) :: error
     integer :: ifile
+    status = status_refused
+    if (farm%rank == 0) call lock_directories(opt, error)
+    if (failed(farm, error, 'the directory lock')) return
+    status = status_failed
     call h5_initialize(error)
-    if (allocated(error)) return
+    if (failed(farm, error, 'HDF5 start-up')) return
     do ifile = 1, opt%nfiles
       call analyse_case(trim(opt%files(ifile)), opt, farm, error)
-      if (farm_any(farm, allocated(error))) then
-        if (.not. allocated(error)) call fatal_error(error, 'case file '//trim(opt%files(ifile))// &
-          ': failed on another rank')
-        return
-      end if
+      if (failed(farm, error, 'case file '//trim(opt%files(ifile)))) return
     end do
     call h5_finalize(error)
   end subroutine analyse_case_files
 
-  !> Analyse one case file.
+  !> Lock each distinct directory of the case files once (a second lock of the same directory by
+  !> this process would be refused: flock locks belong to the open file).
+  subroutine lock_directories(opt, error)
+    type(options_t), intent(in) :: opt
+    type(error_t), allocatable, intent(out) :: error
+    character(len=path_len), allocatable :: dirs(:)
+    integer :: i, ndirs
+    allocate (dirs(opt%nfiles))
+    ndirs = 0
+    do i = 1, opt%nfiles
+      if (any(dirs(1:ndirs) == directory_of(opt%files(i)))) cycle
+      ndirs = ndirs + 1
+      dirs(ndirs) = directory_of(opt%files(i))
+      call lock_directory(trim(dirs(ndirs)), error)
+      if (allocated(error)) then
+        error%message = 'directory '''//trim(dirs(ndirs))//''' of '//trim(opt%files(i))//': '//error%message
+        return
+      end if
+    end do
+  end subroutine lock_directories
+
+  !> The directory part of `path` ('.' for a bare file name).
+  function directory_of(path) result(dir)
+    character(len=*), intent(in) :: path
+    character(len=path_len) :: dir
+    integer :: k
+    k = index(trim(path), '/', back=.true.)
+    if (k == 0) then
+      dir = '.'
+    else if (k == 1) then
+      dir = '/'
+    else
+      dir = path(1:k - 1)
+    end if
+  end function directory_of
+
+  !> Analyse one case file. Every rank reads the frames; rank 0 alone reads what a previous run
+  !> stored and decides what is left to compute (shared with the others), and writes /analysis.
   subroutine analyse_case(path, opt, farm, error)
     character(len=*), intent(in) :: path
     type(options_t), intent(in) :: opt
     type(analysis_farm_t), intent(in) :: farm
     type(error_t), allocatable, intent(out) :: error
     real(wp), allocatable :: t(:), r(:, :, :), flat(:), ev_time(:)
-    integer(i8), allocatable :: todo(:), need(:), mframes(:), ev_frame(:)
+    integer(i8), allocatable :: todo(:), need(:), mframes(:), ev_frame(:), compute(:)
     integer, allocatable :: ev_kind(:), ev_pos(:), pos_of(:)
     type(frame_knots_t) :: prev, fresh, all
     type(shape_analysis_t) :: shapes
     type(stored_matrix_t), allocatable :: mats(:)
     logical :: found
-    integer :: nframes, n, k, m, nneed
+    integer :: nframes, n, k, m
     call read_frames(path, t, r, error)
-    if (allocated(error)) return
-    nframes = size(t)
+    if (.not. allocated(error)) then
+      nframes = size(t)
+      if (nframes < 1) call fatal_error(error, 'case file '//path//': /frames is empty (nothing to analyse)')
+    end if
+    if (.not. allocated(error)) call matrix_frame_list(opt%matrix_frames, nframes, path, mframes, error)
+    if (failed(farm, error, 'case file '//path)) return
     n = size(r, 2)
-    if (nframes < 1) then
-      call fatal_error(error, 'case file '//path//': /frames is empty (nothing to analyse)')
-      return
-    end if
-    call matrix_frame_list(opt%matrix_frames, nframes, path, mframes, error)
-    if (allocated(error)) return
     todo = select_frames(nframes, opt%stride)
-    if (opt%force) then
-      allocate (prev%frame_index(0))
-    else
-      call read_previous_knots(path, opt%closures, opt%seed, prev, error)
-      if (allocated(error)) return
-    end if
-    ! frames still to do; pos_of(k) = position of todo(k) in prev (0 if absent)
-    allocate (pos_of(size(todo)))
-    do k = 1, size(todo)
-      pos_of(k) = 0
-      do m = 1, size(prev%frame_index)
-        if (prev%frame_index(m) == todo(k)) pos_of(k) = m
+    ! Rank 0: the stored k_f (pos_of(k) = position of todo(k) among them, 0 if absent), the
+    ! frames still to do (need) and the knot matrices still to compute (compute(k) = 1).
+    allocate (need(0), compute(size(mframes)), mats(size(mframes)), pos_of(size(todo)))
+    compute = 1
+    if (farm%rank == 0) then
+      if (opt%force) then
+        allocate (prev%frame_index(0))
+      else
+        call read_previous_knots(path, opt%closures, opt%seed, prev, error)
+      end if
+      if (.not. allocated(error)) then
+        do k = 1, size(todo)
+          pos_of(k) = 0
+          do m = 1, size(prev%frame_index)
+            if (prev%frame_index(m) == todo(k)) pos_of(k) = m
+          end do
+        end do
+        need = pack(todo, pos_of == 0)
+      end if
+      do k = 1, size(mframes)
+        if (opt%force .or. allocated(error)) exit
+        call read_previous_matrix(path, mframes(k), opt%matrix_closures, opt%min_length, mats(k), found, error)
+        if (.not. allocated(error) .and. found) compute(k) = 0
       end do
-    end do
-    nneed = count(pos_of == 0)
-    need = pack(todo, pos_of == 0)
-    call analyse_frame_knots(r, t, need, opt%closures, opt%seed, fresh, error, part=farm%rank, nparts=farm%size)
-    if (farm_any(farm, allocated(error))) then
-      if (.not. allocated(error)) call fatal_error(error, 'case file '//path//': failed on another rank')
-      return
     end if
+    if (failed(farm, error, 'case file '//path)) return
+    call farm_share(farm, need)
+    call farm_share(farm, compute)
+    call analyse_frame_knots(r, t, need, opt%closures, opt%seed, fresh, error, part=farm%rank, nparts=farm%size)
+    if (failed(farm, error, 'case file '//path)) return
     call farm_sum(farm, fresh%kf)
     flat = reshape(fresh%spectrum, [size(fresh%spectrum)])
     call farm_sum(farm, flat)
     fresh%spectrum = reshape(flat, shape(fresh%spectrum))
-    ! merge previous and fresh results in the order of todo
+    ! knot matrices not stored yet: computed by all ranks
+    do k = 1, size(mframes)
+      if (compute(k) == 0) cycle
+      mats(k)%frame = mframes(k)
+      mats(k)%time = t(mframes(k) + 1)
+      allocate (mats(k)%k(n, n))
+      call knot_matrix(r(:, :, mframes(k) + 1), opt%matrix_closures, opt%seed, opt%min_length, mats(k)%k, &
+                       error, part=farm%rank, nparts=farm%size)
+      if (failed(farm, error, 'case file '//path)) return
+      flat = reshape(mats(k)%k, [n*n])
+      where (ieee_is_nan(flat)) flat = -huge(1.0_wp)
+      call farm_max(farm, flat)
+      where (flat < -1.0_wp) flat = ieee_nan()
+      mats(k)%k = reshape(flat, [n, n])
+    end do
+    if (farm%rank /= 0) return
+    ! rank 0: merge previous and fresh results in the order of todo, and write
     allocate (all%frame_index(size(todo)), all%time(size(todo)), all%kf(size(todo)), &
               all%spectrum(n_knot_types, size(todo)), all%dominant(size(todo)))
     m = 0
@@ -419,39 +503,12 @@ contains
     call detect_transitions(all%kf, default_low, default_high, ev_kind, ev_pos)
     ev_frame = all%frame_index(ev_pos)
     ev_time = all%time(ev_pos)
-    ! knot matrices
-    allocate (mats(size(mframes)))
-    do k = 1, size(mframes)
-      found = .false.
-      if (.not. opt%force) then
-        call read_previous_matrix(path, mframes(k), opt%matrix_closures, opt%min_length, mats(k), found, error)
-        if (allocated(error)) return
-      end if
-      if (found) cycle
-      mats(k)%frame = mframes(k)
-      mats(k)%time = t(mframes(k) + 1)
-      allocate (mats(k)%k(n, n))
-      call knot_matrix(r(:, :, mframes(k) + 1), opt%matrix_closures, opt%seed, opt%min_length, mats(k)%k, &
-                       error, part=farm%rank, nparts=farm%size)
-      if (farm_any(farm, allocated(error))) then
-        if (.not. allocated(error)) call fatal_error(error, 'case file '//path//': failed on another rank')
-        return
-      end if
-      flat = reshape(mats(k)%k, [n*n])
-      where (ieee_is_nan(flat)) flat = -huge(1.0_wp)
-      call farm_max(farm, flat)
-      where (flat < -1.0_wp) flat = ieee_nan()
-      mats(k)%k = reshape(flat, [n, n])
-    end do
-    if (farm%rank == 0) then
-      call analyse_shapes(r, t, shapes, error)
-      if (.not. allocated(error)) &
-        call write_analysis(path, all, opt%closures, opt%seed, ev_kind, ev_frame, ev_time, default_low, &
-                            default_high, mats, opt%matrix_closures, opt%min_length, shapes, error)
-      if (.not. allocated(error)) write (output_unit, '(a,i0,a,i0,a,i0,a)') trim(path)//': ', size(todo), &
-        ' frames (', nneed, ' new), ', size(ev_kind), ' events written to /analysis'
-    end if
-    call farm_barrier(farm)
+    call analyse_shapes(r, t, shapes, error)
+    if (.not. allocated(error)) &
+      call write_analysis(path, all, opt%closures, opt%seed, ev_kind, ev_frame, ev_time, default_low, &
+                          default_high, mats, opt%matrix_closures, opt%min_length, shapes, error)
+    if (.not. allocated(error)) write (output_unit, '(a,i0,a,i0,a,i0,a)') trim(path)//': ', size(todo), &
+      ' frames (', size(need), ' new), ', size(ev_kind), ' events written to /analysis'
   end subroutine analyse_case
 
   !> The frames of --matrix-frames ('' none, 'last', or a comma-separated list), checked.

@@ -14,6 +14,7 @@ module kf_dynamics
   use kf_hydro_factory, only: make_hydro_model
   use kf_ode_system, only: ode_system_t
   use kf_pair_geometry, only: pair_geometry_t
+  use kf_rheology, only: fibre_stresslet_t, elastic_stresslet, shear_observables
   implicit none
   private
 
@@ -36,6 +37,7 @@ module kf_dynamics
     procedure :: step_begin => dynamics_step_begin
     procedure :: step_accepted => dynamics_step_accepted
     procedure :: step_rejected => dynamics_step_rejected
+    procedure :: stresslet => dynamics_stresslet
   end type dynamics_t
 
 contains
@@ -63,6 +65,24 @@ contains
     real(wp), intent(in) :: cutoff
     this%pair_cutoff = max(this%pair_cutoff, cutoff)
   end subroutine need_pairs
+  !> The fibre's stresslet at r(3, N) (kf_rheology): the hydrodynamic part from the model (exact
+  !> at r), the elastic part from the forces, and, in simple shear (v0 = (G_13 z, 0, 0)), the
+  !> viscosity and normal-stress coefficients (left 0 in other flows).
+  subroutine dynamics_stresslet(this, r, st, error)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    type(fibre_stresslet_t), intent(out) :: st
+    type(error_t), allocatable, intent(out) :: error
+    real(wp) :: g(3, 3)
+    call this%forces%compute(r, this%f)
+    call this%model%stresslet(r, this%f, this%flow%e, st%hydrodynamic, error)
+    if (allocated(error)) return
+    st%elastic = elastic_stresslet(r, this%f)
+    g = this%flow%g
+    g(1, 3) = 0.0_wp
+    if (this%flow%g(1, 3) /= 0.0_wp .and. all(g == 0.0_wp)) &
+      call shear_observables(st, size(r, 2), this%flow%g(1, 3))
+  end subroutine dynamics_stresslet
 
   !> Bead velocities v(3, N) at positions r(3, N), at time t of an integration (optional; a
   !> hydrodynamic model that reuses work between the stages needs it).

@@ -4,6 +4,16 @@
 !> of force-free, torque-free beads in the ambient rate of strain E.
 !> Units of PHYSICS.md section 1: an isolated bead has mobility 1/3.
 !>
+!> `stresslet(r, f, e, s, error)`: the sum over the beads of their hydrodynamic stresslets
+!> (Batchelor's sign: the symmetric traceless first moment of the traction the fluid exerts on
+!> each bead, about the bead's centre; an isolated bead in the strain E has (20/3) pi eta a^3 E)
+!> for beads at r that carry the forces f in the ambient strain e, exact at r whatever a model
+!> reuses. Units pi eta d^3 (rate of strain in the time unit): an isolated bead gives (5/6) E.
+!> The default is exact for any model whose grand mobility is symmetric, by the reciprocal
+!> theorem: the stresslet due to the forces satisfies S_F : E' = - sum_j F_j . (C:E')_j, so it
+!> follows from the model's own disturbance C; to it add N (5/6) E (every bead's own) and the
+!> model's strain-strain pair couplings (`add_pair_strain_stresslet`, none by default).
+!>
 !> The expensive work depends only on positions: `prepare(r)` (assemble, factorise), then any
 !> number of cheap `apply_mobility(f, u)` / `add_strain_disturbance(e, u)` calls.
 !>
@@ -16,6 +26,7 @@ module kf_hydro_model
   use kf_kinds, only: wp, i8
   use kf_error, only: error_t
   use kf_pair_geometry, only: pair_geometry_t
+  use kf_strain_basis, only: strain_basis, tensor_from_pairings
   implicit none
   private
 
@@ -45,7 +56,13 @@ module kf_hydro_model
     procedure :: step_rejected
     procedure :: statistics
     procedure :: pair_cutoff
+    procedure :: stresslet
+    procedure :: add_pair_strain_stresslet
   end type hydro_model_t
+
+  !> Stresslet of an isolated bead per unit rate of strain, (20/3) pi eta a^3 with a = d/2, in
+  !> units of pi eta d^3.
+  real(wp), parameter, public :: single_bead_stresslet = 5.0_wp/6.0_wp
 
   abstract interface
     !> Set up for bead centres r(3, N); `pairs`: the close pairs of r if the caller has them
@@ -145,5 +162,36 @@ contains
     class(hydro_model_t), intent(in) :: this
     pair_cutoff = 0.0_wp
   end function pair_cutoff
+  !> s = the sum of the beads' hydrodynamic stresslets (see the module header) for beads at
+  !> r(3, N) carrying the forces f(3, N) (torque-free) in the ambient symmetric traceless
+  !> strain e: prepares the model at r, so a model's cached state is that of r afterwards.
+  subroutine stresslet(this, r, f, e, s, error)
+    class(hydro_model_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :), f(:, :), e(3, 3)
+    real(wp), intent(out) :: s(3, 3)
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: u(:, :)
+    real(wp) :: m(5)
+    integer :: k
+    s = 0.0_wp
+    call this%prepare(r, error)
+    if (allocated(error)) return
+    allocate (u(3, size(r, 2)))
+    do k = 1, 5
+      u = 0.0_wp
+      call this%add_strain_disturbance(strain_basis(k), u)
+      m(k) = -sum(f*u)
+    end do
+    s = real(size(r, 2), wp)*single_bead_stresslet*e + tensor_from_pairings(m)
+    call this%add_pair_strain_stresslet(r, e, s)
+  end subroutine stresslet
+
+  !> s = s + the stresslets that the beads' own strain stresslets induce on each other (after
+  !> prepare at r). The default adds nothing: beads that do not disturb each other's strain.
+  subroutine add_pair_strain_stresslet(this, r, e, s)
+    class(hydro_model_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :), e(3, 3)
+    real(wp), intent(inout) :: s(3, 3)
+  end subroutine add_pair_strain_stresslet
 
 end module kf_hydro_model

@@ -5,6 +5,17 @@
 !>   r <  1: mu_ij = 1/3 [ (1 - 9r/16) I + (3r/16) r_hat r_hat ]
 !>   r >= 1: C_ij:E = -1/(12 r^4) E r_hat - 5/(16 r^2) (1 - 2/(3r^2)) (r_hat.E.r_hat) r_hat
 !>   r <  1: C_ij:E = (5r^2/12 - r/2) E r_hat - (5r^2/48) (r_hat.E.r_hat) r_hat
+!> The stresslet (kf_hydro_model `stresslet`): every bead's own (5/6) E, the stresslets due to
+!> the forces from the reciprocal theorem (the transpose of C above, overlaps included), and the
+!> generalised-RPY strain-strain pair coupling (the same superposition that gives C: the
+!> Faxen-corrected strain, (1 + a^2/10 lap), at bead i of the field (1 + a^2/10 lap) u_S of bead
+!> j's stresslet S0 = (20/3) pi eta a^3 E; Wajnryb et al. 2013 above, and Batchelor & Green,
+!> J. Fluid Mech. 56, 401 (1972) for the single-sphere fields). With a = 1/2, n = r_hat,
+!> Q = n.E.n, e = E.n, per pair (both beads) in units pi eta d^3:
+!>   S_pair = (5/3) E'(r),  E'(r) = -(5/16) { [e n + n e + Q I - 5 Q n n]/r^3
+!>            + [(4/5) E - 4 (e n + n e) - 2 Q I + 14 Q n n]/(4 r^5) }.
+!> For overlapping beads (r < 1) this coupling is taken at r = 1 (the overlapping-sphere form of
+!> the strain-strain coupling is not implemented; an approximation used only while beads overlap).
 !> prepare() tabulates per pair i < j the separation and the scalar coefficients (one sqrt
 !> per pair, branch-free, vectorised); apply_mobility and add_strain_disturbance are then
 !> single pair loops that use the symmetry of the pair (mu_ji = mu_ij, C_ji:E = -C_ij:E) and
@@ -31,6 +42,7 @@ module kf_hydro_rpy
     procedure :: add_strain_disturbance => rpy_disturb
     procedure :: name => rpy_name
     procedure :: mobility_matrix => rpy_mobility_matrix
+    procedure :: add_pair_strain_stresslet => rpy_pair_strain_stresslet
   end type rpy_model_t
 
   real(wp), parameter :: third = 1.0_wp/3.0_wp
@@ -253,6 +265,35 @@ contains
       uz(i) = uz(i) + uzi
     end do
   end subroutine strain_pairs
+
+  !> s = s + the strain-strain pair stresslets of every pair (module header), after prepare.
+  subroutine rpy_pair_strain_stresslet(this, r, e, s)
+    class(rpy_model_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :), e(3, 3)
+    real(wp), intent(inout) :: s(3, 3)
+    integer :: k
+    real(wp) :: d(3), rr, nv(3), ev(3), q, en(3, 3), nn(3, 3), acc(3, 3), eye(3, 3)
+    eye = 0.0_wp
+    eye(1, 1) = 1.0_wp
+    eye(2, 2) = 1.0_wp
+    eye(3, 3) = 1.0_wp
+    acc = 0.0_wp
+    do k = 1, this%n*(this%n - 1)/2
+      d = [this%dx(k), this%dy(k), this%dz(k)]
+      rr = norm2(d)
+      if (.not. rr > 0.0_wp) cycle   ! coincident beads: no direction, no coupling
+      nv = d/rr
+      rr = max(rr, 1.0_wp)
+      ev = matmul(e, nv)
+      q = dot_product(nv, ev)
+      en = spread(ev, 2, 3)*spread(nv, 1, 3)
+      en = en + transpose(en)
+      nn = spread(nv, 2, 3)*spread(nv, 1, 3)
+      acc = acc + (en + q*eye - 5.0_wp*q*nn)/rr**3 &
+        + (0.8_wp*e - 4.0_wp*en - 2.0_wp*q*eye + 14.0_wp*q*nn)/(4.0_wp*rr**5)
+    end do
+    s = s - (5.0_wp/3.0_wp)*(5.0_wp/16.0_wp)*acc
+  end subroutine rpy_pair_strain_stresslet
 
   function rpy_name(this) result(label)
     class(rpy_model_t), intent(in) :: this

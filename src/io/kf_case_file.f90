@@ -27,6 +27,11 @@
 !>   min_distance, max_bond_strain} (run totals, rewritten with every frame); and the monitor
 !>   state in /checkpoint/diagnostics/{counters, values, ongoing} (`restore_diagnostics`).
 !>   Files without /frames/diagnostics are valid: diagnostics are optional.
+!> - With the fibre's stresslet (kf_rheology; `enable_stresslet` after `create`):
+!>   /frames/stresslet/{hydrodynamic, elastic} (nframes, 3, 3) float64 (symmetric traceless,
+!>   units pi eta d^3 gamma_dot, Batchelor's sign) and /frames/stresslet/{viscosity, psi1, psi2}
+!>   (nframes,) float64 (intrinsic-viscosity form, kf_rheology), one entry per frame, truncated
+!>   with the frames on resume. Files without /frames/stresslet are valid: it is optional.
 !>
 !> Choices made here:
 !> - The file is created under its final name (no '<path>.tmp' and rename): the very first
@@ -59,6 +64,7 @@ module kf_case_file
   use kf_error, only: error_t, fatal_error
   use kf_shape, only: shape_t
   use kf_run_diagnostics, only: run_diagnostics_t, configuration_diagnostics
+  use kf_rheology, only: fibre_stresslet_t
   use kf_build_info, only: knotflow_version, knotflow_git_hash, knotflow_compiler, knotflow_flags
   use kf_h5, only: h5_file_t, h5_create_file, h5_open_file, h5_close_file, h5_flush, &
     h5_create_group, h5_exists, h5_attr_exists, h5_write_attr, h5_read_attr, h5_write, h5_read, &
@@ -117,6 +123,7 @@ module kf_case_file
     integer(i8) :: nframes = 0
     real(wp) :: last_time = 0.0_wp
     logical :: diagnostics = .false.     !< the file has /frames/diagnostics
+    logical :: stresslet = .false.       !< the file has /frames/stresslet
     real(wp) :: flushed_time = -1.0_wp   !< time of the last checkpoint flushed (-1: none)
   contains
     !> create(path, case_name, n_beads, scene_text, [scene_attrs,] rotation, error): the
@@ -135,6 +142,8 @@ module kf_case_file
     procedure :: enable_diagnostics
     procedure :: has_diagnostics
     procedure :: restore_diagnostics
+    procedure :: enable_stresslet
+    procedure :: has_stresslet
     procedure :: read_counter
     !> Write one more root attribute (same kinds as `attribute_list_t%add`).
     generic :: write_attribute => write_attr_str, write_attr_i4, write_attr_i8, write_attr_real, &
@@ -155,6 +164,13 @@ module kf_case_file
     '/frames/diagnostics/overlap_episodes', '/frames/diagnostics/min_distance', &
     '/frames/diagnostics/max_bond_strain']
   integer, parameter :: diag_kinds(5) = [h5_int64, h5_int32, h5_int64, h5_real, h5_real]
+
+  !> The /frames/stresslet datasets: the first two hold a 3 x 3 tensor per frame, the others a
+  !> number.
+  character(len=*), parameter :: stresslet_sets(5) = [character(len=40) :: &
+    '/frames/stresslet/hydrodynamic', '/frames/stresslet/elastic', '/frames/stresslet/viscosity', &
+    '/frames/stresslet/psi1', '/frames/stresslet/psi2']
+  integer, parameter :: stresslet_tensors = 2
 
 contains
 
@@ -276,6 +292,7 @@ contains
     this%n_beads = n_beads
     this%nframes = 0
     this%diagnostics = .false.
+    this%stresslet = .false.
     this%flushed_time = -1.0_wp
     call h5_write_attr(this%file, '/', 'status', 'running', error)
     if (allocated(error)) return
@@ -353,6 +370,39 @@ contains
     call h5_flush(this%file, error)
   end subroutine enable_diagnostics
 
+  !> Create the (empty) /frames/stresslet datasets of a file just created, before its first
+  !> frame: from then on every `append_frame` must pass the fibre's stresslet.
+  subroutine enable_stresslet(this, error)
+    class(case_file_t), intent(inout) :: this
+    type(error_t), allocatable, intent(out) :: error
+    integer :: i
+    if (.not. this%file%is_open()) then
+      call fatal_error(error, 'case file: enable_stresslet on a file that is not open')
+      return
+    end if
+    if (this%nframes > 0) then
+      call fatal_error(error, "case file '"//this%file%name()//"': the stresslet must be enabled before the first frame")
+      return
+    end if
+    do i = 1, size(stresslet_sets)
+      if (h5_exists(this%file, trim(stresslet_sets(i)))) cycle
+      if (i <= stresslet_tensors) then
+        call h5_create_extendible(this%file, trim(stresslet_sets(i)), h5_real, [3, 3], error)
+      else
+        call h5_create_extendible(this%file, trim(stresslet_sets(i)), h5_real, [integer ::], error)
+      end if
+      if (allocated(error)) return
+    end do
+    this%stresslet = .true.
+    call h5_flush(this%file, error)
+  end subroutine enable_stresslet
+
+  !> Does the open file hold the fibre's stresslet (/frames/stresslet)?
+  pure logical function has_stresslet(this)
+    class(case_file_t), intent(in) :: this
+    has_stresslet = this%stresslet
+  end function has_stresslet
+
   !> Does the open file hold run diagnostics (/frames/diagnostics)?
   pure logical function has_diagnostics(this)
     class(case_file_t), intent(in) :: this
@@ -387,8 +437,9 @@ contains
   !> (`enable_diagnostics`) needs `diagnostics`, the run's monitor after the frame's last step:
   !> its per-frame values, run totals (root attributes) and state (checkpoint) are written too.
   !> `stepper`, the time stepper's state after the frame's last step, goes to
-  !> /checkpoint/stepper.
-  subroutine append_frame(this, t, r, shape, steps, rejected, dt, error, diagnostics, stepper)
+  !> /checkpoint/stepper. A file with the stresslet (`enable_stresslet`) needs `stresslet`,
+  !> the fibre's stresslet at the frame.
+  subroutine append_frame(this, t, r, shape, steps, rejected, dt, error, diagnostics, stepper, stresslet)
     class(case_file_t), intent(inout) :: this
     real(wp), intent(in) :: t
     real(wp), intent(in) :: r(:, :)
@@ -398,6 +449,7 @@ contains
     type(error_t), allocatable, intent(out) :: error
     type(run_diagnostics_t), intent(in), optional :: diagnostics
     type(stepper_checkpoint_t), intent(in), optional :: stepper
+    type(fibre_stresslet_t), intent(in), optional :: stresslet
     real(wp), allocatable :: rc(:, :)
     integer(i8) :: digest(2), counters(5)
     real(wp) :: values(5)
@@ -412,6 +464,14 @@ contains
     else if (present(diagnostics) .and. .not. this%diagnostics) then
       call fatal_error(error, "case file '"//this%file%name()//"': append_frame got diagnostics "// &
         'but the file has none (enable_diagnostics)')
+      return
+    end if
+    if (this%stresslet .and. .not. present(stresslet)) then
+      call fatal_error(error, "case file '"//this%file%name()//"': append_frame needs the stresslet")
+      return
+    else if (present(stresslet) .and. .not. this%stresslet) then
+      call fatal_error(error, "case file '"//this%file%name()//"': append_frame got a stresslet "// &
+        'but the file has none (enable_stresslet)')
       return
     end if
     if (size(r, 1) /= 3 .or. size(r, 2) /= this%n_beads) then
@@ -445,6 +505,10 @@ contains
     if (allocated(error)) return
     if (present(diagnostics)) then
       call write_diagnostics_frame(this%file, r, diagnostics, error)
+      if (allocated(error)) return
+    end if
+    if (present(stresslet)) then
+      call write_stresslet_frame(this%file, stresslet, error)
       if (allocated(error)) return
     end if
     ! The frame reaches the disk before the checkpoint is touched: a write that fails here (full
@@ -495,6 +559,21 @@ contains
     if (.not. allocated(error)) call h5_append(file, '/frames/diagnostics/min_distance', dmin, error)
     if (.not. allocated(error)) call h5_append(file, '/frames/diagnostics/max_bond_strain', strain, error)
   end subroutine write_diagnostics_frame
+
+  !> Per-frame values of the fibre's stresslet.
+  subroutine write_stresslet_frame(file, st, error)
+    type(h5_file_t), intent(in) :: file
+    type(fibre_stresslet_t), intent(in) :: st
+    type(error_t), allocatable, intent(out) :: error
+    real(wp) :: a(3, 3)
+    a = st%hydrodynamic
+    call h5_append(file, trim(stresslet_sets(1)), a, error)
+    a = st%elastic
+    if (.not. allocated(error)) call h5_append(file, trim(stresslet_sets(2)), a, error)
+    if (.not. allocated(error)) call h5_append(file, trim(stresslet_sets(3)), st%viscosity, error)
+    if (.not. allocated(error)) call h5_append(file, trim(stresslet_sets(4)), st%psi1, error)
+    if (.not. allocated(error)) call h5_append(file, trim(stresslet_sets(5)), st%psi2, error)
+  end subroutine write_stresslet_frame
 
   !> Run totals (root attributes) and checkpoint state of the run diagnostics (the state
   !> written is returned in `counters`, `values`, `ongoing`).
@@ -571,7 +650,7 @@ contains
     integer(i8) :: digest(2), stored_digest
     character(len=32), parameter :: other_sets(4) = [character(len=32) :: '/frames/positions', &
       '/frames/observables/close_pairs', '/frames/integrator/steps', '/frames/integrator/rejected']
-    character(len=40) :: all_sets(size(frame_real_sets) + size(other_sets) + size(diag_sets))
+    character(len=40) :: all_sets(size(frame_real_sets) + size(other_sets) + size(diag_sets) + size(stresslet_sets))
     integer :: n_sets
     logical :: with_diag
     call this%close()
@@ -630,6 +709,7 @@ contains
       if (allocated(error)) return
     end if
     this%diagnostics = h5_exists(this%file, trim(diag_sets(1)))
+    this%stresslet = h5_exists(this%file, trim(stresslet_sets(1)))
     ! Files written since the digest exists: every part must come from the same frame.
     if (h5_exists(this%file, '/checkpoint/digest')) then
       call h5_read(this%file, '/checkpoint/digest', stored_digest, error)
@@ -660,6 +740,10 @@ contains
     if (this%diagnostics) then
       all_sets(n_sets + 1:n_sets + size(diag_sets)) = diag_sets
       n_sets = n_sets + size(diag_sets)
+    end if
+    if (this%stresslet) then
+      all_sets(n_sets + 1:n_sets + size(stresslet_sets)) = stresslet_sets
+      n_sets = n_sets + size(stresslet_sets)
     end if
     do i = 1, n_sets
       call h5_length(this%file, trim(all_sets(i)), length, error)
@@ -929,13 +1013,13 @@ contains
     real(wp), intent(in) :: t_end
     type(error_t), allocatable, intent(out) :: error
     type(h5_file_t) :: file
-    real(wp), allocatable :: t(:), r(:, :, :), values(:), rc(:, :)
+    real(wp), allocatable :: t(:), r(:, :, :), values(:), rc(:, :), tensors(:, :, :)
     integer(i4), allocatable :: ivalues(:)
     integer(i8), allocatable :: lvalues(:)
     integer(i8) :: nframes, length
     integer(i4) :: n_beads
     integer :: k, bad
-    character(len=40) :: sets(size(frame_real_sets) + 3 + size(diag_sets))
+    character(len=40) :: sets(size(frame_real_sets) + 3 + size(diag_sets) + size(stresslet_sets))
     integer :: kinds(size(sets)), n_sets
     call h5_open_file(file, path, .false., error)
     if (allocated(error)) return
@@ -1011,6 +1095,11 @@ contains
         kinds(n_sets + 1:n_sets + size(diag_sets)) = diag_kinds
         n_sets = n_sets + size(diag_sets)
       end if
+      if (h5_exists(file, trim(stresslet_sets(1)))) then
+        sets(n_sets + 1:n_sets + size(stresslet_sets)) = stresslet_sets
+        kinds(n_sets + 1:n_sets + size(stresslet_sets)) = h5_real
+        n_sets = n_sets + size(stresslet_sets)
+      end if
       do k = 1, n_sets
         call h5_length(file, trim(sets(k)), length, error)
         if (allocated(error)) return
@@ -1021,7 +1110,11 @@ contains
         end if
         select case (kinds(k))
         case (h5_real)
-          call h5_read(file, trim(sets(k)), values, error)
+          if (any(sets(k) == stresslet_sets(1:stresslet_tensors))) then
+            call h5_read(file, trim(sets(k)), tensors, error)
+          else
+            call h5_read(file, trim(sets(k)), values, error)
+          end if
         case (h5_int32)
           call h5_read(file, trim(sets(k)), ivalues, error)
         case default

@@ -1,10 +1,11 @@
 !> The MPI side of knotflow-analyze: start/stop, the rank and size, and the reductions that merge
-!> per-rank partial results (entries a rank did not compute are zero for sums, -huge for maxima).
+!> per-rank partial results (entries a rank did not compute are zero for sums, -huge for maxima),
+!> and the sharing of what rank 0 decided, so that every rank takes the same branch.
 module kf_analysis_farm
   use mpi_f08, only: MPI_Comm, MPI_COMM_WORLD, MPI_Init, MPI_Finalize, MPI_Initialized, &
     MPI_Comm_rank, MPI_Comm_size, MPI_Allreduce, MPI_IN_PLACE, MPI_DOUBLE_PRECISION, &
-    MPI_INTEGER, MPI_SUM, MPI_MAX, MPI_Barrier, MPI_Abort, MPI_SUCCESS
-  use kf_kinds, only: wp
+    MPI_INTEGER, MPI_INTEGER8, MPI_SUM, MPI_MAX, MPI_Barrier, MPI_Abort, MPI_Bcast, MPI_SUCCESS
+  use kf_kinds, only: wp, i8
   use kf_error, only: error_t, fatal_error
   implicit none
   private
@@ -16,7 +17,7 @@ module kf_analysis_farm
     integer :: size = 1
   end type analysis_farm_t
 
-  public :: farm_start, farm_stop, farm_sum, farm_max, farm_barrier, farm_abort, farm_any
+  public :: farm_start, farm_stop, farm_sum, farm_max, farm_barrier, farm_abort, farm_any, farm_share
 
 contains
 
@@ -84,5 +85,21 @@ contains
     if (farm%size > 1) call MPI_Allreduce(MPI_IN_PLACE, v, 1, MPI_INTEGER, MPI_MAX, farm%comm, ierr)
     farm_any = v(1) > 0
   end function farm_any
+
+  !> Rank 0's list `x` on every rank (its size included): a decision taken once, on rank 0.
+  subroutine farm_share(farm, x)
+    type(analysis_farm_t), intent(in) :: farm
+    integer(i8), allocatable, intent(inout) :: x(:)
+    integer :: n(1), ierr
+    if (farm%size == 1) return
+    n = 0
+    if (farm%rank == 0) n = size(x)
+    call MPI_Bcast(n, 1, MPI_INTEGER, 0, farm%comm, ierr)
+    if (farm%rank /= 0) then
+      if (allocated(x)) deallocate (x)
+      allocate (x(n(1)))
+    end if
+    if (n(1) > 0) call MPI_Bcast(x, n(1), MPI_INTEGER8, 0, farm%comm, ierr)
+  end subroutine farm_share
 
 end module kf_analysis_farm

@@ -17,6 +17,7 @@ module kf_case_runner
   use kf_shape, only: shape_t, compute_shape
   use kf_case_file, only: case_file_t, case_file_status, stepper_checkpoint_t, verify_case_file
   use kf_run_diagnostics, only: run_diagnostics_t, diag_pair_cutoff
+  use kf_rheology, only: fibre_stresslet_t
   use kf_fs, only: remove_file, move_aside
   use kf_case_match, only: check_reusable
   use kf_h5, only: h5_extend_truncated
@@ -71,13 +72,14 @@ contains
     integer(i8) :: hydro_base(4)   !< hydro counters of the run before a resume
     type(shape_t) :: obs
     type(run_diagnostics_t), allocatable :: diag   !< allocated only with diagnostics: else absent
+    type(fibre_stresslet_t), allocatable :: st     !< allocated only with the stresslet: else absent
     real(wp), allocatable :: r(:, :)
     real(wp) :: rotation(3, 3), t, t_next, dt
     integer(i8) :: steps, rejected, nframes
     character(len=:), allocatable :: path, state, name, moved_to
     integer(int64) :: clock0, clock_last, clock_now, rate
     real(wp) :: t_start
-    logical :: resumed, with_diag, unreadable, damaged, extended
+    logical :: resumed, with_diag, with_stresslet, unreadable, damaged, extended
     integer(i8) :: old_size, new_size
 
     path = case_path(sc)
@@ -91,6 +93,7 @@ contains
     end if
     resumed = .false.
     with_diag = sc%output%diagnostics
+    with_stresslet = sc%output%stresslet
     if (index(state, 'corrupt: ') == 1) then
       ! A file cut short by a failed write (full disk) cannot be opened until it has its
       ! recorded size again; its checkpoint is then checked like any other.
@@ -135,6 +138,8 @@ contains
         resumed = .true.
         ! a file written before the run diagnostics existed is continued without them
         with_diag = with_diag .and. file%has_diagnostics()
+        ! (the scene match guarantees that a file asked for the stresslet was written with it)
+        with_stresslet = with_stresslet .and. file%has_stresslet()
       else
         state = 'corrupt: its checkpoint cannot be resumed: '//error%message
         deallocate (error)
@@ -180,6 +185,7 @@ contains
       call dyn%need_pairs(diag_pair_cutoff)
       call diag%share_pairs(dyn%pairs)
     end if
+    if (with_stresslet) allocate (st)
     if (resumed) then
       if (with_diag) call file%restore_diagnostics(diag, error)
       if (.not. allocated(error)) call read_hydro_counters(error)
@@ -199,6 +205,7 @@ contains
       call file%create(path, name, size(r, 2), scene_text(sc), rotation, error)
       if (.not. allocated(error)) call write_scene_attributes(file, sc, error)
       if (.not. allocated(error) .and. with_diag) call file%enable_diagnostics(error)
+      if (.not. allocated(error) .and. with_stresslet) call file%enable_stresslet(error)
       if (allocated(error)) then
         call write_failed(error%message)
         return
@@ -206,10 +213,11 @@ contains
       t = 0.0_wp
       nframes = 0
       call compute_shape(r, obs, error)
+      if (.not. allocated(error) .and. with_stresslet) call dyn%stresslet(r, st, error)
       if (.not. allocated(error)) then
         if (with_diag) call diag%start(t, r)
         call integ%get_state(saved%reals, saved%ints)
-        call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt(), error, diag, saved)
+        call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt(), error, diag, saved, st)
         if (allocated(error)) then
           call write_failed(error%message)
           return
@@ -234,12 +242,13 @@ contains
         return
       end if
       call compute_shape(r, obs, error)
+      if (.not. allocated(error) .and. with_stresslet) call dyn%stresslet(r, st, error)
       if (allocated(error)) then
         call fail(error%message)
         return
       end if
       call integ%get_state(saved%reals, saved%ints)
-      call file%append_frame(t, r, obs, integ%steps(), integ%rejected(), integ%dt(), error, diag, saved)
+      call file%append_frame(t, r, obs, integ%steps(), integ%rejected(), integ%dt(), error, diag, saved, st)
       if (.not. allocated(error)) call write_hydro_counters(error)
       if (allocated(error)) then
         call write_failed(error%message)

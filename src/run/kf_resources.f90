@@ -9,8 +9,8 @@
 !>   (O(N): the close pairs of a chain no denser than close packing, about 2.4 KiB per bead);
 !> - hydrodynamic model: 'rpy' keeps 7 float64 pair tables (kf_hydro_rpy: 56 P); 'multipole'
 !>   the dense 3N x 3N mobility and 6N x 6N friction (360 N^2), three more 6N x 6N matrices
-!>   with update = 'adaptive' (864 N^2): a lower bound (the many-body system comes on top);
-!>   'none' nothing.
+!>   with update = 'adaptive' (864 N^2), one more (288 N^2) for the stresslet with lubrication
+!>   (`&output stresslet`): a lower bound (the many-body system comes on top); 'none' nothing.
 !> The estimate is compared with the machine's physical memory (/proc/meminfo MemTotal; no
 !> check where that cannot be read).
 module kf_resources
@@ -30,6 +30,8 @@ module kf_resources
   !> Bytes of one frame besides the positions (observables, integrator, diagnostics, chunk
   !> overhead): a round upper figure.
   integer(i8), parameter :: per_frame_bytes = 256_i8
+  !> Bytes of one frame's stresslet (`&output stresslet`): 21 float64.
+  integer(i8), parameter :: stresslet_frame_bytes = 168_i8
 
   !> The estimate for one case.
   type, public :: case_resources_t
@@ -60,6 +62,8 @@ contains
     case ('multipole')
       res%hydro_bytes = 360_i8*n*n
       if (sc%hydro%update == 'adaptive') res%hydro_bytes = res%hydro_bytes + 864_i8*n*n
+      ! the stresslet's own grand friction with lubrication (kf_hydro_multipole `stresslet`)
+      if (sc%output%stresslet .and. sc%hydro%lubrication) res%hydro_bytes = res%hydro_bytes + 288_i8*n*n
     case default
       res%hydro_bytes = 0
     end select
@@ -74,6 +78,8 @@ contains
       res%frames = 10_i8**15
     end if
     res%file_bytes = res%frames*(24_i8*n + per_frame_bytes)
+    ! the stresslet: two 3 x 3 tensors and three numbers per frame
+    if (sc%output%stresslet) res%file_bytes = res%file_bytes + res%frames*stresslet_frame_bytes
   end function estimate_resources
 
   !> Refuse the scene `sc` (`n_beads` beads) when a case would not fit in `memory_limit` bytes

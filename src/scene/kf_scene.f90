@@ -66,6 +66,7 @@ module kf_scene
     real(wp) :: frame_interval = 1.0_wp             !< simulated time between frames
     real(wp) :: progress_interval = 10.0_wp         !< wall seconds between progress lines
     logical :: diagnostics = .true.                 !< strand passages, overlaps, bond strain per step
+    logical :: stresslet = .false.                  !< the fibre's stresslet and rheology per frame
   end type output_params_t
 
   !> The whole scene of one case.

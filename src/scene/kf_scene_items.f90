@@ -88,6 +88,7 @@ contains
       call add_r(items, 'output.frame_interval', o%frame_interval)
       call add_r(items, 'output.progress_interval', o%progress_interval)
       call add_l(items, 'output.diagnostics', o%diagnostics)
+      call add_l(items, 'output.stresslet', o%stresslet)
     end associate
   end subroutine scene_items
 

@@ -199,14 +199,14 @@ contains
       character(len=*), intent(inout) :: msg
       character(len=path_len) :: directory, case_name
       real(wp) :: frame_interval, progress_interval
-      logical :: diagnostics
-      namelist /output/ directory, case_name, frame_interval, progress_interval, diagnostics
+      logical :: diagnostics, stresslet
+      namelist /output/ directory, case_name, frame_interval, progress_interval, diagnostics, stresslet
       associate (p => sc%output)
         directory = p%directory; case_name = p%case_name; frame_interval = p%frame_interval
-        progress_interval = p%progress_interval; diagnostics = p%diagnostics
+        progress_interval = p%progress_interval; diagnostics = p%diagnostics; stresslet = p%stresslet
         read (text, nml=output, iostat=ios, iomsg=msg)
         p%directory = directory; p%case_name = case_name; p%frame_interval = frame_interval
-        p%progress_interval = progress_interval; p%diagnostics = diagnostics
+        p%progress_interval = progress_interval; p%diagnostics = diagnostics; p%stresslet = stresslet
       end associate
     end subroutine read_output
 
@@ -522,6 +522,16 @@ contains
       if (verify(trim(o%case_name), 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.-+') /= 0) then
         call bad(error, f, 'output', 'case_name', quoted(o%case_name), &
           'letters, digits and _ . - + only'); return
+      end if
+      ! the stresslet's rheological observables are those of simple shear (kf_rheology), and a
+      ! multipole model represents the beads' stresslets only from L = 2 on
+      if (o%stresslet .and. .not. (sc%flow%flow_type == 'shear' .and. sc%flow%shear_rate /= 0.0_wp)) then
+        call bad(error, f, 'output', 'stresslet', '.true.', ".false. unless &flow flow_type = 'shear' "// &
+          'with shear_rate /= 0 (the viscosity and normal-stress coefficients are those of simple shear)'); return
+      end if
+      if (o%stresslet .and. sc%hydro%model == 'multipole' .and. sc%hydro%order < 2) then
+        call bad(error, f, 'output', 'stresslet', '.true.', '.false. with &hydro model = '// &
+          "'multipole' and order = 1 (L = 1 has no stresslet moments; use order >= 2)"); return
       end if
     end associate
   end subroutine validate_scene

@@ -14,6 +14,8 @@
    while the checkpoint is rewritten (frequent in this fast run) leaves it inconsistent: the
    file is moved aside and the case recomputed correctly; the scenario is then repeated (up to
    4 times) until a kill lands between checkpoints.
+   The fibre's stresslet (&output stresslet, /frames/stresslet) is truncated and continued with
+   the frames: one entry per frame, those before the kill equal to the uninterrupted run's.
 2. A checkpoint written before the steppers saved their state (no /checkpoint/stepper, and no
    /checkpoint/digest, which came later: both removed here from a killed run) still resumes, from /checkpoint/{dt, steps, rejected}, and finishes
    with every frame, close to the uninterrupted run.
@@ -41,7 +43,7 @@ def scene(name, extra=""):
         f.write("""&chain shape = 'trefoil', orientation = 'c' /
 &forces excluded_volume = .true. /
 &integrator t_end = 300.0 %s /
-&output directory = '%s', case_name = 'c', frame_interval = 1.0, progress_interval = 0.0 /
+&output directory = '%s', case_name = 'c', frame_interval = 1.0, progress_interval = 0.0, stresslet = .true. /
 """ % (extra, os.path.join(work, name)))
     return path
 
@@ -150,6 +152,20 @@ assert abs(tot_res["min_distance"] - tot_ref["min_distance"]) < 1e-2, (tot_res, 
 assert abs(tot_res["max_bond_strain"] - tot_ref["max_bond_strain"]) < 1e-2, (tot_res, tot_ref)
 assert abs(tot_res["overlap_max_duration"] - tot_ref["overlap_max_duration"]) < 0.1, (tot_res, tot_ref)
 assert abs(tot_res["overlap_mean_duration"] - tot_ref["overlap_mean_duration"]) < 0.05, (tot_res, tot_ref)
+STRESSLET_SETS = ("hydrodynamic", "elastic", "viscosity", "psi1", "psi2")
+
+
+def stresslet(name):
+    with h5py.File(os.path.join(work, name, "c.h5"), "r") as h:
+        return {k: h["frames/stresslet/" + k][:] for k in STRESSLET_SETS}
+
+
+s_ref, s_res = stresslet("reference"), stresslet(killed_name)
+for k in STRESSLET_SETS:
+    assert len(s_res[k]) == len(t_ref) and np.all(np.isfinite(s_res[k])), k
+    assert np.array_equal(s_res[k][:n_same], s_ref[k][:n_same]), k
+print("stresslet after the resume: %d frames; late-time mean viscosity %.3f (uninterrupted %.3f)"
+      % (len(s_res["viscosity"]), s_res["viscosity"][100:].mean(), s_ref["viscosity"][100:].mean()))
 print("diagnostics after the resume: " + ", ".join(
     "%s %s (uninterrupted %s)" % (k, tot_res[k], tot_ref[k]) for k in DIAG_ATTRS))
 

@@ -230,6 +230,14 @@ CORPUS = [
     ('sweep_a_negative',
      '&sweep bending_a = 1.0, -2.0 /',
      '&forces: bending_a = -2.0 is not allowed (a number in [0, 1e7)) [in &sweep case A-2.00]'),
+    ('stresslet_quiescent',
+     "&flow flow_type = 'quiescent' /\n&output stresslet = .true. /",
+     "&output: stresslet = .true. is not allowed (.false. unless &flow flow_type = 'shear' with shear_rate /= 0 "
+     "(the viscosity and normal-stress coefficients are those of simple shear))"),
+    ('stresslet_order_one',
+     "&hydro model = 'multipole', order = 1 /\n&output stresslet = .true. /",
+     "&output: stresslet = .true. is not allowed (.false. with &hydro model = 'multipole' and order = 1 "
+     "(L = 1 has no stresslet moments; use order >= 2))"),
 ]
 corpus_dir = os.path.join(work, "corpus")
 os.makedirs(os.path.join(corpus_dir, "run"))

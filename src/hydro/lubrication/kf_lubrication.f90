@@ -20,6 +20,8 @@ module kf_lubrication
   use kf_near_contact, only: singular_part, singular_weight, smoothstep
   use kf_pair_tensor, only: pair_tensors
   use kf_pair_geometry, only: pair_geometry_t
+  use kf_pair_tensor, only: pair_tensors, pair_strain_stresslet
+  use kf_strain_basis, only: strain_basis
   use kf_lubrication_data, only: lub_max_order, lub_cutoff, lub_n_grid, lubrication_table
   use kf_pair_blocks, only: pair_blocks_t
   implicit none
@@ -46,6 +48,7 @@ module kf_lubrication
     procedure :: correction_functions
     procedure :: pair_correction
     procedure :: pair_blocks
+    procedure :: stresslet_correction
   end type lubrication_t
 
 contains
@@ -179,6 +182,39 @@ contains
       end do
     end subroutine fill
   end subroutine pair_blocks
+
+  !> The correction of the strain-stresslet coupling summed over every pair of r(3, N) closer
+  !> than the cutoff, as pairings sm(k, l) = B_k : (sum over pairs of dS_1 + dS_2 for the strain
+  !> B_l) with B_k = strain_basis(k), project units (the M functions; BWE rule as in
+  !> pair_correction). Zero at L = 1 (no strain functions).
+  subroutine stresslet_correction(this, r, sm)
+    class(lubrication_t), intent(in) :: this
+    real(wp), intent(in) :: r(:, :)
+    real(wp), intent(out) :: sm(5, 5)
+    type(pair_geometry_t) :: close_pairs
+    real(wp) :: dist, dhat(3), df(n_functions), b(3, 3, 5)
+    integer :: p, k, l
+    sm = 0.0_wp
+    if (.not. has_strain(this%order)) return
+    do k = 1, 5
+      b(:, :, k) = strain_basis(k)
+    end do
+    call close_pairs%build(r, this%r_cut)
+    do p = 1, close_pairs%size()
+      dist = close_pairs%distance(p)
+      if (dist > 0.0_wp) then
+        dhat = close_pairs%separation(p)/dist
+      else
+        dhat = [0.0_wp, 0.0_wp, 1.0_wp]
+      end if
+      call this%correction_functions(max(dist, 1.0_wp + this%eps_lub), df)
+      do l = 1, 5
+        do k = 1, 5
+          sm(k, l) = sm(k, l) + sum(b(:, :, k)*pair_strain_stresslet(df, dhat, b(:, :, l)))
+        end do
+      end do
+    end do
+  end subroutine stresslet_correction
 
   !> Second derivatives of the cubic spline through y on a uniform grid of step h, clamped with
   !> zero slope at the first point and natural at the last.

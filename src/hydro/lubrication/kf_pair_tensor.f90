@@ -12,11 +12,11 @@ module kf_pair_tensor
   use kf_error, only: error_t
   use kf_lapack, only: cholesky_factor, cholesky_invert
   use kf_two_sphere, only: n_functions, two_sphere_resistance, i_xa11, i_ya11, i_yb11, i_xc11, i_yc11, i_xg11, i_yg11, &
-    i_yh11
+    i_yh11, i_xm11, i_xm12, i_ym11, i_ym12, i_zm11, i_zm12
   implicit none
   private
 
-  public :: pair_tensors, pair_mobility_functions, two_sphere_mobility
+  public :: pair_tensors, pair_mobility_functions, two_sphere_mobility, pair_strain_stresslet
 
 contains
 
@@ -113,6 +113,35 @@ contains
       end do
     end do
   end subroutine pair_tensors
+
+  !> The sum of the two spheres' stresslets S_1 + S_2 due to the strain E at rest (U = U_inf,
+  !> Omega = Omega_inf) from the M functions of f (Kim & Karrila 11.3, Jeffrey 1992:
+  !> S_alpha = (20/3) pi eta a^3 sum_beta M^{alpha beta} : E), project units pi eta d^3 (an
+  !> isolated sphere has (5/6) E; f22 = f11, f21 = f12 for equal spheres). Per pair member,
+  !> with Q = d.E.d and e = E.d, M : E = (3/2) X^M (d d - I/3) Q + Y^M (d e + e d - 2 d d Q)
+  !> + Z^M (E + I Q/2 + d d Q/2 - d e - e d) for symmetric traceless E.
+  pure function pair_strain_stresslet(f, dhat, e) result(s)
+    real(wp), intent(in) :: f(n_functions)   !< resistance functions (or their differences)
+    real(wp), intent(in) :: dhat(3)          !< unit vector along the line of centres
+    real(wp), intent(in) :: e(3, 3)          !< symmetric traceless rate of strain
+    real(wp) :: s(3, 3)
+    real(wp) :: xm, ym, zm, q, ev(3), de(3, 3), dd(3, 3), eye(3, 3)
+    integer :: i
+    eye = 0.0_wp
+    do i = 1, 3
+      eye(i, i) = 1.0_wp
+    end do
+    xm = f(i_xm11) + f(i_xm12)
+    ym = f(i_ym11) + f(i_ym12)
+    zm = f(i_zm11) + f(i_zm12)
+    ev = matmul(e, dhat)
+    q = dot_product(dhat, ev)
+    dd = spread(dhat, 2, 3)*spread(dhat, 1, 3)
+    de = spread(dhat, 2, 3)*spread(ev, 1, 3)
+    de = de + transpose(de)
+    s = 1.5_wp*xm*(dd - eye/3.0_wp)*q + ym*(de - 2.0_wp*dd*q) + zm*(e + 0.5_wp*eye*q + 0.5_wp*dd*q - de)
+    s = 2.0_wp*(5.0_wp/6.0_wp)*s
+  end function pair_strain_stresslet
 
   !> Normalised mobility functions [x11a, x12a, y11a, y12a] of two torque-free spheres
   !> (3 mu_xx(1,1), 3 mu_xx(1,2), 3 mu_yy(1,1), 3 mu_yy(1,2); x along the line of centres)

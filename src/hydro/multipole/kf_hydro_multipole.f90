@@ -29,6 +29,17 @@
 !>   (max over beads). A call refreshes when the prediction exceeds the budget, |w| > 3, the
 !>   deformation after the rigid fit exceeds max_deformation, or CG does not converge.
 !>   Without a step size or a time (calls outside a stepper) every call is exact.
+!>
+!> The stresslet (`stresslet`, MULTIPOLE.md 9, 11, 13.3) is exact at the configuration given,
+!> in either update mode, and leaves the reuse state alone: a frame's stresslet costs one
+!> assembly and factorisation (plus, with lubrication, one grand friction). With the grand
+!> resistance (F, T, S) = Xi (U_inf - U, Omega_inf - Omega, E), symmetric (Xi_SU = Xi_FE^T), the
+!> beads' total stresslet paired with a basis strain B_k is
+!>   S : B_k = sum_l Xi_SE(k, l) c_l(E) - V . x_k,   V = zeta^-1 (F + x c(E)),
+!> with x_k = Xi_FE : B_k. Without lubrication this is gram c - F . D_k (D the free-sphere
+!> disturbance; kf_multipole_system `strain_disturbance`). With lubrication zeta, x are the
+!> corrected ones and Xi_SE = gram + D^T x_L + the pair corrections of the M functions
+!> (kf_lubrication `stresslet_correction`), as HYDROLIB corrects the whole grand resistance.
 module kf_hydro_multipole
   use kf_kinds, only: wp, i8
   use kf_strings, only: to_str
@@ -36,7 +47,8 @@ module kf_hydro_multipole
   use kf_lapack, only: cholesky_factor, cholesky_solve, cholesky_invert
   use kf_error, only: error_t, fatal_error
   use kf_hydro_model, only: hydro_model_t, hydro_stats_t
-  use kf_multipole_system, only: multipole_system_t, strain_coefficients, strain_basis
+  use kf_multipole_system, only: multipole_system_t
+  use kf_strain_basis, only: strain_coefficients, strain_basis, tensor_from_pairings
   use kf_lubrication, only: lubrication_t
   use kf_pair_blocks, only: pair_blocks_t
   use kf_pair_geometry, only: pair_geometry_t
@@ -104,6 +116,7 @@ module kf_hydro_multipole
     procedure :: step_begin => multipole_step_begin
     procedure :: statistics => multipole_statistics
     procedure :: reused_velocities => multipole_reused_velocities
+    procedure :: stresslet => multipole_stresslet
   end type multipole_model_t
 
 contains
@@ -658,6 +671,65 @@ contains
     if (this%w /= 0.0_wp) call dsymv('L', n6, this%w, this%zh, n6, xv, 1, 1.0_wp, y, 1)
     if (this%lubrication) call this%pairs%apply(xv, y)
   end subroutine operator_apply
+
+  !> s = the beads' total hydrodynamic stresslet at r for forces f in the ambient strain e
+  !> (module header; exact at r, the reuse state and the cached mobility are not touched).
+  subroutine multipole_stresslet(this, r, f, e, s, error)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :), f(:, :), e(3, 3)
+    real(wp), intent(out) :: s(3, 3)
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: dfree(:, :), zeta(:, :), x(:, :), v(:)
+    real(wp) :: gram(5, 5), se(5, 5), sm(5, 5), c(5), m(5), bas(3, 3, 5)
+    type(pair_blocks_t) :: pairs
+    integer :: nb, i, k
+
+    s = 0.0_wp
+    if (this%order < 2) then
+      call fatal_error(error, 'multipole: the stresslet needs order L >= 2 (L = 1 has no stresslet moments)')
+      return
+    end if
+    nb = size(r, 2)
+    call this%sys%factorise(r, error)
+    if (allocated(error)) return
+    allocate (dfree(6*nb, 5))
+    call this%sys%strain_disturbance(dfree, gram)
+    c = strain_coefficients(e)
+    if (.not. this%lubrication) then
+      do k = 1, 5
+        m(k) = dot_product(gram(k, :), c)
+        do i = 1, nb
+          m(k) = m(k) - dot_product(f(:, i), dfree(6*i - 5:6*i - 3, k))
+        end do
+      end do
+      s = tensor_from_pairings(m)
+      return
+    end if
+    allocate (zeta(6*nb, 6*nb), x(6*nb, 5), v(6*nb))
+    call this%sys%friction_coupling(zeta, x, error)
+    if (allocated(error)) return
+    se = gram + matmul(transpose(dfree), x)
+    call this%lub%stresslet_correction(r, sm)
+    se = se + sm
+    do k = 1, 5
+      bas(:, :, k) = strain_basis(k)
+    end do
+    call this%lub%pair_blocks(r, pairs)
+    call pairs%add_friction(zeta)
+    call pairs%add_strain_basis(bas, x)
+    call cholesky_factor(zeta, error, 'lubrication-corrected friction')
+    if (allocated(error)) return
+    v = 0.0_wp
+    do i = 1, nb
+      v(6*i - 5:6*i - 3) = f(:, i)
+    end do
+    v = v + matmul(x, c)
+    call cholesky_solve(zeta, v)
+    do k = 1, 5
+      m(k) = dot_product(se(k, :), c) - dot_product(v, x(:, k))
+    end do
+    s = tensor_from_pairings(m)
+  end subroutine multipole_stresslet
 
   !> Largest translational velocity norm over beads of a 6N vector.
   pure real(wp) function largest_velocity(v, nb) result(m)

@@ -26,10 +26,9 @@ module kf_multipole_system
   use kf_multipole_blocks, only: multipole_layout_t, pair_block_grouped, fam_phi, fam_p
   use kf_multipole_index, only: multipole_index_t
   use kf_solid_harmonics, only: irregular_harmonics
+  use kf_strain_basis, only: strain_basis, strain_coefficients
   implicit none
   private
-
-  public :: strain_basis, strain_coefficients
 
   !> The factorised N-sphere system.
   type, public :: multipole_system_t
@@ -346,13 +345,21 @@ contains
 
   !> Disturbance [U - U_inf; Omega - Omega_inf] (6N) of force-free, torque-free spheres for the
   !> five basis strains of `strain_basis` (columns). Zero at L = 1 (no strain coupling).
-  subroutine system_strain_disturbance(this, dist)
+  !> `gram` (optional): the pairings gram(k, l) = B_k : (sum over the spheres of their
+  !> stresslets, Batchelor's sign, when force- and torque-free in the strain B_l), project units
+  !> pi eta d^3. With the scaled strain right-hand sides b_l (= sigma c(B_l)) and
+  !> K_QQ = L_QQ L_QQ^T, the moments are F_Q = -sigma K_QQ^-1 b_l (MULTIPOLE.md 11), their pairing
+  !> with c(B_k) is the fluid's E:S^fl (4.3) and S = -S^fl: gram = (L^-1 b_k).(L^-1 b_l)/pi
+  !> (force unit pi eta d^2 with eta = d = 1).
+  subroutine system_strain_disturbance(this, dist, gram)
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(out) :: dist(:, :)
+    real(wp), intent(out), optional :: gram(5, 5)
     real(wp) :: y(5, 5), rt2
     integer :: i, k, q, t, c
 
     dist(1:this%n6, 1:5) = 0.0_wp
+    if (present(gram)) gram = 0.0_wp
     if (this%lay%order < 2) return
     rt2 = sqrt(2.0_wp)
     ! Real-form strain coefficients y(q, k) (section 7) of basis strain k.
@@ -369,6 +376,7 @@ contains
       end do
     end do
     call dtrsm('L', 'L', 'N', 'N', this%nqt, 5, 1.0_wp, this%k, this%nr, this%bq, this%nqt)
+    if (present(gram)) gram = matmul(transpose(this%bq), this%bq)/pi
     call dgemm('N', 'N', this%n6, 5, this%nqt, -1.0_wp, this%k(this%nqt + 1, 1), this%nr, &
                this%bq, this%nqt, 0.0_wp, this%d6, this%n6)
     do k = 1, 5
@@ -397,37 +405,5 @@ contains
     call this%strain_disturbance(free)
     call dgemm('N', 'N', n6, 5, n6, 1.0_wp, zeta, n6, free, n6, 0.0_wp, x, n6)
   end subroutine system_friction_coupling
-
-  !> Basis strain k = 1..5: xx-zz, yy-zz, xy+yx, xz+zx, yz+zy.
-  pure function strain_basis(k) result(e)
-    integer, intent(in) :: k
-    real(wp) :: e(3, 3)
-    e = 0.0_wp
-    select case (k)
-    case (1)
-      e(1, 1) = 1.0_wp
-      e(3, 3) = -1.0_wp
-    case (2)
-      e(2, 2) = 1.0_wp
-      e(3, 3) = -1.0_wp
-    case (3)
-      e(1, 2) = 1.0_wp
-      e(2, 1) = 1.0_wp
-    case (4)
-      e(1, 3) = 1.0_wp
-      e(3, 1) = 1.0_wp
-    case (5)
-      e(2, 3) = 1.0_wp
-      e(3, 2) = 1.0_wp
-    end select
-  end function strain_basis
-
-  !> Coefficients of a symmetric traceless strain in the basis of `strain_basis`.
-  pure function strain_coefficients(e) result(c)
-    real(wp), intent(in) :: e(3, 3)
-    real(wp) :: c(5)
-    c = [e(1, 1), e(2, 2), 0.5_wp*(e(1, 2) + e(2, 1)), 0.5_wp*(e(1, 3) + e(3, 1)), &
-         0.5_wp*(e(2, 3) + e(3, 2))]
-  end function strain_coefficients
 
 end module kf_multipole_system

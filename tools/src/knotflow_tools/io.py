@@ -14,6 +14,9 @@ OBSERVABLES = ("rg", "a", "b", "c", "theta", "phi", "close_pairs")
 # /frames/diagnostics and run totals as root attributes "diagnostics.<name>".
 DIAGNOSTICS = ("strand_passages", "overlapping_pairs", "overlap_episodes", "min_distance",
                "max_bond_strain")
+# The fibre's stresslet (optional, &output stresslet): /frames/stresslet/{hydrodynamic, elastic}
+# (nframes, 3, 3) and {viscosity, psi1, psi2} (nframes,), units and normalisation in the README.
+STRESSLET = ("hydrodynamic", "elastic", "viscosity", "psi1", "psi2")
 DIAGNOSTIC_TOTALS = ("strand_passages", "first_passage_time", "overlap_episodes",
                      "overlap_mean_duration", "overlap_max_duration", "max_overlapping_pairs",
                      "min_distance", "max_bond_strain")
@@ -56,6 +59,7 @@ class Case:
     case_mode: int | None = None
     diagnostics: dict | None = None            # /frames/diagnostics: name -> (nframes,)
     diagnostic_totals: dict | None = None      # diagnostics.* root attributes, without prefix
+    stresslet: dict | None = None              # /frames/stresslet: name -> (nframes[, 3, 3])
 
     @property
     def name(self) -> str:
@@ -129,6 +133,9 @@ def read_case(path) -> Case:
         if "diagnostics" in fr:
             g = fr["diagnostics"]
             case.diagnostics = {k: np.asarray(_read(path, g[k]))[:n] for k in DIAGNOSTICS if k in g}
+        if "stresslet" in fr:
+            g = fr["stresslet"]
+            case.stresslet = {k: np.asarray(_read(path, g[k]))[:n] for k in STRESSLET if k in g}
         totals = {k: attrs["diagnostics." + k] for k in DIAGNOSTIC_TOTALS
                   if "diagnostics." + k in attrs}
         if totals:

@@ -1,4 +1,5 @@
-"""Figures of one case: k_f(t) with events, shape panels, knot matrices, 3D snapshots, movie."""
+"""Figures of one case: k_f(t) with events, shape panels, the rheology (files with the stresslet),
+knot matrices, 3D snapshots, movie."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from matplotlib.cm import ScalarMappable  # noqa: E402
 
 from .analysis import CaseAnalysis  # noqa: E402
 from .io import Case  # noqa: E402
+from .rheology import running_mean  # noqa: E402
 
 MODE_NAMES = {0: "-", 1: "I", 2: "II"}
 _COL_FIRST = "tab:blue"
@@ -81,6 +83,48 @@ def plot_shape(case: Case, ana: CaseAnalysis, path) -> str:
             ax.axvline(ev.time, color="0.6", ls=":", lw=1)
     axes[0].set_title(f"{_title(case)}   case mode: {MODE_NAMES.get(ana.case_mode, '?')}",
                       fontsize=10)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return str(path)
+
+
+_MODE_COLOURS = {0: "0.6", 1: _COL_FIRST, 2: _COL_SECOND}
+
+
+def plot_rheology(case: Case, ana: CaseAnalysis, path) -> str:
+    """The fibre's viscosity and normal-stress coefficients (/frames/stresslet) against time,
+    each frame coloured by its shape mode (grey: none, blue: I, orange: II), with running
+    means; k_f(t); and the viscosity against k_f at the analysed frames."""
+    t = case.time
+    st = case.stresslet
+    modes = np.asarray(ana.modes) if len(ana.modes) == len(t) else np.zeros(len(t), dtype=int)
+    fig = plt.figure(figsize=(8, 10), constrained_layout=True)
+    axes = [fig.add_subplot(5, 1, 1)]
+    for k in range(1, 4):
+        axes.append(fig.add_subplot(5, 1, k + 1, sharex=axes[0]))
+    for ax, key, label in ((axes[0], "viscosity", "viscosity"), (axes[1], "psi1", r"$\psi_1$"),
+                           (axes[2], "psi2", r"$\psi_2$")):
+        v = st[key]
+        for m, col in _MODE_COLOURS.items():
+            sel = modes == m
+            if sel.any():
+                ax.plot(t[sel], v[sel], ".", ms=3, color=col,
+                        label=f"mode {MODE_NAMES[m]}" if m else "no mode")
+        ax.plot(t, running_mean(v), "-", color="k", lw=1.2, label="running mean")
+        ax.set_ylabel(label)
+    axes[0].legend(loc="upper right", fontsize=8, ncol=4)
+    axes[3].plot(ana.time, ana.kf, "-", color="k", lw=1.2)
+    axes[3].set_ylabel("$k_f$")
+    axes[3].set_xlabel(r"time $\dot\gamma t$")
+    for ev in ana.events:
+        for ax in axes[:4]:
+            ax.axvline(ev.time, color="0.6", ls=":", lw=1)
+    ax = fig.add_subplot(5, 1, 5)
+    idx = np.asarray(ana.frame_index, dtype=int)
+    ax.plot(ana.kf, st["viscosity"][idx], ".", ms=3, color="k")
+    ax.set_xlabel("$k_f$")
+    ax.set_ylabel("viscosity")
+    axes[0].set_title(f"{_title(case)}   intrinsic viscosity form (5/2: free beads)", fontsize=10)
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return str(path)
@@ -175,6 +219,8 @@ def plot_case(case: Case, ana: CaseAnalysis, outdir, movie: bool = False,
     base = os.path.join(outdir, _safe(case.name))
     files = [plot_kf(case, ana, f"{base}_kf.png"), plot_shape(case, ana, f"{base}_shape.png"),
              plot_snapshots(case, f"{base}_snapshots.png")]
+    if case.stresslet and all(k in case.stresslet for k in ("viscosity", "psi1", "psi2")):
+        files.append(plot_rheology(case, ana, f"{base}_rheology.png"))
     for fi, mat in sorted(ana.knot_matrices.items()):
         files.append(plot_knot_matrix(mat, f"{base}_knot_matrix_{fi}.png",
                                       f"{case.name}: knot matrix, frame {fi}"))

@@ -1,4 +1,5 @@
-"""Sweep report: per-case table, a Table-2-like grid A x orientation, figures (md + html)."""
+"""Sweep report: per-case table, a Table-2-like grid A x orientation, late-time rheology of the
+cases with a stresslet, figures (md + html)."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ import sys
 from .analysis import analyze_case
 from .io import read_case
 from .plot import MODE_NAMES, plot_case
+from .rheology import rheology_summary
 from .xdmf import write_xdmf, xdmf_path
 
 
@@ -58,7 +60,7 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
                          "final_kf": None, "final_state": "-", "transitions": "-",
                          "events": 0, "unknot_then_knot": False, "mode": "-",
                          "strand_passages": None, "overlap_episodes": None, "figures": [],
-                         "xdmf": None, "viewer": None})
+                         "xdmf": None, "viewer": None, "rheology": None})
             continue
         if case.nframes == 0:
             ana = None
@@ -90,6 +92,8 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
             "figures": [os.path.relpath(f, outdir) for f in figs],
             "xdmf": os.path.relpath(xdmf_file, outdir) if xdmf_file else None,
             "viewer": view,
+            "rheology": (rheology_summary(case, 0.5 * case.time[-1])
+                         if case.nframes else None),
         })
     summary_name, summary = _read_summary(sweep_dir)
     md = _markdown(sweep_dir, rows, summary_name, summary)
@@ -153,6 +157,24 @@ def _grid(rows):
     return a_vals, o_vals, cells
 
 
+RHEOLOGY_COLUMNS = ("case", "viscosity", "psi1", "psi2", "frames")
+
+
+def _rheology_cells(r):
+    """Late-time mean +- standard deviation of the case's viscosity, psi1, psi2 and the number
+    of frames averaged (None for a case without the stresslet)."""
+    rh = r.get("rheology")
+    if not rh:
+        return None
+    return [r["name"]] + [f"{rh[k][0]:.4g} ± {rh[k][1]:.2g}" for k in ("viscosity", "psi1", "psi2")] \
+        + [str(rh["viscosity"][2])]
+
+
+RHEOLOGY_NOTE = ("Late-time means ± standard deviations over the frames of the second half of "
+                 "each run (t ≥ t_last/2) of the fibre's intrinsic-viscosity-form shear viscosity "
+                 "and normal-stress coefficients (/frames/stresslet; README).")
+
+
 def _markdown(sweep_dir, rows, summary_name, summary) -> str:
     out = [f"# knotflow sweep report: {sweep_dir}", "",
            f"{len(rows)} case files. Transitions use the hysteresis thresholds 0.1 / 0.9 on k_f.",
@@ -170,6 +192,11 @@ def _markdown(sweep_dir, rows, summary_name, summary) -> str:
                                                   for o in o_vals) + " |")
     else:
         out.append("(no cases with both forces.bending_a and chain.orientation)")
+    rheo = [c for c in (_rheology_cells(r) for r in rows) if c]
+    if rheo:
+        out += ["", "## Rheology", "", RHEOLOGY_NOTE, "", "| " + " | ".join(RHEOLOGY_COLUMNS) + " |",
+                "|" + "---|" * len(RHEOLOGY_COLUMNS)]
+        out += ["| " + " | ".join(c) + " |" for c in rheo]
     if summary is not None:
         out += ["", f"## Sweep summary ({summary_name})", "", "```", summary.rstrip(), "```"]
     out += ["", "## Figures", "",
@@ -222,6 +249,12 @@ def _html(sweep_dir, rows, summary_name, summary) -> str:
         out.append("</table>")
     else:
         out.append("<p>(no cases with both forces.bending_a and chain.orientation)</p>")
+    rheo = [c for c in (_rheology_cells(r) for r in rows) if c]
+    if rheo:
+        out.append(f"<h2>Rheology</h2><p>{e(RHEOLOGY_NOTE)}</p><table><tr>"
+                   + "".join(f"<th>{e(c)}</th>" for c in RHEOLOGY_COLUMNS) + "</tr>")
+        out += ["<tr>" + "".join(f"<td>{e(c)}</td>" for c in cells) + "</tr>" for cells in rheo]
+        out.append("</table>")
     if summary is not None:
         out.append(f"<h2>Sweep summary ({e(summary_name)})</h2><pre>{e(summary)}</pre>")
     out.append("<h2>Figures</h2>")

@@ -15,7 +15,8 @@ Per time step (``Time`` = ``/frames/time[k]``):
 - point data: ``bead`` (0-based index, int32) and ``half`` (0 for the first half of the chain,
   1 for the second: the colouring of the report's figures);
 - field data (``Center="Grid"``, one value per step): ``time``, every ``/frames/observables/*``
-  and ``/frames/diagnostics/*`` dataset present, and, when ``/analysis/knots`` exists, ``kf``:
+  and ``/frames/diagnostics/*`` dataset present (and ``viscosity``, ``psi1``, ``psi2`` of
+  ``/frames/stresslet``), and, when ``/analysis/knots`` exists, ``kf``:
   k_f of the latest analysed frame at or before k (absent before the first analysed frame).
 """
 
@@ -96,9 +97,10 @@ def _frame_count(f) -> int:
 
 
 def _per_frame_datasets(f, nframes) -> list:
-    """(name, dataset) of the 1-D numeric per-frame datasets (observables, diagnostics)."""
+    """(name, dataset) of the 1-D numeric per-frame datasets (observables, diagnostics, the
+    stresslet's viscosity, psi1, psi2)."""
     out = []
-    for group in ("observables", "diagnostics"):
+    for group in ("observables", "diagnostics", "stresslet"):
         g = f["frames"].get(group)
         if g is None:
             continue
