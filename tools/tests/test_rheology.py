@@ -4,8 +4,9 @@ from files without it, and averaged (running and late-time means)."""
 import h5py
 import numpy as np
 
-from conftest import unknotting_trefoil_frames, write_case
 from knotflow_tools import io, rheology
+
+from conftest import unknotting_trefoil_frames, write_case
 
 
 def add_stresslet(path, nframes):

@@ -97,6 +97,8 @@ def plot_rheology(case: Case, ana: CaseAnalysis, path) -> str:
     means; k_f(t); and the viscosity against k_f at the analysed frames."""
     t = case.time
     st = case.stresslet
+    if st is None:
+        raise ValueError(f"{case.path}: no /frames/stresslet (run with &output stresslet = .true.)")
     modes = np.asarray(ana.modes) if len(ana.modes) == len(t) else np.zeros(len(t), dtype=int)
     fig = plt.figure(figsize=(8, 10), constrained_layout=True)
     axes = [fig.add_subplot(5, 1, 1)]
