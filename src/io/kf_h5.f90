@@ -12,7 +12,8 @@
 !> Chunked (extendible) datasets carry HDF5's Fletcher-32 checksum filter, so damaged data fails
 !> to read instead of reading wrong. Failed writes, flushes and closes name the operating
 !> system's reason (errno, kf_fs).
-!> Writing an attribute that exists replaces it; writing a dataset that exists overwrites it in
+!> Writing an attribute that exists overwrites it in place when its type and shape match and
+!> replaces it otherwise; writing a dataset that exists overwrites it in
 !> place when the shape matches (no file space is lost) and replaces it otherwise.
 module kf_h5
   use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_f_pointer, c_char, c_size_t, &
@@ -31,7 +32,7 @@ module kf_h5
     h5aexists_f, h5adelete_f, h5awrite_f, h5aread_f, h5aget_type_f, h5aget_space_f, &
     h5dcreate_f, h5dopen_f, h5dclose_f, h5dwrite_f, h5dread_f, h5dget_space_f, &
     h5dset_extent_f, h5pcreate_f, h5pclose_f, h5pset_chunk_f, h5pset_fletcher32_f, H5P_DATASET_CREATE_F, &
-    h5tcopy_f, h5tclose_f, h5tset_size_f, h5tget_size_f, h5tset_strpad_f, h5tget_class_f, &
+    h5tcopy_f, h5tclose_f, h5tequal_f, h5tset_size_f, h5tget_size_f, h5tset_strpad_f, h5tget_class_f, &
     h5tis_variable_str_f, H5T_FORTRAN_S1, H5T_STR_NULLPAD_F, H5T_STRING_F, &
     H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, H5T_STD_I32LE, H5T_STD_I64LE, h5kind_to_type, &
     H5_INTEGER_KIND
@@ -372,7 +373,10 @@ contains
       int(shape(value), hsize_t), c_loc(value), error)
   end subroutine write_attr_r2
 
-  !> Create (replacing any old one) and write an attribute; rank 0 dims means a scalar.
+  !> Write an attribute; rank 0 dims means a scalar. An existing attribute of the same type and
+  !> shape is overwritten in place (its object header keeps its structure, so a kill while the
+  !> header is flushed leaves the old or the new value); one of another type or shape is
+  !> replaced.
   subroutine write_attr_raw(file, obj, name, memtype, filetype, dims, buf, error)
     type(h5_file_t), intent(in) :: file
     character(len=*), intent(in) :: obj, name
@@ -382,14 +386,31 @@ contains
     type(error_t), allocatable, intent(out) :: error
     integer(hid_t) :: oid, sid, aid
     integer :: stat, ignore
-    logical :: exists
+    logical :: exists, same
     call h5oopen_f(file%id, obj, oid, stat)
     if (stat < 0) then
       call fail(error, file, 'open object', obj)
       return
     end if
     call h5aexists_f(oid, name, exists, stat)
-    if (stat >= 0 .and. exists) call h5adelete_f(oid, name, stat)
+    if (stat >= 0 .and. exists) then
+      call h5aopen_f(oid, name, aid, stat)
+      if (stat >= 0) then
+        same = same_type_and_shape(aid, filetype, dims)
+        if (same) then
+          call clear_os_error()
+          call h5awrite_f(aid, memtype, buf, stat)
+          if (stat < 0) call fail_io(error, file, 'write attribute', obj//'@'//name)
+        end if
+        call h5aclose_f(aid, stat)
+        if (stat < 0 .and. .not. allocated(error)) call fail_io(error, file, 'write (close) attribute', obj//'@'//name)
+        if (same .or. allocated(error)) then
+          call h5oclose_f(oid, ignore)
+          return
+        end if
+      end if
+      if (stat >= 0) call h5adelete_f(oid, name, stat)
+    end if
     if (stat < 0) then
       call fail(error, file, 'replace attribute', obj//'@'//name)
       call h5oclose_f(oid, ignore)
@@ -418,6 +439,30 @@ contains
     call h5sclose_f(sid, ignore)
     call h5oclose_f(oid, ignore)
   end subroutine write_attr_raw
+
+  !> Has the open attribute `aid` the file type `filetype` and the dimensions `dims`?
+  logical function same_type_and_shape(aid, filetype, dims) result(same)
+    integer(hid_t), intent(in) :: aid, filetype
+    integer(hsize_t), intent(in) :: dims(:)
+    integer(hid_t) :: tid, sid
+    integer(hsize_t), allocatable :: old(:)
+    integer :: stat, ignore
+    same = .false.
+    call h5aget_type_f(aid, tid, stat)
+    if (stat < 0) return
+    call h5tequal_f(tid, filetype, same, stat)
+    if (stat < 0) same = .false.
+    call h5tclose_f(tid, ignore)
+    if (.not. same) return
+    call h5aget_space_f(aid, sid, stat)
+    same = stat >= 0
+    if (.not. same) return
+    call space_dims(sid, -1, old, stat)
+    same = stat >= 0
+    if (same) same = size(old) == size(dims)
+    if (same) same = all(old == dims)
+    call h5sclose_f(sid, ignore)
+  end function same_type_and_shape
 
   ! ---------------------------------------------------------------- attributes: reading
 

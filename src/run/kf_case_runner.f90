@@ -60,6 +60,7 @@ contains
     class(stepper_t), allocatable :: integ
     type(stepper_checkpoint_t) :: saved
     integer(i8) :: hydro_base(4)   !< hydro counters of the run before a resume
+    integer(i8), allocatable :: saved_counters(:)
     type(shape_t) :: obs
     type(run_diagnostics_t), allocatable :: diag   !< allocated only with diagnostics: else absent
     real(wp), allocatable :: r(:, :)
@@ -121,7 +122,7 @@ contains
       deallocate (error)
     end if
     if (state == 'running') then
-      call file%open_resume(path, r, t, dt, steps, rejected, nframes, error, saved)
+      call file%open_resume(path, r, t, dt, steps, rejected, nframes, error, saved, saved_counters)
       if (.not. allocated(error)) then
         resumed = .true.
         ! a file written before the run diagnostics existed is continued without them
@@ -187,6 +188,9 @@ contains
       call file%create(path, name, size(r, 2), scene_text(sc), rotation, error)
       if (.not. allocated(error)) call write_scene_attributes(file, sc, error)
       if (.not. allocated(error) .and. with_diag) call file%enable_diagnostics(error)
+      ! every root attribute rewritten with the frames exists before the first frame, so that
+      ! later frames overwrite them in place
+      if (.not. allocated(error)) call write_hydro_counters(error)
       if (allocated(error)) then
         call write_failed(error%message)
         return
@@ -197,7 +201,7 @@ contains
       if (.not. allocated(error)) then
         if (with_diag) call diag%start(t, r)
         call integ%get_state(saved%reals, saved%ints)
-        call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt(), error, diag, saved)
+        call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt(), error, diag, saved, hydro_counts())
         if (allocated(error)) then
           call write_failed(error%message)
           return
@@ -227,7 +231,8 @@ contains
         return
       end if
       call integ%get_state(saved%reals, saved%ints)
-      call file%append_frame(t, r, obs, integ%steps(), integ%rejected(), integ%dt(), error, diag, saved)
+      call file%append_frame(t, r, obs, integ%steps(), integ%rejected(), integ%dt(), error, diag, saved, &
+                             hydro_counts())
       if (.not. allocated(error)) call write_hydro_counters(error)
       if (allocated(error)) then
         call write_failed(error%message)
@@ -264,24 +269,41 @@ contains
 
   contains
 
-    !> The counters of the hydrodynamic model (kf_hydro_model's hydro_stats_t) as root
-    !> attributes hydro.{evaluations, refreshes, reused, cg_iterations}, cumulative over resumes.
-    subroutine write_hydro_counters(err)
-      type(error_t), allocatable, intent(out) :: err
-      type(hydro_stats_t) :: st
+    !> The counters of the hydrodynamic model (kf_hydro_model's hydro_stats_t), cumulative over
+    !> resumes: saved with every checkpoint and written as the root attributes
+    !> hydro.{evaluations, refreshes, reused, cg_iterations}.
+    function hydro_counts() result(c)
       integer(i8) :: c(4)
-      integer :: k
+      type(hydro_stats_t) :: st
       st = dyn%model%statistics()
       c = hydro_base + [st%evaluations, st%refreshes, st%reused, st%cg_iterations]
+    end function hydro_counts
+
+    subroutine write_hydro_counters(err)
+      type(error_t), allocatable, intent(out) :: err
+      integer(i8) :: c(4)
+      integer :: k
+      c = hydro_counts()
       do k = 1, 4
         call file%write_attribute(trim(hydro_counters(k)), c(k), err)
         if (allocated(err)) return
       end do
     end subroutine write_hydro_counters
 
+    !> The counters of the run before the resume: from its checkpoint, or (files written before
+    !> the checkpoint held them) from the root attributes.
     subroutine read_hydro_counters(err)
       type(error_t), allocatable, intent(out) :: err
       integer :: k
+      if (allocated(saved_counters)) then
+        if (size(saved_counters) /= size(hydro_base)) then
+          call fatal_error(err, path//': the checkpoint holds '//to_str(size(saved_counters))// &
+            ' run counters, not '//to_str(size(hydro_base)))
+          return
+        end if
+        hydro_base = saved_counters
+        return
+      end if
       do k = 1, 4
         call file%read_counter(trim(hydro_counters(k)), hydro_base(k), err)
         if (allocated(err)) return
