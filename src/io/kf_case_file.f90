@@ -634,17 +634,19 @@ contains
       '/frames/observables/close_pairs', '/frames/integrator/steps', '/frames/integrator/rejected']
     character(len=40) :: all_sets(size(frame_real_sets) + size(other_sets) + size(diag_sets))
     character(len=:), allocatable :: damaged_slot
+    logical :: legacy
     integer :: n_sets
     call this%close()
     call h5_open_file(this%file, path, .true., error)
     if (allocated(error)) return
     call h5_read_attr(this%file, '/', 'n_beads', n_beads, error)
     if (allocated(error)) return
-    call latest_checkpoint(this%file, int(n_beads), this%resumed, error, damaged_slot)
+    call latest_checkpoint(this%file, int(n_beads), this%resumed, error, damaged_slot, legacy)
     if (allocated(error)) return
     ! A slot left damaged by a kill while it was written is removed (its structure may be
     ! inconsistent); the next checkpoint creates it again.
     if (len(damaged_slot) > 0) call h5_delete(this%file, damaged_slot, error)
+    if (.not. allocated(error) .and. legacy) call upgrade_layout(this%file, this%resumed, error)
     if (allocated(error)) return
     this%diagnostics = h5_exists(this%file, trim(diag_sets(1)))
     n_sets = size(frame_real_sets) + size(other_sets)
@@ -677,13 +679,15 @@ contains
   !> The newest whole checkpoint of the open file: of a file of schema 3 the slot with the
   !> larger frame count among those that `read_checkpoint` and `check_last_frame` accept; of an
   !> older file its single /checkpoint. The error names the file and what is wrong with each.
-  !> `damaged` (optional) returns the group of a slot that exists but is not whole ('' if none).
-  subroutine latest_checkpoint(file, n_beads, ck, error, damaged)
+  !> `damaged` (optional) returns the group of a slot that exists but is not whole ('' if none),
+  !> `legacy` (optional) whether the file has the single checkpoint of schema 1 or 2.
+  subroutine latest_checkpoint(file, n_beads, ck, error, damaged, legacy)
     type(h5_file_t), intent(in) :: file
     integer, intent(in) :: n_beads
     type(checkpoint_t), intent(out) :: ck
     type(error_t), allocatable, intent(out) :: error
     character(len=:), allocatable, intent(out), optional :: damaged
+    logical, intent(out), optional :: legacy
     type(checkpoint_t) :: candidate
     type(error_t), allocatable :: err
     character(len=:), allocatable :: reasons
@@ -696,6 +700,7 @@ contains
       call h5_read_attr(file, '/', 'schema_version', schema, error)
       if (allocated(error)) return
     end if
+    if (present(legacy)) legacy = schema < 3
     if (schema < 3) then
       call read_checkpoint(file, legacy_group, n_beads, .false., ck, error)
       if (.not. allocated(error)) call check_last_frame(file, ck, error)
@@ -722,6 +727,27 @@ contains
     if (.not. found) call fatal_error(error, "case file '"//file%name()//"' has no whole checkpoint ("// &
       trim(adjustl(reasons))//')')
   end subroutine latest_checkpoint
+
+  !> Give a file of schema 1 or 2, resumed from its single /checkpoint `ck`, the layout of this
+  !> version: `ck` written to both slots, then schema_version, then the old checkpoint's parts
+  !> removed, each step flushed (a kill in between leaves a file that reads as the old or as
+  !> the new layout).
+  subroutine upgrade_layout(file, ck, error)
+    type(h5_file_t), intent(in) :: file
+    type(checkpoint_t), intent(in) :: ck
+    type(error_t), allocatable, intent(out) :: error
+    character(len=*), parameter :: old_parts(10) = [character(len=11) :: 'time', 'positions', 'dt', &
+      'steps', 'rejected', 'nframes', 'digest', 'stepper', 'counters', 'diagnostics']
+    integer :: k
+    call write_checkpoint(file, trim(slot_groups(0)), ck, error)
+    if (.not. allocated(error)) call write_checkpoint(file, trim(slot_groups(1)), ck, error)
+    if (.not. allocated(error)) call h5_flush(file, error)
+    if (.not. allocated(error)) call h5_write_attr(file, '/', 'schema_version', case_schema_version, error)
+    if (.not. allocated(error)) call h5_flush(file, error)
+    do k = 1, size(old_parts)
+      if (.not. allocated(error)) call h5_delete(file, legacy_group//'/'//trim(old_parts(k)), error)
+    end do
+  end subroutine upgrade_layout
 
   !> Read the checkpoint in `group` and check it against its digest (`need_digest`: a checkpoint
   !> without one is refused; otherwise, files written before it existed, it is taken as is).

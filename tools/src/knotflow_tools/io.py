@@ -106,6 +106,19 @@ def check_frames(path, time, positions) -> None:
         raise ValueError(f"{path}: frame {k} (t = {time[k]:g}): {cause}{more}")
 
 
+def checkpoint_frames(f):
+    """Frames the newest checkpoint of the open case file `f` counts (None: no checkpoint).
+    Files of schema 3 have two slots written alternately (/checkpoint/slot0, slot1; a slot's
+    frame count is written last, so the larger one is whole or being finished); older files one
+    /checkpoint. Frames beyond it were being written when the run stopped."""
+    if "checkpoint" not in f:
+        return None
+    groups = [f["checkpoint"][s] for s in ("slot0", "slot1") if s in f["checkpoint"]]
+    groups.append(f["checkpoint"])
+    counts = [int(g["nframes"][()]) for g in groups if "nframes" in g]
+    return max(counts) if counts else None
+
+
 def read_case(path) -> Case:
     """Read a case file; missing optional parts are left empty. A frame with a non-finite
     time or coordinate, or data that cannot be read (damaged), is a ValueError naming the
@@ -116,8 +129,9 @@ def read_case(path) -> Case:
         time = np.asarray(_read(path, fr["time"]), dtype=float)
         pos = np.asarray(_read(path, fr["positions"]), dtype=float)
         n = min(len(time), len(pos))
-        if "checkpoint" in f and "nframes" in f["checkpoint"]:
-            n = min(n, int(f["checkpoint"]["nframes"][()]))
+        counted = checkpoint_frames(f)
+        if counted is not None:
+            n = min(n, counted)
         time, pos = time[:n], pos[:n]
         check_frames(path, time, pos)
         obs = {}

@@ -27,6 +27,8 @@ import xml.etree.ElementTree as ET
 import h5py
 import numpy as np
 
+from .io import checkpoint_frames
+
 XDMF_SUFFIX = ".xdmf2"
 
 # numpy dtype kind + size -> (XDMF NumberType, Precision)
@@ -90,8 +92,9 @@ def _frame_count(f) -> int:
     """Frames the file holds completely (as ``io.read_case``: time, positions, checkpoint)."""
     fr = f["frames"]
     n = min(fr["time"].shape[0], fr["positions"].shape[0])
-    if "checkpoint" in f and "nframes" in f["checkpoint"]:
-        n = min(n, int(f["checkpoint"]["nframes"][()]))
+    counted = checkpoint_frames(f)
+    if counted is not None:
+        n = min(n, counted)
     return n
 
 
