@@ -64,7 +64,7 @@ module kf_case_file
   use kf_h5, only: h5_file_t, h5_create_file, h5_open_file, h5_close_file, h5_flush, &
     h5_create_group, h5_exists, h5_attr_exists, h5_write_attr, h5_read_attr, h5_write, h5_read, &
     h5_create_extendible, h5_append, h5_set_length, h5_length, h5_real, h5_int32, h5_int64, h5_read_entry, &
-    h5_delete
+    h5_delete, h5_move
   implicit none
   private
 
@@ -643,9 +643,10 @@ contains
     if (allocated(error)) return
     call latest_checkpoint(this%file, int(n_beads), this%resumed, error, damaged_slot, legacy)
     if (allocated(error)) return
-    ! A slot left damaged by a kill while it was written is removed (its structure may be
-    ! inconsistent); the next checkpoint creates it again.
-    if (len(damaged_slot) > 0) call h5_delete(this%file, damaged_slot, error)
+    ! A slot left damaged by a kill while its structure changed is renamed, not deleted
+    ! (freeing objects whose headers are inconsistent could free space still in use), and the
+    ! next checkpoint creates the slot anew.
+    if (len(damaged_slot) > 0) call set_aside(this%file, damaged_slot, error)
     if (.not. allocated(error) .and. legacy) call upgrade_layout(this%file, this%resumed, error)
     if (allocated(error)) return
     this%diagnostics = h5_exists(this%file, trim(diag_sets(1)))
@@ -727,6 +728,19 @@ contains
     if (.not. found) call fatal_error(error, "case file '"//file%name()//"' has no whole checkpoint ("// &
       trim(adjustl(reasons))//')')
   end subroutine latest_checkpoint
+
+  !> Rename the group `group` to the first free `<group>_damaged<k>`, k = 1, 2, ...
+  subroutine set_aside(file, group, error)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: group
+    type(error_t), allocatable, intent(out) :: error
+    integer :: k
+    k = 1
+    do while (h5_exists(file, group//'_damaged'//to_str(k)))
+      k = k + 1
+    end do
+    call h5_move(file, group, group//'_damaged'//to_str(k), error)
+  end subroutine set_aside
 
   !> Give a file of schema 1 or 2, resumed from its single /checkpoint `ck`, the layout of this
   !> version: `ck` written to both slots, then schema_version, then the old checkpoint's parts

@@ -25,7 +25,7 @@ module kf_h5
   use kf_fs, only: clear_os_error, os_error_text
   use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5close_f, h5eset_auto_f, &
     h5fcreate_f, h5fopen_f, h5fclose_f, h5fflush_f, H5F_ACC_TRUNC_F, H5F_ACC_RDWR_F, &
-    H5F_ACC_RDONLY_F, H5F_SCOPE_GLOBAL_F, h5gcreate_f, h5gclose_f, h5lexists_f, h5ldelete_f, &
+    H5F_ACC_RDONLY_F, H5F_SCOPE_GLOBAL_F, h5gcreate_f, h5gclose_f, h5lexists_f, h5ldelete_f, h5lmove_f, &
     h5oopen_f, h5oclose_f, h5screate_f, h5screate_simple_f, h5sclose_f, H5S_SCALAR_F, &
     H5S_UNLIMITED_F, H5S_SELECT_SET_F, h5sget_simple_extent_ndims_f, &
     h5sget_simple_extent_dims_f, h5sselect_hyperslab_f, h5acreate_f, h5aopen_f, h5aclose_f, &
@@ -42,7 +42,7 @@ module kf_h5
   public :: h5_file_t
   public :: h5_initialize, h5_finalize
   public :: h5_create_file, h5_open_file, h5_close_file, h5_flush
-  public :: h5_create_group, h5_exists, h5_attr_exists, h5_delete
+  public :: h5_create_group, h5_exists, h5_attr_exists, h5_delete, h5_move
   public :: h5_write_attr, h5_read_attr
   public :: h5_write, h5_read
   public :: h5_create_extendible, h5_append, h5_set_length, h5_length, h5_read_entry
@@ -1525,6 +1525,18 @@ contains
     type(error_t), allocatable, intent(out) :: error
     call delete_link(file, name, error)
   end subroutine h5_delete
+
+  !> Rename the link `from` to `to` (same file; the object itself is kept as it is: nothing is
+  !> read or freed, so this also works for an object whose own structure is damaged).
+  subroutine h5_move(file, from, to, error)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: from, to
+    type(error_t), allocatable, intent(out) :: error
+    integer :: stat
+    call clear_os_error()
+    call h5lmove_f(file%id, from, file%id, to, stat)
+    if (stat < 0) call fail_io(error, file, 'rename to '//to//' the object', from)
+  end subroutine h5_move
 
   !> Delete link `name` if it exists.
   subroutine delete_link(file, name, error)
