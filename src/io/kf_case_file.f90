@@ -1196,24 +1196,86 @@ contains
 
   end subroutine verify_case_file
 
-  !> Read all frame times t(nframes) and positions r(3, N, nframes) of a case file.
+  !> Read the complete frames of a case file: times t(nframes) and positions r(3, N, nframes).
+  !> A file with a checkpoint is read up to the frames its newest checkpoint counts (a frame
+  !> beyond it was being written when the run stopped). Refused with an error naming the file
+  !> and the problem: no /frames group, /frames/time or /frames/positions missing, not numbers
+  !> or unreadable (checksums), positions not of shape (frames, beads, 3), fewer than 2 beads,
+  !> time and positions of different lengths (without a checkpoint), no frame, a non-finite time
+  !> or coordinate, times that do not increase.
   subroutine read_frames(path, t, r, error)
     character(len=*), intent(in) :: path
     real(wp), allocatable, intent(out) :: t(:)
     real(wp), allocatable, intent(out) :: r(:, :, :)
     type(error_t), allocatable, intent(out) :: error
     type(h5_file_t) :: file
+    integer(i8) :: counted
+    integer :: n, k
     call h5_open_file(file, path, .false., error)
     if (allocated(error)) return
-    call h5_read(file, '/frames/time', t, error)
-    if (.not. allocated(error)) call h5_read(file, '/frames/positions', r, error)
-    if (.not. allocated(error)) then
-      if (size(r, 3) /= size(t)) call fatal_error(error, "case file '"//path// &
-        "': /frames/time and /frames/positions have different lengths")
+    if (.not. h5_exists(file, '/frames')) then
+      call fatal_error(error, "case file '"//path//"': no /frames group (not a knotflow case file)")
+    else
+      call h5_read(file, '/frames/time', t, error)
+      if (.not. allocated(error)) call h5_read(file, '/frames/positions', r, error)
+      if (.not. allocated(error)) call checkpoint_frames(file, counted, error)
     end if
-    if (.not. allocated(error)) call check_finite_frames(path, t, r, error)
     call h5_close_file(file)
+    if (allocated(error)) return
+    if (size(r, 1) /= 3) then
+      call fatal_error(error, "case file '"//path//"': /frames/positions has shape ("//to_str(size(r, 3))//', '// &
+        to_str(size(r, 2))//', '//to_str(size(r, 1))//'), expected (frames, beads, 3)')
+      return
+    end if
+    if (size(r, 2) < 2) then
+      call fatal_error(error, "case file '"//path//"': /frames/positions holds "//to_str(size(r, 2))// &
+        ' bead(s) per frame, a chain needs at least 2')
+      return
+    end if
+    if (counted >= 0) then
+      n = int(min(int(min(size(t), size(r, 3)), i8), counted))
+    else if (size(r, 3) /= size(t)) then
+      call fatal_error(error, "case file '"//path//"': /frames/time and /frames/positions have different "// &
+        'lengths ('//to_str(size(t))//' and '//to_str(size(r, 3))//' frames)')
+      return
+    else
+      n = size(t)
+    end if
+    if (n < 1) then
+      call fatal_error(error, "case file '"//path//"': no complete frame (/frames is empty)")
+      return
+    end if
+    if (n < size(t)) t = t(1:n)
+    if (n < size(r, 3)) r = r(:, :, 1:n)
+    call check_finite_frames(path, t, r, error)
+    if (allocated(error)) return
+    do k = 2, n
+      if (.not. t(k) > t(k - 1)) then
+        call fatal_error(error, "case file '"//path//"': frame "//to_str(k - 1)//' (t = '//to_str(t(k), '(g0.6)')// &
+          ') is not after frame '//to_str(k - 2)//' (t = '//to_str(t(k - 1), '(g0.6)')//'): times must increase')
+        return
+      end if
+    end do
   end subroutine read_frames
+
+  !> The frames the newest checkpoint of an open file counts, without checking it: the larger
+  !> frame count of the slots (schema 3; a slot's count is written last) or /checkpoint/nframes
+  !> (older files); -1 when the file has no checkpoint.
+  subroutine checkpoint_frames(file, counted, error)
+    type(h5_file_t), intent(in) :: file
+    integer(i8), intent(out) :: counted
+    type(error_t), allocatable, intent(out) :: error
+    character(len=*), parameter :: groups(3) = [character(len=17) :: slot_groups(0), slot_groups(1), legacy_group]
+    integer(i8) :: n
+    integer :: k
+    counted = -1
+    do k = 1, size(groups)
+      if (.not. h5_exists(file, trim(groups(k))//'/nframes')) cycle
+      call h5_read(file, trim(groups(k))//'/nframes', n, error)
+      if (allocated(error)) return
+      counted = max(counted, n)
+    end do
+  end subroutine checkpoint_frames
 
   !> Every frame time and coordinate must be finite: the error names the file, the first bad
   !> frame (0-based), its time and the number of non-finite coordinates.

@@ -33,7 +33,8 @@ module kf_h5
     h5dcreate_f, h5dopen_f, h5dclose_f, h5dwrite_f, h5dread_f, h5dget_space_f, &
     h5dset_extent_f, h5pcreate_f, h5pclose_f, h5pset_chunk_f, h5pset_fletcher32_f, H5P_DATASET_CREATE_F, &
     h5tcopy_f, h5tclose_f, h5tequal_f, h5tset_size_f, h5tget_size_f, h5tset_strpad_f, h5tget_class_f, &
-    h5tis_variable_str_f, H5T_FORTRAN_S1, H5T_STR_NULLPAD_F, H5T_STRING_F, &
+    h5tis_variable_str_f, H5T_FORTRAN_S1, H5T_STR_NULLPAD_F, H5T_STRING_F, H5T_FLOAT_F, H5T_INTEGER_F, &
+    h5dget_type_f, &
     H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, H5T_STD_I32LE, H5T_STD_I64LE, h5kind_to_type, &
     H5_INTEGER_KIND
   implicit none
@@ -185,9 +186,42 @@ contains
     end if
     if (stat < 0) then
       file%id = -1
-      call fatal_error(error, "HDF5: cannot open file '"//path//"' (not an HDF5 file or not accessible)")
+      call fatal_error(error, "HDF5: cannot open file '"//path//"' ("//unopenable_reason(path)//')')
     end if
   end subroutine h5_open_file
+
+  !> Why HDF5 cannot open the existing `path`: a directory, an empty file, no HDF5 signature in
+  !> its first 8 bytes, or (with the signature) a truncated or damaged file.
+  function unopenable_reason(path) result(reason)
+    character(len=*), intent(in) :: path
+    character(len=:), allocatable :: reason
+    character(len=7), parameter :: signature_tail = 'HDF'//achar(13)//achar(10)//achar(26)//achar(10)
+    character(len=8) :: head
+    integer :: unit, stat
+    integer(i8) :: bytes
+    logical :: is_dir
+    inquire (file=path//'/.', exist=is_dir)
+    if (is_dir) then
+      reason = 'it is a directory'
+      return
+    end if
+    open (newunit=unit, file=path, access='stream', form='unformatted', action='read', status='old', iostat=stat)
+    if (stat /= 0) then
+      reason = 'not readable'
+      return
+    end if
+    inquire (unit=unit, size=bytes)
+    head = ''
+    if (bytes >= 8) read (unit, iostat=stat) head
+    close (unit)
+    if (bytes == 0) then
+      reason = 'an empty file, not HDF5'
+    else if (iachar(head(1:1)) /= 137 .or. head(2:8) /= signature_tail) then
+      reason = 'not an HDF5 file'
+    else
+      reason = 'an HDF5 file that is truncated or damaged'
+    end if
+  end function unopenable_reason
 
   !> Close the file (a closed file is left alone).
   subroutine h5_close_file(file, error)
@@ -1073,6 +1107,11 @@ contains
     type(c_ptr) :: ptr
     call open_dataset(file, name, did, error)
     if (allocated(error)) return
+    call check_numeric(did, file, name, error)
+    if (allocated(error)) then
+      call h5dclose_f(did, ignore)
+      return
+    end if
     ptr = buf
     call clear_os_error()
     call h5dread_f(did, memtype, ptr, stat)
@@ -1082,6 +1121,32 @@ contains
     end if
     call h5dclose_f(did, ignore)
   end subroutine read_raw
+
+  !> A dataset read into numbers must hold integers or floating-point numbers (not strings,
+  !> compounds, references, ...): the error names the file, the dataset and what it holds.
+  subroutine check_numeric(did, file, name, error)
+    integer(hid_t), intent(in) :: did
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: name
+    type(error_t), allocatable, intent(out) :: error
+    integer(hid_t) :: tid
+    integer :: stat, tclass, ignore
+    call h5dget_type_f(did, tid, stat)
+    if (stat < 0) then
+      call fail(error, file, 'get the type of dataset', name)
+      return
+    end if
+    call h5tget_class_f(tid, tclass, stat)
+    call h5tclose_f(tid, ignore)
+    if (stat < 0) then
+      call fail(error, file, 'get the type of dataset', name)
+    else if (tclass == H5T_STRING_F) then
+      call fatal_error(error, "HDF5: dataset '"//name//"' in '"//file%name()//"' holds strings, not numbers")
+    else if (tclass /= H5T_FLOAT_F .and. tclass /= H5T_INTEGER_F) then
+      call fatal_error(error, "HDF5: dataset '"//name//"' in '"//file%name()//"' does not hold numbers "// &
+        '(HDF5 type class '//to_str(tclass)//')')
+    end if
+  end subroutine check_numeric
 
   subroutine open_dataset(file, name, did, error)
     type(h5_file_t), intent(in) :: file
