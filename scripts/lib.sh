@@ -33,10 +33,11 @@ kf_as_root() {
 KF_APT_PACKAGES=(gcc gfortran cmake make git pkg-config openssh-client libopenmpi-dev openmpi-bin libhdf5-dev
                  libopenblas-dev liblapack-dev libfftw3-dev python3 python3-pip python3-venv)
 
-# Optional system packages: ffmpeg (MP4 movies; without it GIFs) and chromium (the browser test
-# of the report's 3-D viewer; skipped without it).  Installed when missing; a failure is only a
+# Optional system packages: ffmpeg (MP4 movies; without it GIFs), chromium (the browser test
+# of the report's 3-D viewer; skipped without it) and strace (the kill-at-every-write test;
+# without it only random kills).  Installed when missing; a failure is only a
 # warning.
-KF_APT_OPTIONAL=(ffmpeg chromium)
+KF_APT_OPTIONAL=(ffmpeg chromium strace)
 
 kf_ensure_optional_packages() {
   [ "${KNOTFLOW_NO_OPTIONAL:-0}" = 1 ] && return 0

@@ -57,7 +57,11 @@ def main_kf(argv=None) -> int:
     if args.closures < 1 and points is None:
         print("knotflow-kf: error: --closures must be >= 1", file=sys.stderr)
         return 2
-    res = knots.analyze_chain(r, closures=args.closures, seed=args.seed, points=points)
+    try:
+        res = knots.analyze_chain(r, closures=args.closures, seed=args.seed, points=points)
+    except ValueError as exc:
+        print(f"knotflow-kf: error: {args.chain}: {exc}", file=sys.stderr)
+        return 2
     mat = None
     core = None
     slip = False
