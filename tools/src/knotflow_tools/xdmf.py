@@ -27,6 +27,7 @@ import xml.etree.ElementTree as ET
 import h5py
 import numpy as np
 
+from . import add_version_option
 from .io import checkpoint_frames
 
 XDMF_SUFFIX = ".xdmf2"
@@ -207,6 +208,7 @@ def main(argv=None) -> int:
         description="Write an XDMF file <case>.xdmf2 beside each case file for ParaView "
                     "(File > Open: its 'Xdmf Reader') and VisIt (open as type Xdmf); it points "
                     "into the case file, copying no data.")
+    add_version_option(p)
     p.add_argument("cases", nargs="+", help="HDF5 case files")
     p.add_argument("--out", default=None,
                    help="output file (only with one case file; default <case>.xdmf2)")
