@@ -47,7 +47,7 @@ module kf_h5
   public :: h5_write_attr, h5_read_attr
   public :: h5_write, h5_read
   public :: h5_create_extendible, h5_append, h5_set_length, h5_length, h5_read_entry
-  public :: h5_extend_truncated
+  public :: h5_extend_truncated, h5_raise_end
   public :: h5_real, h5_int32, h5_int64
 
   !> Element kinds of extendible datasets (for `h5_create_extendible`).
@@ -1367,23 +1367,23 @@ contains
     call h5dclose_f(did, ignore)
   end subroutine h5_read_entry
 
-  !> A file cut short by a write that failed (full disk, file size limit) after HDF5 had
-  !> recorded its new end in the superblock cannot be opened ("truncated file"). Extend such a
-  !> file with zeros to the end address its superblock records (superblock versions 0-3, 8-byte
-  !> addresses, no user block), so that what was written before can be read and checked.
-  !> `extended` tells whether the file was such a file; `old_size` and `new_size` its sizes.
-  subroutine h5_extend_truncated(path, extended, old_size, new_size, error)
+  !> The end address (EOA) the superblock of the HDF5 file `path` records, and the byte offset
+  !> of that field (superblock versions 0-3, 8-byte addresses, no user block); `found` is false
+  !> for anything else (not HDF5, other layouts, unreadable). `size` is the file's size.
+  subroutine superblock_end(path, size, eoa, at, version, found)
     character(len=*), intent(in) :: path
-    logical, intent(out) :: extended
-    integer(i8), intent(out) :: old_size, new_size
-    type(error_t), allocatable, intent(out) :: error
+    integer(i8), intent(out) :: size, eoa
+    integer, intent(out) :: at, version
+    logical, intent(out) :: found
     character(len=1) :: head(48)
     character(len=8), parameter :: signature = char(137)//'HDF'//achar(13)//achar(10)//achar(26)//achar(10)
-    integer :: unit, ios, version, at, k
-    extended = .false.
-    new_size = 0
-    inquire (file=path, size=old_size)
-    if (old_size < 48) return
+    integer :: unit, ios, k
+    found = .false.
+    eoa = 0
+    at = 0
+    version = -1
+    inquire (file=path, size=size)
+    if (size < 48) return
     open (newunit=unit, file=path, access='stream', form='unformatted', status='old', action='read', iostat=ios)
     if (ios /= 0) return
     read (unit, iostat=ios) head
@@ -1406,10 +1406,30 @@ contains
     case default
       return
     end select
-    new_size = 0
     do k = 8, 1, -1
-      new_size = new_size*256 + iachar(head(at + k))
+      eoa = eoa*256 + iachar(head(at + k))
     end do
+    found = .true.
+  end subroutine superblock_end
+
+  !> A file cut short by a write that failed (full disk, file size limit) after HDF5 had
+  !> recorded its new end in the superblock cannot be opened ("truncated file"). Extend such a
+  !> file with zeros to the end address its superblock records (superblock versions 0-3, 8-byte
+  !> addresses, no user block), so that what was written before can be read and checked.
+  !> `extended` tells whether the file was such a file; `old_size` and `new_size` its sizes.
+  subroutine h5_extend_truncated(path, extended, old_size, new_size, error)
+    character(len=*), intent(in) :: path
+    logical, intent(out) :: extended
+    integer(i8), intent(out) :: old_size, new_size
+    type(error_t), allocatable, intent(out) :: error
+    integer :: unit, ios, at, version
+    logical :: found
+    extended = .false.
+    call superblock_end(path, old_size, new_size, at, version, found)
+    if (.not. found) then
+      new_size = 0
+      return
+    end if
     if (new_size <= old_size .or. new_size > 1024_i8*old_size + 2_i8**30) return
     open (newunit=unit, file=path, access='stream', form='unformatted', status='old', action='readwrite', &
           iostat=ios)
@@ -1421,6 +1441,41 @@ contains
     end if
     extended = .true.
   end subroutine h5_extend_truncated
+
+  !> The opposite case: a process killed while HDF5 flushed the file may have written new
+  !> objects (a new chunk of an extendible dataset, new metadata) at its end and the references
+  !> to them, but not yet the superblock with the new end address. HDF5 then sees them beyond
+  !> the end of the file's address space, fails on them and would allocate that space again.
+  !> Raise the recorded end to the file's size (superblock versions 0 and 1, which carry no
+  !> checksum; later versions are left alone). `raised` tells whether the file was such a file;
+  !> `old_end` and `new_end` are the recorded end before and after.
+  subroutine h5_raise_end(path, raised, old_end, new_end, error)
+    character(len=*), intent(in) :: path
+    logical, intent(out) :: raised
+    integer(i8), intent(out) :: old_end, new_end
+    type(error_t), allocatable, intent(out) :: error
+    integer :: unit, ios, at, version, k
+    logical :: found
+    character(len=1) :: bytes(8)
+    raised = .false.
+    call superblock_end(path, new_end, old_end, at, version, found)
+    if (.not. found .or. version > 1 .or. new_end <= old_end) then
+      new_end = old_end
+      return
+    end if
+    do k = 1, 8
+      bytes(k) = achar(int(mod(shiftr(new_end, 8*(k - 1)), 256_i8)))
+    end do
+    open (newunit=unit, file=path, access='stream', form='unformatted', status='old', action='readwrite', &
+          iostat=ios)
+    if (ios == 0) write (unit, pos=at + 1, iostat=ios) bytes
+    if (ios == 0) close (unit, iostat=ios)
+    if (ios /= 0) then
+      call fatal_error(error, "cannot record the end of '"//path//"' in its superblock")
+      return
+    end if
+    raised = .true.
+  end subroutine h5_raise_end
 
   !> Set the length of the last (extendible) dimension to `length`: truncates (the entries
   !> beyond are dropped) or extends (new entries hold the fill value 0).

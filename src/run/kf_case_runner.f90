@@ -19,7 +19,7 @@ module kf_case_runner
   use kf_run_diagnostics, only: run_diagnostics_t
   use kf_fs, only: remove_file, move_aside
   use kf_case_match, only: check_reusable
-  use kf_h5, only: h5_extend_truncated
+  use kf_h5, only: h5_extend_truncated, h5_raise_end
   implicit none
   private
 
@@ -98,6 +98,19 @@ contains
           return
         end if
       end if
+    end if
+    if (state == 'running') then
+      ! A kill while HDF5 flushed may have left objects written beyond the end the superblock
+      ! records: the end is raised to include them before the file is opened.
+      call h5_raise_end(path, extended, old_size, new_size, error)
+      if (allocated(error)) then
+        status = case_failed
+        message = error%message
+        return
+      end if
+      if (extended) call report('case '//name//': '//path//' holds '//to_str(new_size - old_size)// &
+        ' bytes written after the end its superblock records (killed while writing): end raised to '// &
+        to_str(new_size)//' bytes')
     end if
     if (state == 'finished' .or. state == 'running') then
       ! Reused only when the stored scene is the requested one (knotflow checks every case at
