@@ -112,6 +112,8 @@ def check_rerun(label, frames_done):
         kind = "resumed"
         if frames_done is not None:
             assert int(m.group(1)) >= frames_done, (label, frames_done, again.stdout)
+    elif "1 skipped (already finished)" in again.stdout:
+        kind = "finished before the kill"
     elif "is damaged" in again.stdout:
         kind = "moved aside"
         assert frames_done is None or frames_done < 2, (label, frames_done, again.stdout)
