@@ -20,7 +20,8 @@ Kill points:
   'slow' test); a larger STRIDE at every STRIDE-th write, plus every write of frame 16 (the
   one that allocates the second chunk of /frames/positions).
   Skipped, with a message, when strace is not installed or cannot trace (no ptrace).
-- at RANDOM random moments of the run (SIGKILL from this script after a random delay).
+- at RANDOM random moments of the run (SIGKILL from this script after a random number of
+  frames and a random delay of up to 0.06 s, about one frame).
 
 Usage: check_kill_points.py KNOTFLOW WORKDIR [STRIDE] [RANDOM]
 """
@@ -158,15 +159,27 @@ if strace:
     print("kills at writes: " + ", ".join("%d %s" % (v, k) for k, v in sorted(counts.items()))
           + "; every rerun equal to the uninterrupted run bit for bit")
 
-# kills at random moments (a run takes about a second; the delays cover start-up to the end)
+# kills at random moments: after a random number of frames (progress lines) and a random
+# fraction of the next frame's time
 rng = random.Random(20261201)
 random_counts = {}
 for i in range(n_random):
     shutil.rmtree(out, ignore_errors=True)
     proc = subprocess.Popen([exe, scene], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
-    time.sleep(rng.uniform(0.05, 1.5))
+    wanted = rng.randrange(0, len(reference["time"]) - 1)
+    seen = 0
+    lines = []
+    while seen < wanted:
+        line = proc.stdout.readline()
+        if not line:
+            break
+        lines.append(line)
+        if progress.search(line):
+            seen += 1
+    time.sleep(rng.uniform(0.0, 0.06))
     proc.send_signal(signal.SIGKILL)
-    stdout = proc.communicate()[0]
+    lines.append(proc.communicate()[0])
+    stdout = "".join(lines)
     frames_done = len(progress.findall(stdout)) + (1 if progress.search(stdout) else 0)
     if proc.returncode == 0:
         kind = "finished before the kill"
