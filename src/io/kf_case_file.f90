@@ -68,7 +68,7 @@ module kf_case_file
   implicit none
   private
 
-  public :: case_file_status, read_frames, verify_case_file
+  public :: case_file_status, read_frames, verify_case_file, has_checkpoint
 
   !> Version of the case file layout written by `create`. 1: files without the attribute
   !> (before it existed); 2: the attribute itself; 3: two checkpoint slots written alternately
@@ -1257,6 +1257,21 @@ contains
       end if
     end do
   end subroutine read_frames
+
+  !> Does the case file `path` hold a checkpoint (of at least one frame)? A file killed while it
+  !> was created has none (and may lack its scene attributes): nothing in it can be reused.
+  logical function has_checkpoint(path)
+    character(len=*), intent(in) :: path
+    type(h5_file_t) :: file
+    type(error_t), allocatable :: error
+    integer(i8) :: counted
+    has_checkpoint = .false.
+    call h5_open_file(file, path, .false., error)
+    if (allocated(error)) return
+    call checkpoint_frames(file, counted, error)
+    has_checkpoint = .not. allocated(error) .and. counted >= 1
+    call h5_close_file(file)
+  end function has_checkpoint
 
   !> The frames the newest checkpoint of an open file counts, without checking it: the larger
   !> frame count of the slots (schema 3; a slot's count is written last) or /checkpoint/nframes

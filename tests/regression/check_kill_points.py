@@ -17,8 +17,9 @@ Kill points:
   so the kill lands between two writes of a checkpoint as often as anywhere else. The pwrite
   calls of the uninterrupted run are counted first, with the progress line after each frame
   (to know which frames were complete at a kill point). STRIDE = 1 kills at every write (the
-  'slow' test); a larger STRIDE at every STRIDE-th write, plus every write of frame 16 (the
-  one that allocates the second chunk of /frames/positions).
+  'slow' test); a larger STRIDE at every STRIDE-th write, plus the first 8 writes (creating
+  the file) and every write of frame 16 (the one that allocates the second chunk of
+  /frames/positions).
   Skipped, with a message, when strace is not installed or cannot trace (no ptrace).
 - at RANDOM random moments of the run (SIGKILL from this script after a random number of
   frames and a random delay of up to 0.06 s, about one frame).
@@ -143,7 +144,8 @@ if strace:
     for k in dense_frames:    # frame k >= 1 is written after the progress line of frame k - 1
         if k - 1 in first_write and k in first_write:
             dense.update(range(first_write[k - 1], first_write[k]))
-    points = sorted(set(range(1, total + 1, stride)) | dense)
+    # the first writes create the file: a kill there leaves a file without scene attributes
+    points = sorted(set(range(1, total + 1, stride)) | dense | set(range(1, 9)))
     print("%d pwrite64 calls in the uninterrupted run, %d progress lines; %d kill points"
           % (total, reported, len(points)))
     for n in points:
