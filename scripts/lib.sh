@@ -42,10 +42,11 @@ KF_APT_PACKAGES=(gcc gfortran cmake make git pkg-config openssh-client libopenmp
 # Optional system packages: ffmpeg (MP4 movies; without it GIFs), chromium (the browser test
 # of the report's 3-D viewer), a single-node SLURM with munge (the scheduler test of the job
 # scripts, tests/jobs, whose jobs run as another user: their Python tools use the system's
-# numpy, h5py and matplotlib) and shellcheck (the lint tests); those tests are skipped without
-# them. Installed when missing; a failure is only a warning.
+# numpy, h5py and matplotlib), shellcheck (the lint tests) and strace (the kill-at-every-write
+# test; without it only random kills); those tests are skipped without them. Installed when
+# missing; a failure is only a warning.
 KF_APT_OPTIONAL=(ffmpeg chromium munge slurmctld slurmd slurm-client python3-numpy python3-h5py
-                 python3-matplotlib python3-setuptools shellcheck)
+                 python3-matplotlib python3-setuptools shellcheck strace)
 
 kf_ensure_optional_packages() {
   [ "${KNOTFLOW_NO_OPTIONAL:-0}" = 1 ] && return 0

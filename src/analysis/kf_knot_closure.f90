@@ -70,6 +70,10 @@ contains
       call fatal_error(error, 'knot closures: the number of closures must be >= 1, got '//to_str(nc))
       return
     end if
+    if (n < 2) then
+      call fatal_error(error, 'knot closures: the chain has '//to_str(n)//' bead(s), at least 2 are needed')
+      return
+    end if
     st = 0_i8
     if (present(stream)) st = stream
     ! closure points and projection directions come from separate streams, so that the points

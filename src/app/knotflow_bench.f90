@@ -16,6 +16,8 @@ program knotflow_bench
   use kf_stepper, only: stepper_t
   use kf_stepper_factory, only: make_stepper
   use kf_hydro_rpy, only: rpy_model_t
+  use kf_cli, only: standard_option
+  use kf_exit, only: exit_program
   implicit none
 
   type(scene_t) :: scene
@@ -30,15 +32,17 @@ program knotflow_bench
   trefoil_case = .false.
   do i = 1, command_argument_count()
     call get_command_argument(i, arg)
+    call standard_option('knotflow-bench', arg, 'usage: knotflow-bench [--trefoil-case]'//new_line('a')// &
+      '       knotflow-bench --help | --version'//new_line('a')// &
+      'Times one velocity evaluation (none, rpy; trefoil and candy-cane); --trefoil-case also runs'// &
+      new_line('a')//'the reference trefoil case (rpy, t_end = 1000).')
     select case (trim(arg))
     case ('--trefoil-case')
       trefoil_case = .true.
-    case ('-h', '--help')
-      write (output_unit, '(a)') 'usage: knotflow-bench [--trefoil-case]'
-      stop
     case default
-      write (error_unit, '(a)') "ERROR: knotflow-bench: unknown argument '"//trim(arg)//"' (allowed: --trefoil-case)"
-      stop 1
+      write (error_unit, '(a)') "knotflow-bench: error: unknown argument '"//trim(arg)// &
+        "' (allowed: --trefoil-case, --help, --version)"
+      call exit_program(2)
     end select
   end do
 

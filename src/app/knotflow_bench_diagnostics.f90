@@ -14,6 +14,8 @@ program knotflow_bench_diagnostics
   use kf_stepper, only: stepper_t
   use kf_stepper_factory, only: make_stepper
   use kf_run_diagnostics, only: run_diagnostics_t
+  use kf_cli, only: standard_option
+  use kf_exit, only: exit_program
   implicit none
 
   type(scene_t) :: scene
@@ -21,10 +23,16 @@ program knotflow_bench_diagnostics
   character(len=9), parameter :: shapes(2) = ['trefoil  ', 'candycane']
   integer :: ishape
   real(wp) :: t_eval, t_diag, t_with, t_without
+  character(len=64) :: arg
 
   if (command_argument_count() > 0) then
-    write (error_unit, '(a)') 'usage: knotflow-bench-diagnostics (no arguments)'
-    stop 1
+    call get_command_argument(1, arg)
+    call standard_option('knotflow-bench-diagnostics', arg, 'usage: knotflow-bench-diagnostics'// &
+      new_line('a')//'       knotflow-bench-diagnostics --help | --version'//new_line('a')// &
+      'Times the run diagnostics of one accepted step against one RPY evaluation (trefoil, candy-cane).')
+    write (error_unit, '(a)') "knotflow-bench-diagnostics: error: unknown argument '"//trim(arg)// &
+      "' (allowed: no arguments, --help, --version)"
+    call exit_program(2)
   end if
   write (output_unit, '(a)') '# run diagnostics per accepted step against one RPY evaluation, median'
   write (output_unit, '(a10,a6,a16,a18,a22)') 'shape', 'N', 'rpy eval [us]', 'diagnostics [us]', &

@@ -14,6 +14,7 @@ program knotflow_bench_knots
   use kf_knot_closure, only: knot_stats_t, analyse_closures
   use kf_knot_matrix, only: knot_matrix, knot_core, n_subchains
   use kf_analysis_farm, only: analysis_farm_t, farm_start, farm_stop, farm_max, farm_barrier
+  use kf_cli, only: standard_option
   implicit none
 
   type(analysis_farm_t) :: farm
@@ -28,6 +29,11 @@ program knotflow_bench_knots
   minlen = 10
   if (command_argument_count() >= 1) then
     call get_command_argument(1, arg)
+    call standard_option('knotflow-bench-knots', arg, 'usage: [mpirun -n P] knotflow-bench-knots '// &
+      '[MATRIX_CLOSURES [MIN_LENGTH]]'//new_line('a')//'       knotflow-bench-knots --help | --version'// &
+      new_line('a')//'Times k_f of an N = 99 trefoil frame (1000 closures) and the knot matrix of an '// &
+      'N = 152'//new_line('a')//'candy-cane frame (MATRIX_CLOSURES per subchain, default 100; subchains of '// &
+      'at least'//new_line('a')//'MIN_LENGTH beads, default 10) over the MPI ranks.')
     read (arg, *, iostat=stat) mclos
     if (stat /= 0 .or. mclos < 1) call die('matrix_closures: invalid value "'//trim(arg)//'" (allowed: integer >= 1)')
   end if

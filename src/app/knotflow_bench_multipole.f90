@@ -14,6 +14,7 @@ program knotflow_bench_multipole
   use kf_hydro_multipole, only: multipole_model_t
   use kf_scene, only: chain_params_t
   use kf_chain_shapes, only: build_initial_chain
+  use kf_cli, only: standard_option
   implicit none
 
   integer, parameter :: sizes(4) = [10, 20, 99, 152]
@@ -29,6 +30,10 @@ program knotflow_bench_multipole
   max_seconds = 60.0_wp
   if (command_argument_count() >= 1) then
     call get_command_argument(1, arg)
+    call standard_option('knotflow-bench-multipole', arg, 'usage: knotflow-bench-multipole [MAX_SECONDS]'// &
+      new_line('a')//'       knotflow-bench-multipole --help | --version'//new_line('a')// &
+      'Times one multipole evaluation (assembly, factorisation, solves, lubrication) for N = 10-152'// &
+      new_line('a')//'and L = 1-4; sizes predicted to take more than MAX_SECONDS (default 60) are skipped.')
     read (arg, *, iostat=ios) max_seconds
     if (ios /= 0 .or. max_seconds <= 0.0_wp) then
       write (error_unit, '(a)') 'knotflow-bench-multipole: error: max_seconds '//trim(arg)// &

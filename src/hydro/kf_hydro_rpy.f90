@@ -21,8 +21,9 @@
 !> single pair loops that use the symmetry of the pair (mu_ji = mu_ij, C_ji:E = -C_ij:E) and
 !> allocate nothing (work arrays are allocated when N changes).
 module kf_hydro_rpy
-  use kf_kinds, only: wp
+  use kf_kinds, only: wp, i8
   use kf_pair_geometry, only: pair_geometry_t
+  use kf_pairs, only: pair_count, pair_row_offset
   use kf_error, only: error_t
   use kf_hydro_model, only: hydro_model_t
   implicit none
@@ -81,19 +82,22 @@ contains
     this%x = r(1, :)
     this%y = r(2, :)
     this%z = r(3, :)
-    call tabulate_pairs(n, this%x, this%y, this%z, this%dx, this%dy, this%dz, this%a, this%bb, &
+    call tabulate_pairs(n, pair_count(n), this%x, this%y, this%z, this%dx, this%dy, this%dz, this%a, this%bb, &
                         this%c1, this%c2)
   end subroutine rpy_prepare
 
-  !> The pair table of rpy_prepare (explicit-shape arrays: no aliasing, the j loop vectorises).
-  pure subroutine tabulate_pairs(n, x, y, z, dx, dy, dz, a, bb, c1, c2)
+  !> The pair table of rpy_prepare (explicit-shape arrays: no aliasing, the j loop vectorises;
+  !> np = pair_count(n) and the packed indices are 64-bit, kf_pairs).
+  pure subroutine tabulate_pairs(n, np, x, y, z, dx, dy, dz, a, bb, c1, c2)
     integer, intent(in) :: n
+    integer(i8), intent(in) :: np
     real(wp), intent(in) :: x(n), y(n), z(n)
-    real(wp), intent(out) :: dx(n*(n-1)/2), dy(n*(n-1)/2), dz(n*(n-1)/2), a(n*(n-1)/2), bb(n*(n-1)/2), c1(n*(n-1)/2), c2(n*(n-1)/2)
-    integer :: i, j, off
+    real(wp), intent(out) :: dx(np), dy(np), dz(np), a(np), bb(np), c1(np), c2(np)
+    integer :: i, j
+    integer(i8) :: off
     real(wp) :: xi, yi, zi, r2, r2s, rinv, rf, rf2, rf5, wf, wn
     do i = 1, n - 1
-      off = pair_offset(i, n)
+      off = pair_row_offset(i, n)
       xi = x(i)
       yi = y(i)
       zi = z(i)
@@ -120,20 +124,14 @@ contains
     end do
   end subroutine tabulate_pairs
 
-  !> Packed index of pair (i, j), i < j, is pair_offset(i, n) + j.
-  pure integer function pair_offset(i, n)
-    integer, intent(in) :: i, n
-    pair_offset = (i - 1)*n - (i*(i - 1))/2 - i
-  end function pair_offset
-
   subroutine allocate_work(this, n)
     class(rpy_model_t), intent(inout) :: this
     integer, intent(in) :: n
-    integer :: np
+    integer(i8) :: np
     if (allocated(this%x)) deallocate (this%x, this%y, this%z, this%ux, this%uy, this%uz, &
                                        this%fx, this%fy, this%fz, this%dx, this%dy, this%dz, &
                                        this%a, this%bb, this%c1, this%c2)
-    np = max(1, (n*(n - 1))/2)
+    np = max(1_i8, pair_count(n))
     allocate (this%x(n), this%y(n), this%z(n), this%ux(n), this%uy(n), this%uz(n), &
               this%fx(n), this%fy(n), this%fz(n))
     allocate (this%dx(np), this%dy(np), this%dz(np), this%a(np), this%bb(np), this%c1(np), this%c2(np))
@@ -153,7 +151,7 @@ contains
     this%ux = third*this%fx
     this%uy = third*this%fy
     this%uz = third*this%fz
-    call mobility_pairs(n, this%dx, this%dy, this%dz, this%a, this%bb, this%fx, this%fy, this%fz, &
+    call mobility_pairs(n, pair_count(n), this%dx, this%dy, this%dz, this%a, this%bb, this%fx, this%fy, this%fz, &
                         this%ux, this%uy, this%uz)
     u(1, :) = this%ux
     u(2, :) = this%uy
@@ -161,14 +159,16 @@ contains
   end subroutine rpy_apply
 
   !> Pair loop of rpy_apply: u += sum over pairs of mu_ij f_j and mu_ji f_i.
-  pure subroutine mobility_pairs(n, pdx, pdy, pdz, pa, pbb, fx, fy, fz, ux, uy, uz)
+  pure subroutine mobility_pairs(n, np, pdx, pdy, pdz, pa, pbb, fx, fy, fz, ux, uy, uz)
     integer, intent(in) :: n
-    real(wp), intent(in) :: pdx(n*(n-1)/2), pdy(n*(n-1)/2), pdz(n*(n-1)/2), pa(n*(n-1)/2), pbb(n*(n-1)/2), fx(n), fy(n), fz(n)
+    integer(i8), intent(in) :: np
+    real(wp), intent(in) :: pdx(np), pdy(np), pdz(np), pa(np), pbb(np), fx(n), fy(n), fz(n)
     real(wp), intent(inout) :: ux(n), uy(n), uz(n)
-    integer :: i, j, off
+    integer :: i, j
+    integer(i8) :: off
     real(wp) :: fxi, fyi, fzi, uxi, uyi, uzi, df_j, df_i, a, dx, dy, dz
     do i = 1, n - 1
-      off = pair_offset(i, n)
+      off = pair_row_offset(i, n)
       fxi = fx(i)
       fyi = fy(i)
       fzi = fz(i)
@@ -213,7 +213,7 @@ contains
     this%ux = 0.0_wp
     this%uy = 0.0_wp
     this%uz = 0.0_wp
-    call strain_pairs(n, this%dx, this%dy, this%dz, this%c1, this%c2, [e11, e12, e13, e22, e23, e33], &
+    call strain_pairs(n, pair_count(n), this%dx, this%dy, this%dz, this%c1, this%c2, [e11, e12, e13, e22, e23, e33], &
                       this%ux, this%uy, this%uz)
     u(1, :) = u(1, :) + this%ux
     u(2, :) = u(2, :) + this%uy
@@ -221,11 +221,13 @@ contains
   end subroutine rpy_disturb
 
   !> Pair loop of rpy_disturb; es = (E11, E12, E13, E22, E23, E33).
-  pure subroutine strain_pairs(n, pdx, pdy, pdz, pc1, pc2, es, ux, uy, uz)
+  pure subroutine strain_pairs(n, np, pdx, pdy, pdz, pc1, pc2, es, ux, uy, uz)
     integer, intent(in) :: n
-    real(wp), intent(in) :: pdx(n*(n-1)/2), pdy(n*(n-1)/2), pdz(n*(n-1)/2), pc1(n*(n-1)/2), pc2(n*(n-1)/2), es(6)
+    integer(i8), intent(in) :: np
+    real(wp), intent(in) :: pdx(np), pdy(np), pdz(np), pc1(np), pc2(np), es(6)
     real(wp), intent(inout) :: ux(n), uy(n), uz(n)
-    integer :: i, j, off
+    integer :: i, j
+    integer(i8) :: off
     real(wp) :: dx, dy, dz, edx, edy, edz, ded, c1, c2, wx, wy, wz, uxi, uyi, uzi
     real(wp) :: e11, e12, e13, e22, e23, e33
     e11 = es(1)
@@ -235,7 +237,7 @@ contains
     e23 = es(5)
     e33 = es(6)
     do i = 1, n - 1
-      off = pair_offset(i, n)
+      off = pair_row_offset(i, n)
       uxi = 0.0_wp
       uyi = 0.0_wp
       uzi = 0.0_wp

@@ -10,22 +10,23 @@
 !>   /frames/observables/{rg,a,b,c,theta,phi} (nframes,) float64, .../close_pairs int32,
 !>   /frames/integrator/{steps,rejected} int64, /frames/integrator/dt float64: all chunked,
 !>   extendible along the frame axis and protected by HDF5's Fletcher-32 checksum filter.
-!> - /checkpoint/{time, positions (N, 3), dt, steps, rejected, nframes}: the state of the last
-!>   frame, rewritten with every frame; /checkpoint/digest (int64): a digest of every part of
-!>   the checkpoint (stepper and diagnostics state included), written just before nframes
-!>   (absent from older files).
-!> - /checkpoint/stepper/{reals float64, ints int64} (1-D) with the group attribute `name` (the
-!>   &integrator method): the time stepper's whole state as exported by its `get_state`
-!>   (kf_stepper), rewritten with every frame when the caller passes it to `append_frame` and
-!>   returned by `open_resume`. Files written before it existed have none: they resume from
-!>   /checkpoint/{dt, steps, rejected} alone.
+!> - Two checkpoint slots /checkpoint/slot0 and /checkpoint/slot1 (schema 3), written
+!>   alternately: the checkpoint after frame count k goes to slot mod(k, 2). Each holds {time,
+!>   positions (N, 3), dt, steps, rejected, nframes, digest} and, when given, stepper/{reals
+!>   float64, ints int64} with the group attribute `name` (the &integrator method: the time
+!>   stepper's whole state as exported by its `get_state`, kf_stepper), `counters` (int64, the
+!>   caller's run counters) and diagnostics/{counters, values, ongoing} (the run diagnostics'
+!>   state). `digest` (int64) is a digest of every other part of the slot, written just before
+!>   `nframes`. Files of schema 1 and 2 have one checkpoint with the same parts directly in
+!>   /checkpoint (without digest before it existed, without stepper state before that); they
+!>   still resume.
 !> - With run diagnostics (kf_run_diagnostics; `enable_diagnostics` after `create`):
 !>   /frames/diagnostics/{strand_passages, overlap_episodes} int64 (cumulative since t = 0),
 !>   overlapping_pairs int32, min_distance and max_bond_strain float64 (of the frame's
 !>   configuration); root attributes diagnostics.{strand_passages, first_passage_time,
 !>   overlap_episodes, overlap_mean_duration, overlap_max_duration, max_overlapping_pairs,
 !>   min_distance, max_bond_strain} (run totals, rewritten with every frame); and the monitor
-!>   state in /checkpoint/diagnostics/{counters, values, ongoing} (`restore_diagnostics`).
+!>   state in the checkpoint (`restore_diagnostics`).
 !>   Files without /frames/diagnostics are valid: diagnostics are optional.
 !> - With the fibre's stresslet (kf_rheology; `enable_stresslet` after `create`):
 !>   /frames/stresslet/{hydrodynamic, elastic} (nframes, 3, 3) float64 (symmetric traceless,
@@ -39,16 +40,16 @@
 !>   a kill says 'running'. Such a file has no /checkpoint yet, `open_resume` then fails and the
 !>   caller recreates the case from scratch. A file whose HDF5 structure was damaged by a kill
 !>   reports 'corrupt: ...' from `case_file_status` and is recreated as well.
-!> - `append_frame` appends to every /frames dataset and flushes, then rewrites /checkpoint
-!>   (digest, then nframes = the new frame count) and flushes again; every HDF5 status is
-!>   checked, and a failed write names the operating system's reason. If the run is killed or a
-!>   write fails (full disk) in between, /frames may hold entries beyond the checkpoint (or some
-!>   datasets one entry more than others): `open_resume` truncates all of /frames to the
-!>   checkpoint's nframes, so no frame is lost or duplicated. A write that fails while the frame
-!>   is flushed leaves the previous checkpoint untouched.
-!> - `open_resume` trusts a checkpoint only when it is whole: its digest matches its parts and
-!>   it equals the last frame it counts (time and positions). Otherwise it fails and the caller
-!>   moves the file aside (kf_case_runner).
+!> - `append_frame` appends to every /frames dataset and flushes, then writes the checkpoint
+!>   into the slot the previous frame did not use (digest, then nframes last) and flushes
+!>   again; every HDF5 status is checked, and a failed write names the operating system's
+!>   reason. A kill or a failed write (full disk) at any moment leaves at least one whole
+!>   checkpoint: the previous one in the other slot while a slot is rewritten. /frames may hold
+!>   entries beyond it (or some datasets one entry more than others): `open_resume` truncates
+!>   all of /frames to the checkpoint's nframes, so no frame is lost or duplicated.
+!> - `open_resume` continues from the newest checkpoint that is whole: its digest matches its
+!>   parts and it equals the frame it counts (time and positions). When no slot is whole it
+!>   fails and the caller moves the file aside (kf_case_runner).
 !> - `finish` writes status = 'finished' only after the last frame is flushed, the file closed,
 !>   read back and verified (`verify_case_file`: frame counts, checksums, finite positions,
 !>   times from 0 to t_end, checkpoint = last frame).
@@ -63,20 +64,35 @@ module kf_case_file
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_shape, only: shape_t
-  use kf_run_diagnostics, only: run_diagnostics_t, configuration_diagnostics
   use kf_rheology, only: fibre_stresslet_t
+  use kf_run_diagnostics, only: run_diagnostics_t, configuration_diagnostics
   use kf_build_info, only: knotflow_version, knotflow_git_hash, knotflow_compiler, knotflow_flags
   use kf_h5, only: h5_file_t, h5_create_file, h5_open_file, h5_close_file, h5_flush, &
     h5_create_group, h5_exists, h5_attr_exists, h5_write_attr, h5_read_attr, h5_write, h5_read, &
-    h5_create_extendible, h5_append, h5_set_length, h5_length, h5_real, h5_int32, h5_int64, h5_read_entry
+    h5_create_extendible, h5_append, h5_set_length, h5_length, h5_real, h5_int32, h5_int64, h5_read_entry, &
+    h5_delete, h5_move
   implicit none
   private
 
-  public :: case_file_status, read_frames, verify_case_file
+  public :: case_file_status, read_frames, verify_case_file, has_checkpoint
 
   !> Version of the case file layout written by `create`. 1: files without the attribute
-  !> (before it existed); 2: the attribute itself. Raise it with any change a reader must know.
-  integer(i4), parameter, public :: case_schema_version = 2
+  !> (before it existed); 2: the attribute itself; 3: two checkpoint slots written alternately
+  !> (/checkpoint/slot0, /checkpoint/slot1) instead of one /checkpoint rewritten in place.
+  !> Raise it with any change a reader must know.
+  integer(i4), parameter, public :: case_schema_version = 3
+
+  !> The checkpoint slots of schema 3: the checkpoint of frame count k is written to
+  !> slot_groups(mod(k, 2)), so the other slot keeps the previous checkpoint whole while one is
+  !> rewritten. Files of schema 1 and 2 have a single checkpoint in `legacy_group`.
+  character(len=*), parameter :: slot_groups(0:1) = [character(len=17) :: '/checkpoint/slot0', &
+    '/checkpoint/slot1']
+  character(len=*), parameter :: legacy_group = '/checkpoint'
+
+  !> The status attribute is stored with at least this many bytes (null-padded), so that
+  !> 'running' and 'finished' replace each other in place (a kill while the root object header
+  !> is flushed then leaves one or the other, never no status).
+  integer, parameter :: status_capacity = 64
 
   integer, parameter :: kind_str = 1, kind_i4 = 2, kind_i8 = 3, kind_real = 4, kind_real1 = 5, &
     kind_real2 = 6
@@ -115,6 +131,17 @@ module kf_case_file
     integer(i8), allocatable :: ints(:)
   end type stepper_checkpoint_t
 
+  !> One checkpoint as read back from a file: the state after frame `nframes`.
+  type :: checkpoint_t
+    integer(i8) :: nframes = 0, steps = 0, rejected = 0
+    real(wp) :: t = 0.0_wp, dt = 0.0_wp
+    real(wp), allocatable :: r(:, :)
+    type(stepper_checkpoint_t) :: stepper
+    integer(i8), allocatable :: counters(:)         !< the caller's run counters (or none)
+    integer(i8), allocatable :: diag_counters(:)    !< run diagnostics state (or none)
+    real(wp), allocatable :: diag_values(:), diag_ongoing(:, :)
+  end type checkpoint_t
+
   !> An open case file being written by the simulation.
   type, public :: case_file_t
     private
@@ -125,6 +152,7 @@ module kf_case_file
     logical :: diagnostics = .false.     !< the file has /frames/diagnostics
     logical :: stresslet = .false.       !< the file has /frames/stresslet
     real(wp) :: flushed_time = -1.0_wp   !< time of the last checkpoint flushed (-1: none)
+    type(checkpoint_t) :: resumed         !< the checkpoint `open_resume` continued from
   contains
     !> create(path, case_name, n_beads, scene_text, [scene_attrs,] rotation, error): the
     !> scene attributes can also be written afterwards with `write_attribute`.
@@ -294,7 +322,7 @@ contains
     this%diagnostics = .false.
     this%stresslet = .false.
     this%flushed_time = -1.0_wp
-    call h5_write_attr(this%file, '/', 'status', 'running', error)
+    call h5_write_attr(this%file, '/', 'status', status_value('running'), error)
     if (allocated(error)) return
     call h5_write_attr(this%file, '/', 'schema_version', case_schema_version, error)
     if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'knotflow_version', knotflow_version, error)
@@ -409,26 +437,17 @@ contains
     has_diagnostics = this%diagnostics
   end function has_diagnostics
 
-  !> Restore the run diagnostics from /checkpoint/diagnostics of a file opened with
-  !> `open_resume` (`diag` initialised for the file's number of beads).
+  !> Restore the run diagnostics from the checkpoint (its `diagnostics` group) that
+  !> `open_resume` continued from (`diag` initialised for the file's number of beads).
   subroutine restore_diagnostics(this, diag, error)
     class(case_file_t), intent(inout) :: this
     type(run_diagnostics_t), intent(inout) :: diag
     type(error_t), allocatable, intent(out) :: error
-    integer(i8), allocatable :: counters(:)
-    real(wp), allocatable :: values(:), ongoing(:, :)
-    logical :: stored
-    stored = this%diagnostics   ! then the query: in one expression the compiler may skip it
-    if (stored) stored = h5_exists(this%file, '/checkpoint/diagnostics/counters')
-    if (.not. stored) then
+    if (.not. (this%diagnostics .and. allocated(this%resumed%diag_counters))) then
       call fatal_error(error, "case file '"//this%file%name()//"' has no diagnostics checkpoint")
       return
     end if
-    call h5_read(this%file, '/checkpoint/diagnostics/counters', counters, error)
-    if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/diagnostics/values', values, error)
-    if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/diagnostics/ongoing', ongoing, error)
-    if (allocated(error)) return
-    call diag%set_state(counters, values, ongoing, error)
+    call diag%set_state(this%resumed%diag_counters, this%resumed%diag_values, this%resumed%diag_ongoing, error)
     if (allocated(error)) error%message = "case file '"//this%file%name()//"': "//error%message
   end subroutine restore_diagnostics
 
@@ -436,10 +455,14 @@ contains
   !> rewrite /checkpoint with this state and flush the file. A file with diagnostics
   !> (`enable_diagnostics`) needs `diagnostics`, the run's monitor after the frame's last step:
   !> its per-frame values, run totals (root attributes) and state (checkpoint) are written too.
-  !> `stepper`, the time stepper's state after the frame's last step, goes to
-  !> /checkpoint/stepper. A file with the stresslet (`enable_stresslet`) needs `stresslet`,
-  !> the fibre's stresslet at the frame.
-  subroutine append_frame(this, t, r, shape, steps, rejected, dt, error, diagnostics, stepper, stresslet)
+  !> `stepper`, the time stepper's state after the frame's last step, goes to the checkpoint's
+  !> `stepper` group; `counters`, any run counters of the caller (e.g. the hydrodynamic model's
+  !> work), to its `counters` dataset (`open_resume` returns both).
+  !> The checkpoint is written to the slot the previous frame did not use (schema 3), so a kill
+  !> or a failed write while it is written leaves the previous checkpoint whole. A file with the
+  !> stresslet (`enable_stresslet`) needs `stresslet`, the fibre's stresslet at the frame.
+  subroutine append_frame(this, t, r, shape, steps, rejected, dt, error, diagnostics, stepper, counters, &
+                          stresslet)
     class(case_file_t), intent(inout) :: this
     real(wp), intent(in) :: t
     real(wp), intent(in) :: r(:, :)
@@ -449,11 +472,10 @@ contains
     type(error_t), allocatable, intent(out) :: error
     type(run_diagnostics_t), intent(in), optional :: diagnostics
     type(stepper_checkpoint_t), intent(in), optional :: stepper
+    integer(i8), intent(in), optional :: counters(:)
     type(fibre_stresslet_t), intent(in), optional :: stresslet
     real(wp), allocatable :: rc(:, :)
-    integer(i8) :: digest(2), counters(5)
-    real(wp) :: values(5)
-    real(wp), allocatable :: ongoing(:, :)
+    type(checkpoint_t) :: ck
     if (.not. this%file%is_open()) then
       call fatal_error(error, 'case file: append_frame on a file that is not open')
       return
@@ -518,27 +540,24 @@ contains
     this%nframes = this%nframes + 1
     this%last_time = t
     if (present(diagnostics)) then
-      call write_diagnostics_state(this%file, diagnostics, error, counters, values, ongoing)
+      call write_diagnostics_totals(this%file, diagnostics, error)
       if (allocated(error)) return
+      allocate (ck%diag_counters(5), ck%diag_values(5))
+      call diagnostics%get_state(ck%diag_counters, ck%diag_values, ck%diag_ongoing)
+      call pad_columns(ck%diag_ongoing)
     end if
-    call h5_write(this%file, '/checkpoint/time', t, error)
-    if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/positions', rc, error)
-    if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/dt', dt, error)
-    if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/steps', steps, error)
-    if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/rejected', rejected, error)
-    if (present(stepper) .and. .not. allocated(error)) call write_stepper(this%file, stepper, error)
-    ! The digest of every part, then nframes last: a checkpoint is only trusted up to the frame
-    ! count written with it, and only when its parts belong together (`resume` recomputes it).
-    if (.not. allocated(error)) then
-      if (present(stepper)) then
-        digest = checkpoint_digest(this%nframes, t, rc, dt, steps, rejected, stepper%reals, stepper%ints)
-      else
-        digest = checkpoint_digest(this%nframes, t, rc, dt, steps, rejected)
-      end if
-      if (present(diagnostics)) call digest_add(digest, counters, values, ongoing)
-      call h5_write(this%file, '/checkpoint/digest', digest_value(digest), error)
-    end if
-    if (.not. allocated(error)) call h5_write(this%file, '/checkpoint/nframes', this%nframes, error)
+    ck%nframes = this%nframes
+    ck%t = t
+    ck%r = rc
+    ck%dt = dt
+    ck%steps = steps
+    ck%rejected = rejected
+    if (present(stepper)) ck%stepper = stepper
+    if (present(counters)) ck%counters = counters
+    ! The first checkpoint goes to both slots, so that their structure exists before any frame
+    ! but the first could be lost.
+    if (this%nframes == 1) call write_checkpoint(this%file, trim(slot_groups(0)), ck, error)
+    if (.not. allocated(error)) call write_checkpoint(this%file, trim(slot_groups(mod(this%nframes, 2_i8))), ck, error)
     if (allocated(error)) return
     call h5_flush(this%file, error)
     if (.not. allocated(error)) this%flushed_time = t
@@ -575,16 +594,11 @@ contains
     if (.not. allocated(error)) call h5_append(file, trim(stresslet_sets(5)), st%psi2, error)
   end subroutine write_stresslet_frame
 
-  !> Run totals (root attributes) and checkpoint state of the run diagnostics (the state
-  !> written is returned in `counters`, `values`, `ongoing`).
-  subroutine write_diagnostics_state(file, diag, error, counters, values, ongoing)
+  !> Run totals of the run diagnostics (root attributes).
+  subroutine write_diagnostics_totals(file, diag, error)
     type(h5_file_t), intent(in) :: file
     type(run_diagnostics_t), intent(in) :: diag
     type(error_t), allocatable, intent(out) :: error
-    integer(i8), intent(out) :: counters(5)
-    real(wp), intent(out) :: values(5)
-    real(wp), allocatable, intent(out) :: ongoing(:, :)
-    call diag%get_state(counters, values, ongoing)
     call h5_write_attr(file, '/', 'diagnostics.strand_passages', diag%strand_passages, error)
     if (.not. allocated(error)) &
       call h5_write_attr(file, '/', 'diagnostics.first_passage_time', diag%first_passage_time, error)
@@ -600,27 +614,65 @@ contains
       call h5_write_attr(file, '/', 'diagnostics.min_distance', diag%min_distance(), error)
     if (.not. allocated(error)) &
       call h5_write_attr(file, '/', 'diagnostics.max_bond_strain', diag%max_bond_strain, error)
-    if (allocated(error)) return
-    call h5_write(file, '/checkpoint/diagnostics/counters', counters, error)
-    if (.not. allocated(error)) call h5_write(file, '/checkpoint/diagnostics/values', values, error)
-    if (.not. allocated(error)) call h5_write(file, '/checkpoint/diagnostics/ongoing', ongoing, error)
-  end subroutine write_diagnostics_state
+  end subroutine write_diagnostics_totals
 
-  !> The time stepper's state in /checkpoint/stepper.
-  subroutine write_stepper(file, stepper, error)
+  !> Pad the columns of `a` with zero columns to the next power of two (at least 1), so that
+  !> a dataset holding it changes its shape (and the file its structure) only rarely.
+  pure subroutine pad_columns(a)
+    real(wp), allocatable, intent(inout) :: a(:, :)
+    real(wp), allocatable :: padded(:, :)
+    integer :: n
+    n = 1
+    do while (n < size(a, 2))
+      n = 2*n
+    end do
+    if (n == size(a, 2)) return
+    allocate (padded(size(a, 1), n))
+    padded = 0.0_wp
+    padded(:, 1:size(a, 2)) = a
+    call move_alloc(padded, a)
+  end subroutine pad_columns
+
+  !> Write the checkpoint `ck` into `group`: every part, then its digest, then its frame count
+  !> (a checkpoint is trusted only when its digest matches its parts: `read_checkpoint`).
+  subroutine write_checkpoint(file, group, ck, error)
     type(h5_file_t), intent(in) :: file
-    type(stepper_checkpoint_t), intent(in) :: stepper
+    character(len=*), intent(in) :: group
+    type(checkpoint_t), intent(in) :: ck
     type(error_t), allocatable, intent(out) :: error
-    call h5_write(file, '/checkpoint/stepper/reals', stepper%reals, error)
-    if (.not. allocated(error)) call h5_write(file, '/checkpoint/stepper/ints', stepper%ints, error)
-    if (.not. allocated(error)) call h5_write_attr(file, '/checkpoint/stepper', 'name', stepper%name, error)
-  end subroutine write_stepper
+    call h5_write(file, group//'/time', ck%t, error)
+    if (.not. allocated(error)) call h5_write(file, group//'/positions', ck%r, error)
+    if (.not. allocated(error)) call h5_write(file, group//'/dt', ck%dt, error)
+    if (.not. allocated(error)) call h5_write(file, group//'/steps', ck%steps, error)
+    if (.not. allocated(error)) call h5_write(file, group//'/rejected', ck%rejected, error)
+    if (allocated(error)) return
+    if (allocated(ck%stepper%ints)) then
+      call h5_write(file, group//'/stepper/reals', ck%stepper%reals, error)
+      if (.not. allocated(error)) call h5_write(file, group//'/stepper/ints', ck%stepper%ints, error)
+      if (.not. allocated(error)) call h5_write_attr(file, group//'/stepper', 'name', ck%stepper%name, error)
+      if (allocated(error)) return
+    end if
+    if (allocated(ck%counters)) then
+      call h5_write(file, group//'/counters', ck%counters, error)
+      if (allocated(error)) return
+    end if
+    if (allocated(ck%diag_counters)) then
+      call h5_write(file, group//'/diagnostics/counters', ck%diag_counters, error)
+      if (.not. allocated(error)) call h5_write(file, group//'/diagnostics/values', ck%diag_values, error)
+      if (.not. allocated(error)) call h5_write(file, group//'/diagnostics/ongoing', ck%diag_ongoing, error)
+      if (allocated(error)) return
+    end if
+    call h5_write(file, group//'/digest', digest_value(checkpoint_digest(ck)), error)
+    if (.not. allocated(error)) call h5_write(file, group//'/nframes', ck%nframes, error)
+  end subroutine write_checkpoint
 
-  !> Open an existing case file to continue it: read /checkpoint, truncate every /frames
-  !> dataset to the checkpoint's nframes, set status 'running' and return the state. `stepper`
-  !> returns /checkpoint/stepper, with unallocated components when the file has none (written
-  !> before the steppers saved their state). On error the file is closed again.
-  subroutine open_resume(this, path, r, t, dt, steps, rejected, nframes, error, stepper)
+  !> Open an existing case file to continue it from its newest whole checkpoint (schema 3: the
+  !> newer of the two slots whose digest matches and that equals the frame it counts; older
+  !> schemas: /checkpoint), truncate every /frames dataset to that checkpoint's frame count,
+  !> set status 'running' and return the state. `stepper` returns the checkpoint's stepper
+  !> state and `counters` the run counters passed to `append_frame`, unallocated when the file
+  !> has none (written before they were saved). On error the file is closed again.
+  subroutine open_resume(this, path, r, t, dt, steps, rejected, nframes, error, stepper, counters)
     class(case_file_t), intent(inout) :: this
     character(len=*), intent(in) :: path
     real(wp), allocatable, intent(out) :: r(:, :)
@@ -628,112 +680,57 @@ contains
     integer(i8), intent(out) :: steps, rejected, nframes
     type(error_t), allocatable, intent(out) :: error
     type(stepper_checkpoint_t), intent(out), optional :: stepper
-    type(stepper_checkpoint_t) :: state
-    call resume(this, path, r, t, dt, steps, rejected, nframes, state, error)
-    if (allocated(error)) call this%close()
-    if (present(stepper) .and. .not. allocated(error)) stepper = state
-  end subroutine open_resume
-
-  subroutine resume(this, path, r, t, dt, steps, rejected, nframes, stepper, error)
-    class(case_file_t), intent(inout) :: this
-    character(len=*), intent(in) :: path
-    real(wp), allocatable, intent(out) :: r(:, :)
-    real(wp), intent(out) :: t, dt
-    integer(i8), intent(out) :: steps, rejected, nframes
-    type(stepper_checkpoint_t), intent(out) :: stepper
-    type(error_t), allocatable, intent(out) :: error
-    integer(i4) :: n_beads
-    integer(i8) :: length
-    integer :: i
-    real(wp), allocatable :: times(:), last(:, :), values(:), ongoing(:, :)
-    integer(i8), allocatable :: counters(:)
-    integer(i8) :: digest(2), stored_digest
-    character(len=32), parameter :: other_sets(4) = [character(len=32) :: '/frames/positions', &
-      '/frames/observables/close_pairs', '/frames/integrator/steps', '/frames/integrator/rejected']
-    character(len=40) :: all_sets(size(frame_real_sets) + size(other_sets) + size(diag_sets) + size(stresslet_sets))
-    integer :: n_sets
-    logical :: with_diag
-    call this%close()
+    integer(i8), allocatable, intent(out), optional :: counters(:)
     t = 0.0_wp
     dt = 0.0_wp
     steps = 0
     rejected = 0
     nframes = 0
+    call resume(this, path, error)
+    if (allocated(error)) then
+      call this%close()
+      return
+    end if
+    associate (ck => this%resumed)
+      r = ck%r
+      t = ck%t
+      dt = ck%dt
+      steps = ck%steps
+      rejected = ck%rejected
+      nframes = ck%nframes
+      if (present(stepper)) stepper = ck%stepper
+      if (present(counters) .and. allocated(ck%counters)) counters = ck%counters
+    end associate
+  end subroutine open_resume
+
+  subroutine resume(this, path, error)
+    class(case_file_t), intent(inout) :: this
+    character(len=*), intent(in) :: path
+    type(error_t), allocatable, intent(out) :: error
+    integer(i4) :: n_beads
+    integer(i8) :: length
+    integer :: i
+    character(len=32), parameter :: other_sets(4) = [character(len=32) :: '/frames/positions', &
+      '/frames/observables/close_pairs', '/frames/integrator/steps', '/frames/integrator/rejected']
+    character(len=40) :: all_sets(size(frame_real_sets) + size(other_sets) + size(diag_sets) + size(stresslet_sets))
+    character(len=:), allocatable :: damaged_slot
+    logical :: legacy
+    integer :: n_sets
+    call this%close()
     call h5_open_file(this%file, path, .true., error)
     if (allocated(error)) return
     call h5_read_attr(this%file, '/', 'n_beads', n_beads, error)
     if (allocated(error)) return
-    if (.not. h5_exists(this%file, '/checkpoint/nframes')) then
-      call fatal_error(error, "case file '"//path//"' has no checkpoint (created but never written)")
-      return
-    end if
-    call h5_read(this%file, '/checkpoint/nframes', nframes, error)
-    if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/time', t, error)
-    if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/dt', dt, error)
-    if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/steps', steps, error)
-    if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/rejected', rejected, error)
-    if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/positions', r, error)
+    call latest_checkpoint(this%file, int(n_beads), this%resumed, error, damaged_slot, legacy)
     if (allocated(error)) return
-    if (size(r, 1) /= 3 .or. size(r, 2) /= n_beads) then
-      call fatal_error(error, "case file '"//path//"': checkpoint positions do not have shape (3, n_beads)")
-      return
-    end if
-    if (nframes < 1) then
-      call fatal_error(error, "case file '"//path//"': checkpoint has no frames")
-      return
-    end if
-    ! The checkpoint must be its last frame: a write that failed part-way is not resumed from.
-    call h5_length(this%file, '/frames/time', length, error)
+    ! A slot left damaged by a kill while its structure changed is renamed, not deleted
+    ! (freeing objects whose headers are inconsistent could free space still in use), and the
+    ! next checkpoint creates the slot anew.
+    if (len(damaged_slot) > 0) call set_aside(this%file, damaged_slot, error)
+    if (.not. allocated(error) .and. legacy) call upgrade_layout(this%file, this%resumed, error)
     if (allocated(error)) return
-    if (length < nframes) then
-      call fatal_error(error, "case file '"//path//"': /frames/time is shorter than the checkpoint's frame count")
-      return
-    end if
-    call h5_read(this%file, '/frames/time', times, error)
-    if (.not. allocated(error)) call h5_read_entry(this%file, '/frames/positions', nframes, last, error)
-    if (allocated(error)) return
-    if (times(nframes) /= t .or. any(shape(last) /= shape(r))) then
-      call fatal_error(error, "case file '"//path//"': the checkpoint (t = "//to_str(t, '(g0.6)')// &
-        ') is not its last frame: it was not written completely')
-      return
-    end if
-    if (any(last /= r)) then
-      call fatal_error(error, "case file '"//path//"': the checkpoint (t = "//to_str(t, '(g0.6)')// &
-        ') is not its last frame: it was not written completely')
-      return
-    end if
-    if (h5_exists(this%file, '/checkpoint/stepper/ints')) then
-      call h5_read(this%file, '/checkpoint/stepper/reals', stepper%reals, error)
-      if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/stepper/ints', stepper%ints, error)
-      if (.not. allocated(error)) call h5_read_attr(this%file, '/checkpoint/stepper', 'name', stepper%name, error)
-      if (allocated(error)) return
-    end if
     this%diagnostics = h5_exists(this%file, trim(diag_sets(1)))
     this%stresslet = h5_exists(this%file, trim(stresslet_sets(1)))
-    ! Files written since the digest exists: every part must come from the same frame.
-    if (h5_exists(this%file, '/checkpoint/digest')) then
-      call h5_read(this%file, '/checkpoint/digest', stored_digest, error)
-      if (allocated(error)) return
-      if (allocated(stepper%ints)) then
-        digest = checkpoint_digest(nframes, t, r, dt, steps, rejected, stepper%reals, stepper%ints)
-      else
-        digest = checkpoint_digest(nframes, t, r, dt, steps, rejected)
-      end if
-      with_diag = .false.   ! then the query: in one expression the compiler may skip it
-      if (this%diagnostics) with_diag = h5_exists(this%file, '/checkpoint/diagnostics/counters')
-      if (with_diag) then
-        call h5_read(this%file, '/checkpoint/diagnostics/counters', counters, error)
-        if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/diagnostics/values', values, error)
-        if (.not. allocated(error)) call h5_read(this%file, '/checkpoint/diagnostics/ongoing', ongoing, error)
-        if (allocated(error)) return
-        call digest_add(digest, counters, values, ongoing)
-      end if
-      if (digest_value(digest) /= stored_digest) then
-        call fatal_error(error, "case file '"//path//"': the checkpoint (t = "//to_str(t, '(g0.6)')// &
-          ') does not match its digest: it was not written completely')
-        return
-      end if
-    end if
     n_sets = size(frame_real_sets) + size(other_sets)
     all_sets(1:size(frame_real_sets)) = frame_real_sets
     all_sets(size(frame_real_sets) + 1:n_sets) = other_sets
@@ -748,29 +745,194 @@ contains
     do i = 1, n_sets
       call h5_length(this%file, trim(all_sets(i)), length, error)
       if (allocated(error)) return
-      if (length < nframes) then
+      if (length < this%resumed%nframes) then
         call fatal_error(error, "case file '"//path//"': dataset '"//trim(all_sets(i))// &
           "' is shorter than the checkpoint's frame count")
         return
       end if
-      if (length > nframes) call h5_set_length(this%file, trim(all_sets(i)), nframes, error)
+      if (length > this%resumed%nframes) call h5_set_length(this%file, trim(all_sets(i)), this%resumed%nframes, error)
       if (allocated(error)) return
     end do
-    call h5_write_attr(this%file, '/', 'status', 'running', error)
+    call h5_write_attr(this%file, '/', 'status', status_value('running'), error)
     if (.not. allocated(error)) call h5_flush(this%file, error)
     if (allocated(error)) return
     this%n_beads = n_beads
-    this%nframes = nframes
-    this%last_time = t
-    this%flushed_time = t
+    this%nframes = this%resumed%nframes
+    this%last_time = this%resumed%t
+    this%flushed_time = this%resumed%t
   end subroutine resume
+
+  !> The newest whole checkpoint of the open file: of a file of schema 3 the slot with the
+  !> larger frame count among those that `read_checkpoint` and `check_last_frame` accept; of an
+  !> older file its single /checkpoint. The error names the file and what is wrong with each.
+  !> `damaged` (optional) returns the group of a slot that exists but is not whole ('' if none),
+  !> `legacy` (optional) whether the file has the single checkpoint of schema 1 or 2.
+  subroutine latest_checkpoint(file, n_beads, ck, error, damaged, legacy)
+    type(h5_file_t), intent(in) :: file
+    integer, intent(in) :: n_beads
+    type(checkpoint_t), intent(out) :: ck
+    type(error_t), allocatable, intent(out) :: error
+    character(len=:), allocatable, intent(out), optional :: damaged
+    logical, intent(out), optional :: legacy
+    type(checkpoint_t) :: candidate
+    type(error_t), allocatable :: err
+    character(len=:), allocatable :: reasons
+    integer(i4) :: schema
+    integer :: k
+    logical :: found
+    if (present(damaged)) damaged = ''
+    schema = 1
+    if (h5_attr_exists(file, '/', 'schema_version')) then
+      call h5_read_attr(file, '/', 'schema_version', schema, error)
+      if (allocated(error)) return
+    end if
+    if (present(legacy)) legacy = schema < 3
+    if (schema < 3) then
+      call read_checkpoint(file, legacy_group, n_beads, .false., ck, error)
+      if (.not. allocated(error)) call check_last_frame(file, ck, error)
+      if (allocated(error)) error%message = "case file '"//file%name()//"': "//error%message
+      return
+    end if
+    found = .false.
+    reasons = ''
+    do k = 0, 1
+      call read_checkpoint(file, trim(slot_groups(k)), n_beads, .true., candidate, err)
+      if (.not. allocated(err)) call check_last_frame(file, candidate, err)
+      if (allocated(err)) then
+        reasons = reasons//merge('; ', '  ', k > 0)//trim(slot_groups(k))//': '//err%message
+        deallocate (err)
+        if (present(damaged)) then
+          if (h5_exists(file, trim(slot_groups(k)))) damaged = trim(slot_groups(k))
+        end if
+        cycle
+      end if
+      if (found) then
+        if (candidate%nframes <= ck%nframes) cycle
+      end if
+      ck = candidate
+      found = .true.
+    end do
+    if (.not. found) call fatal_error(error, "case file '"//file%name()//"' has no whole checkpoint ("// &
+      trim(adjustl(reasons))//')')
+  end subroutine latest_checkpoint
+
+  !> Rename the group `group` to the first free `<group>_damaged<k>`, k = 1, 2, ...
+  subroutine set_aside(file, group, error)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: group
+    type(error_t), allocatable, intent(out) :: error
+    integer :: k
+    k = 1
+    do while (h5_exists(file, group//'_damaged'//to_str(k)))
+      k = k + 1
+    end do
+    call h5_move(file, group, group//'_damaged'//to_str(k), error)
+  end subroutine set_aside
+
+  !> Give a file of schema 1 or 2, resumed from its single /checkpoint `ck`, the layout of this
+  !> version: `ck` written to both slots, then schema_version, then the old checkpoint's parts
+  !> removed, each step flushed (a kill in between leaves a file that reads as the old or as
+  !> the new layout).
+  subroutine upgrade_layout(file, ck, error)
+    type(h5_file_t), intent(in) :: file
+    type(checkpoint_t), intent(in) :: ck
+    type(error_t), allocatable, intent(out) :: error
+    character(len=*), parameter :: old_parts(10) = [character(len=11) :: 'time', 'positions', 'dt', &
+      'steps', 'rejected', 'nframes', 'digest', 'stepper', 'counters', 'diagnostics']
+    integer :: k
+    call write_checkpoint(file, trim(slot_groups(0)), ck, error)
+    if (.not. allocated(error)) call write_checkpoint(file, trim(slot_groups(1)), ck, error)
+    if (.not. allocated(error)) call h5_flush(file, error)
+    if (.not. allocated(error)) call h5_write_attr(file, '/', 'schema_version', case_schema_version, error)
+    if (.not. allocated(error)) call h5_flush(file, error)
+    do k = 1, size(old_parts)
+      if (.not. allocated(error)) call h5_delete(file, legacy_group//'/'//trim(old_parts(k)), error)
+    end do
+  end subroutine upgrade_layout
+
+  !> Read the checkpoint in `group` and check it against its digest (`need_digest`: a checkpoint
+  !> without one is refused; otherwise, files written before it existed, it is taken as is).
+  subroutine read_checkpoint(file, group, n_beads, need_digest, ck, error)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: group
+    integer, intent(in) :: n_beads
+    logical, intent(in) :: need_digest
+    type(checkpoint_t), intent(out) :: ck
+    type(error_t), allocatable, intent(out) :: error
+    integer(i8) :: stored_digest
+    if (.not. h5_exists(file, group//'/nframes')) then
+      call fatal_error(error, 'no checkpoint (created but never written)')
+      return
+    end if
+    call h5_read(file, group//'/nframes', ck%nframes, error)
+    if (.not. allocated(error)) call h5_read(file, group//'/time', ck%t, error)
+    if (.not. allocated(error)) call h5_read(file, group//'/dt', ck%dt, error)
+    if (.not. allocated(error)) call h5_read(file, group//'/steps', ck%steps, error)
+    if (.not. allocated(error)) call h5_read(file, group//'/rejected', ck%rejected, error)
+    if (.not. allocated(error)) call h5_read(file, group//'/positions', ck%r, error)
+    if (allocated(error)) return
+    if (size(ck%r, 1) /= 3 .or. size(ck%r, 2) /= n_beads) then
+      call fatal_error(error, 'checkpoint positions do not have shape (3, n_beads)')
+      return
+    end if
+    if (h5_exists(file, group//'/stepper/ints')) then
+      call h5_read(file, group//'/stepper/reals', ck%stepper%reals, error)
+      if (.not. allocated(error)) call h5_read(file, group//'/stepper/ints', ck%stepper%ints, error)
+      if (.not. allocated(error)) call h5_read_attr(file, group//'/stepper', 'name', ck%stepper%name, error)
+      if (allocated(error)) return
+    end if
+    if (h5_exists(file, group//'/counters')) then
+      call h5_read(file, group//'/counters', ck%counters, error)
+      if (allocated(error)) return
+    end if
+    if (h5_exists(file, group//'/diagnostics/counters')) then
+      call h5_read(file, group//'/diagnostics/counters', ck%diag_counters, error)
+      if (.not. allocated(error)) call h5_read(file, group//'/diagnostics/values', ck%diag_values, error)
+      if (.not. allocated(error)) call h5_read(file, group//'/diagnostics/ongoing', ck%diag_ongoing, error)
+      if (allocated(error)) return
+    end if
+    if (.not. h5_exists(file, group//'/digest')) then
+      if (need_digest) call fatal_error(error, 'the checkpoint (t = '//to_str(ck%t, '(g0.6)')//') has no digest')
+      return
+    end if
+    call h5_read(file, group//'/digest', stored_digest, error)
+    if (allocated(error)) return
+    if (digest_value(checkpoint_digest(ck)) /= stored_digest) call fatal_error(error, 'the checkpoint (t = '// &
+      to_str(ck%t, '(g0.6)')//') does not match its digest: it was not written completely')
+  end subroutine read_checkpoint
+
+  !> A checkpoint is trusted only when it is the frame it counts: /frames holds at least
+  !> `nframes` frames and frame `nframes` has the checkpoint's time and positions.
+  subroutine check_last_frame(file, ck, error)
+    type(h5_file_t), intent(in) :: file
+    type(checkpoint_t), intent(in) :: ck
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: times(:), last(:, :)
+    if (ck%nframes < 1) then
+      call fatal_error(error, 'the checkpoint has no frames')
+      return
+    end if
+    call h5_read(file, '/frames/time', times, error)
+    if (allocated(error)) return
+    if (size(times, kind=i8) < ck%nframes) then
+      call fatal_error(error, "/frames/time is shorter than the checkpoint's frame count")
+      return
+    end if
+    call h5_read_entry(file, '/frames/positions', ck%nframes, last, error)
+    if (allocated(error)) return
+    if (times(ck%nframes) /= ck%t .or. any(shape(last) /= shape(ck%r))) then
+      call fatal_error(error, 'the checkpoint (t = '//to_str(ck%t, '(g0.6)')//') is not its last frame')
+    else if (any(last /= ck%r)) then
+      call fatal_error(error, 'the checkpoint (t = '//to_str(ck%t, '(g0.6)')//') is not its last frame')
+    end if
+  end subroutine check_last_frame
 
   !> Set the status attribute ('running', 'finished', 'failed: <reason>') and flush.
   subroutine set_status(this, text, error)
     class(case_file_t), intent(inout) :: this
     character(len=*), intent(in) :: text
     type(error_t), allocatable, intent(out) :: error
-    call h5_write_attr(this%file, '/', 'status', text, error)
+    call h5_write_attr(this%file, '/', 'status', status_value(text), error)
     if (.not. allocated(error)) call h5_flush(this%file, error)
   end subroutine set_status
 
@@ -808,7 +970,7 @@ contains
     end if
     call h5_open_file(this%file, path, .true., error)
     if (allocated(error)) return
-    call h5_write_attr(this%file, '/', 'status', 'finished', error)
+    call h5_write_attr(this%file, '/', 'status', status_value('finished'), error)
     if (.not. allocated(error)) call h5_flush(this%file, error)
     if (allocated(error)) then
       call this%close()
@@ -816,6 +978,14 @@ contains
     end if
     call this%close(error)
   end subroutine finish
+
+  !> `text` null-padded to `status_capacity` bytes (readers stop at the first null).
+  pure function status_value(text) result(value)
+    character(len=*), intent(in) :: text
+    character(len=max(len(text), status_capacity)) :: value
+    value = repeat(achar(0), len(value))
+    value(1:len(text)) = text
+  end function status_value
 
   pure logical function case_is_open(this)
     class(case_file_t), intent(in) :: this
@@ -963,30 +1133,26 @@ contains
   ! ---------------------------------------------------------------- checkpoint digest
 
   !> The digest of a checkpoint's parts (an Adler-style pair of sums modulo a prime over their
-  !> bytes): it tells whether parts read back were written by the same `append_frame`.
-  pure function checkpoint_digest(nframes, t, r, dt, steps, rejected, reals, ints) result(d)
-    integer(i8), intent(in) :: nframes, steps, rejected
-    real(wp), intent(in) :: t, dt, r(:, :)
-    real(wp), intent(in), optional :: reals(:)
-    integer(i8), intent(in), optional :: ints(:)
+  !> bytes): it tells whether parts read back were written by the same `append_frame`. Parts
+  !> a checkpoint does not have (stepper state, run diagnostics, run counters) are left out.
+  pure function checkpoint_digest(ck) result(d)
+    type(checkpoint_t), intent(in) :: ck
     integer(i8) :: d(2)
     d = [1_i8, 0_i8]
-    call add_bytes(d, transfer([nframes, steps, rejected], [0_int8]))
-    call add_bytes(d, transfer([t, dt], [0_int8]))
-    call add_bytes(d, transfer(r, [0_int8]))
-    if (present(reals)) call add_bytes(d, transfer(reals, [0_int8]))
-    if (present(ints)) call add_bytes(d, transfer(ints, [0_int8]))
+    call add_bytes(d, transfer([ck%nframes, ck%steps, ck%rejected], [0_int8]))
+    call add_bytes(d, transfer([ck%t, ck%dt], [0_int8]))
+    call add_bytes(d, transfer(ck%r, [0_int8]))
+    if (allocated(ck%stepper%ints)) then
+      call add_bytes(d, transfer(ck%stepper%reals, [0_int8]))
+      call add_bytes(d, transfer(ck%stepper%ints, [0_int8]))
+    end if
+    if (allocated(ck%diag_counters)) then
+      call add_bytes(d, transfer(ck%diag_counters, [0_int8]))
+      call add_bytes(d, transfer(ck%diag_values, [0_int8]))
+      call add_bytes(d, transfer(ck%diag_ongoing, [0_int8]))
+    end if
+    if (allocated(ck%counters)) call add_bytes(d, transfer(ck%counters, [0_int8]))
   end function checkpoint_digest
-
-  !> Add the run diagnostics' checkpoint state to a digest.
-  pure subroutine digest_add(d, counters, values, ongoing)
-    integer(i8), intent(inout) :: d(2)
-    integer(i8), intent(in) :: counters(:)
-    real(wp), intent(in) :: values(:), ongoing(:, :)
-    call add_bytes(d, transfer(counters, [0_int8]))
-    call add_bytes(d, transfer(values, [0_int8]))
-    call add_bytes(d, transfer(ongoing, [0_int8]))
-  end subroutine digest_add
 
   pure subroutine add_bytes(d, bytes)
     integer(i8), intent(inout) :: d(2)
@@ -1013,7 +1179,8 @@ contains
     real(wp), intent(in) :: t_end
     type(error_t), allocatable, intent(out) :: error
     type(h5_file_t) :: file
-    real(wp), allocatable :: t(:), r(:, :, :), values(:), rc(:, :), tensors(:, :, :)
+    real(wp), allocatable :: t(:), r(:, :, :), values(:), tensors(:, :, :)
+    type(checkpoint_t) :: ck
     integer(i4), allocatable :: ivalues(:)
     integer(i8), allocatable :: lvalues(:)
     integer(i8) :: nframes, length
@@ -1025,18 +1192,27 @@ contains
     if (allocated(error)) return
     call check()
     call h5_close_file(file)
-    if (allocated(error)) error%message = "case file '"//path//"' fails verification: "//error%message
+    if (allocated(error)) then
+      k = index(error%message, "case file '"//path//"'")
+      if (k == 1) error%message = error%message(len("case file '"//path//"'") + 1:)
+      if (k == 1 .and. error%message(1:1) == ':') error%message = adjustl(error%message(2:))
+      error%message = "case file '"//path//"' fails verification: "//error%message
+    end if
 
   contains
 
     subroutine check()
       call h5_read_attr(file, '/', 'n_beads', n_beads, error)
-      if (.not. allocated(error)) call h5_read(file, '/checkpoint/nframes', nframes, error)
-      if (.not. allocated(error)) call h5_read(file, '/frames/time', t, error)
+      if (allocated(error)) return
+      ! the newest whole checkpoint, which must be the last frame
+      call latest_checkpoint(file, int(n_beads), ck, error)
+      if (allocated(error)) return
+      nframes = ck%nframes
+      call h5_read(file, '/frames/time', t, error)
       if (allocated(error)) return
       if (size(t, kind=i8) /= nframes .or. nframes < 1) then
-        call fatal_error(error, '/frames/time has '//to_str(size(t, kind=i8))//' frames, the checkpoint '// &
-          to_str(nframes))
+        call fatal_error(error, '/frames/time has '//to_str(size(t, kind=i8))//' frames, the newest whole '// &
+          'checkpoint '//to_str(nframes))
         return
       end if
       if (t(1) /= 0.0_wp) then
@@ -1073,16 +1249,6 @@ contains
           return
         end if
       end do
-      call h5_read(file, '/checkpoint/positions', rc, error)
-      if (allocated(error)) return
-      if (any(shape(rc) /= [3, int(n_beads)])) then
-        call fatal_error(error, '/checkpoint/positions does not have shape (n_beads, 3)')
-        return
-      end if
-      if (any(rc /= r(:, :, size(r, 3)))) then
-        call fatal_error(error, 'the checkpoint is not the last frame')
-        return
-      end if
       n_sets = size(frame_real_sets)
       sets(1:n_sets) = frame_real_sets
       kinds(1:n_sets) = h5_real
@@ -1126,24 +1292,101 @@ contains
 
   end subroutine verify_case_file
 
-  !> Read all frame times t(nframes) and positions r(3, N, nframes) of a case file.
+  !> Read the complete frames of a case file: times t(nframes) and positions r(3, N, nframes).
+  !> A file with a checkpoint is read up to the frames its newest checkpoint counts (a frame
+  !> beyond it was being written when the run stopped). Refused with an error naming the file
+  !> and the problem: no /frames group, /frames/time or /frames/positions missing, not numbers
+  !> or unreadable (checksums), positions not of shape (frames, beads, 3), fewer than 2 beads,
+  !> time and positions of different lengths (without a checkpoint), no frame, a non-finite time
+  !> or coordinate, times that do not increase.
   subroutine read_frames(path, t, r, error)
     character(len=*), intent(in) :: path
     real(wp), allocatable, intent(out) :: t(:)
     real(wp), allocatable, intent(out) :: r(:, :, :)
     type(error_t), allocatable, intent(out) :: error
     type(h5_file_t) :: file
+    integer(i8) :: counted
+    integer :: n, k
     call h5_open_file(file, path, .false., error)
     if (allocated(error)) return
-    call h5_read(file, '/frames/time', t, error)
-    if (.not. allocated(error)) call h5_read(file, '/frames/positions', r, error)
-    if (.not. allocated(error)) then
-      if (size(r, 3) /= size(t)) call fatal_error(error, "case file '"//path// &
-        "': /frames/time and /frames/positions have different lengths")
+    if (.not. h5_exists(file, '/frames')) then
+      call fatal_error(error, "case file '"//path//"': no /frames group (not a knotflow case file)")
+    else
+      call h5_read(file, '/frames/time', t, error)
+      if (.not. allocated(error)) call h5_read(file, '/frames/positions', r, error)
+      if (.not. allocated(error)) call checkpoint_frames(file, counted, error)
     end if
-    if (.not. allocated(error)) call check_finite_frames(path, t, r, error)
     call h5_close_file(file)
+    if (allocated(error)) return
+    if (size(r, 1) /= 3) then
+      call fatal_error(error, "case file '"//path//"': /frames/positions has shape ("//to_str(size(r, 3))//', '// &
+        to_str(size(r, 2))//', '//to_str(size(r, 1))//'), expected (frames, beads, 3)')
+      return
+    end if
+    if (size(r, 2) < 2) then
+      call fatal_error(error, "case file '"//path//"': /frames/positions holds "//to_str(size(r, 2))// &
+        ' bead(s) per frame, a chain needs at least 2')
+      return
+    end if
+    if (counted >= 0) then
+      n = int(min(int(min(size(t), size(r, 3)), i8), counted))
+    else if (size(r, 3) /= size(t)) then
+      call fatal_error(error, "case file '"//path//"': /frames/time and /frames/positions have different "// &
+        'lengths ('//to_str(size(t))//' and '//to_str(size(r, 3))//' frames)')
+      return
+    else
+      n = size(t)
+    end if
+    if (n < 1) then
+      call fatal_error(error, "case file '"//path//"': no complete frame (/frames is empty)")
+      return
+    end if
+    if (n < size(t)) t = t(1:n)
+    if (n < size(r, 3)) r = r(:, :, 1:n)
+    call check_finite_frames(path, t, r, error)
+    if (allocated(error)) return
+    do k = 2, n
+      if (.not. t(k) > t(k - 1)) then
+        call fatal_error(error, "case file '"//path//"': frame "//to_str(k - 1)//' (t = '//to_str(t(k), '(g0.6)')// &
+          ') is not after frame '//to_str(k - 2)//' (t = '//to_str(t(k - 1), '(g0.6)')//'): times must increase')
+        return
+      end if
+    end do
   end subroutine read_frames
+
+  !> Does the case file `path` hold a checkpoint (of at least one frame)? A file killed while it
+  !> was created has none (and may lack its scene attributes): nothing in it can be reused.
+  logical function has_checkpoint(path)
+    character(len=*), intent(in) :: path
+    type(h5_file_t) :: file
+    type(error_t), allocatable :: error
+    integer(i8) :: counted
+    has_checkpoint = .false.
+    call h5_open_file(file, path, .false., error)
+    if (allocated(error)) return
+    call checkpoint_frames(file, counted, error)
+    has_checkpoint = .not. allocated(error) .and. counted >= 1
+    call h5_close_file(file)
+  end function has_checkpoint
+
+  !> The frames the newest checkpoint of an open file counts, without checking it: the larger
+  !> frame count of the slots (schema 3; a slot's count is written last) or /checkpoint/nframes
+  !> (older files); -1 when the file has no checkpoint.
+  subroutine checkpoint_frames(file, counted, error)
+    type(h5_file_t), intent(in) :: file
+    integer(i8), intent(out) :: counted
+    type(error_t), allocatable, intent(out) :: error
+    character(len=*), parameter :: groups(3) = [character(len=17) :: slot_groups(0), slot_groups(1), legacy_group]
+    integer(i8) :: n
+    integer :: k
+    counted = -1
+    do k = 1, size(groups)
+      if (.not. h5_exists(file, trim(groups(k))//'/nframes')) cycle
+      call h5_read(file, trim(groups(k))//'/nframes', n, error)
+      if (allocated(error)) return
+      counted = max(counted, n)
+    end do
+  end subroutine checkpoint_frames
 
   !> Every frame time and coordinate must be finite: the error names the file, the first bad
   !> frame (0-based), its time and the number of non-finite coordinates.

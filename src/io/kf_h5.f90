@@ -12,7 +12,8 @@
 !> Chunked (extendible) datasets carry HDF5's Fletcher-32 checksum filter, so damaged data fails
 !> to read instead of reading wrong. Failed writes, flushes and closes name the operating
 !> system's reason (errno, kf_fs).
-!> Writing an attribute that exists replaces it; writing a dataset that exists overwrites it in
+!> Writing an attribute that exists overwrites it in place when its type and shape match and
+!> replaces it otherwise; writing a dataset that exists overwrites it in
 !> place when the shape matches (no file space is lost) and replaces it otherwise.
 module kf_h5
   use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_f_pointer, c_char, c_size_t, &
@@ -24,15 +25,16 @@ module kf_h5
   use kf_fs, only: clear_os_error, os_error_text
   use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5close_f, h5eset_auto_f, &
     h5fcreate_f, h5fopen_f, h5fclose_f, h5fflush_f, H5F_ACC_TRUNC_F, H5F_ACC_RDWR_F, &
-    H5F_ACC_RDONLY_F, H5F_SCOPE_GLOBAL_F, h5gcreate_f, h5gclose_f, h5lexists_f, h5ldelete_f, &
+    H5F_ACC_RDONLY_F, H5F_SCOPE_GLOBAL_F, h5gcreate_f, h5gclose_f, h5lexists_f, h5ldelete_f, h5lmove_f, &
     h5oopen_f, h5oclose_f, h5screate_f, h5screate_simple_f, h5sclose_f, H5S_SCALAR_F, &
     H5S_UNLIMITED_F, H5S_SELECT_SET_F, h5sget_simple_extent_ndims_f, &
     h5sget_simple_extent_dims_f, h5sselect_hyperslab_f, h5acreate_f, h5aopen_f, h5aclose_f, &
     h5aexists_f, h5adelete_f, h5awrite_f, h5aread_f, h5aget_type_f, h5aget_space_f, &
     h5dcreate_f, h5dopen_f, h5dclose_f, h5dwrite_f, h5dread_f, h5dget_space_f, &
     h5dset_extent_f, h5pcreate_f, h5pclose_f, h5pset_chunk_f, h5pset_fletcher32_f, H5P_DATASET_CREATE_F, &
-    h5tcopy_f, h5tclose_f, h5tset_size_f, h5tget_size_f, h5tset_strpad_f, h5tget_class_f, &
-    h5tis_variable_str_f, H5T_FORTRAN_S1, H5T_STR_NULLPAD_F, H5T_STRING_F, &
+    h5tcopy_f, h5tclose_f, h5tequal_f, h5tset_size_f, h5tget_size_f, h5tset_strpad_f, h5tget_class_f, &
+    h5tis_variable_str_f, H5T_FORTRAN_S1, H5T_STR_NULLPAD_F, H5T_STRING_F, H5T_FLOAT_F, H5T_INTEGER_F, &
+    h5dget_type_f, &
     H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, H5T_STD_I32LE, H5T_STD_I64LE, h5kind_to_type, &
     H5_INTEGER_KIND
   implicit none
@@ -41,11 +43,11 @@ module kf_h5
   public :: h5_file_t
   public :: h5_initialize, h5_finalize
   public :: h5_create_file, h5_open_file, h5_close_file, h5_flush
-  public :: h5_create_group, h5_exists, h5_attr_exists, h5_delete
+  public :: h5_create_group, h5_exists, h5_attr_exists, h5_delete, h5_move
   public :: h5_write_attr, h5_read_attr
   public :: h5_write, h5_read
   public :: h5_create_extendible, h5_append, h5_set_length, h5_length, h5_read_entry
-  public :: h5_extend_truncated
+  public :: h5_extend_truncated, h5_raise_end
   public :: h5_real, h5_int32, h5_int64
 
   !> Element kinds of extendible datasets (for `h5_create_extendible`).
@@ -184,9 +186,42 @@ contains
     end if
     if (stat < 0) then
       file%id = -1
-      call fatal_error(error, "HDF5: cannot open file '"//path//"' (not an HDF5 file or not accessible)")
+      call fatal_error(error, "HDF5: cannot open file '"//path//"' ("//unopenable_reason(path)//')')
     end if
   end subroutine h5_open_file
+
+  !> Why HDF5 cannot open the existing `path`: a directory, an empty file, no HDF5 signature in
+  !> its first 8 bytes, or (with the signature) a truncated or damaged file.
+  function unopenable_reason(path) result(reason)
+    character(len=*), intent(in) :: path
+    character(len=:), allocatable :: reason
+    character(len=7), parameter :: signature_tail = 'HDF'//achar(13)//achar(10)//achar(26)//achar(10)
+    character(len=8) :: head
+    integer :: unit, stat
+    integer(i8) :: bytes
+    logical :: is_dir
+    inquire (file=path//'/.', exist=is_dir)
+    if (is_dir) then
+      reason = 'it is a directory'
+      return
+    end if
+    open (newunit=unit, file=path, access='stream', form='unformatted', action='read', status='old', iostat=stat)
+    if (stat /= 0) then
+      reason = 'not readable'
+      return
+    end if
+    inquire (unit=unit, size=bytes)
+    head = ''
+    if (bytes >= 8) read (unit, iostat=stat) head
+    close (unit)
+    if (bytes == 0) then
+      reason = 'an empty file, not HDF5'
+    else if (iachar(head(1:1)) /= 137 .or. head(2:8) /= signature_tail) then
+      reason = 'not an HDF5 file'
+    else
+      reason = 'an HDF5 file that is truncated or damaged'
+    end if
+  end function unopenable_reason
 
   !> Close the file (a closed file is left alone).
   subroutine h5_close_file(file, error)
@@ -372,7 +407,10 @@ contains
       int(shape(value), hsize_t), c_loc(value), error)
   end subroutine write_attr_r2
 
-  !> Create (replacing any old one) and write an attribute; rank 0 dims means a scalar.
+  !> Write an attribute; rank 0 dims means a scalar. An existing attribute of the same type and
+  !> shape is overwritten in place (its object header keeps its structure, so a kill while the
+  !> header is flushed leaves the old or the new value); one of another type or shape is
+  !> replaced.
   subroutine write_attr_raw(file, obj, name, memtype, filetype, dims, buf, error)
     type(h5_file_t), intent(in) :: file
     character(len=*), intent(in) :: obj, name
@@ -382,14 +420,31 @@ contains
     type(error_t), allocatable, intent(out) :: error
     integer(hid_t) :: oid, sid, aid
     integer :: stat, ignore
-    logical :: exists
+    logical :: exists, same
     call h5oopen_f(file%id, obj, oid, stat)
     if (stat < 0) then
       call fail(error, file, 'open object', obj)
       return
     end if
     call h5aexists_f(oid, name, exists, stat)
-    if (stat >= 0 .and. exists) call h5adelete_f(oid, name, stat)
+    if (stat >= 0 .and. exists) then
+      call h5aopen_f(oid, name, aid, stat)
+      if (stat >= 0) then
+        same = same_type_and_shape(aid, filetype, dims)
+        if (same) then
+          call clear_os_error()
+          call h5awrite_f(aid, memtype, buf, stat)
+          if (stat < 0) call fail_io(error, file, 'write attribute', obj//'@'//name)
+        end if
+        call h5aclose_f(aid, stat)
+        if (stat < 0 .and. .not. allocated(error)) call fail_io(error, file, 'write (close) attribute', obj//'@'//name)
+        if (same .or. allocated(error)) then
+          call h5oclose_f(oid, ignore)
+          return
+        end if
+      end if
+      if (stat >= 0) call h5adelete_f(oid, name, stat)
+    end if
     if (stat < 0) then
       call fail(error, file, 'replace attribute', obj//'@'//name)
       call h5oclose_f(oid, ignore)
@@ -418,6 +473,30 @@ contains
     call h5sclose_f(sid, ignore)
     call h5oclose_f(oid, ignore)
   end subroutine write_attr_raw
+
+  !> Has the open attribute `aid` the file type `filetype` and the dimensions `dims`?
+  logical function same_type_and_shape(aid, filetype, dims) result(same)
+    integer(hid_t), intent(in) :: aid, filetype
+    integer(hsize_t), intent(in) :: dims(:)
+    integer(hid_t) :: tid, sid
+    integer(hsize_t), allocatable :: old(:)
+    integer :: stat, ignore
+    same = .false.
+    call h5aget_type_f(aid, tid, stat)
+    if (stat < 0) return
+    call h5tequal_f(tid, filetype, same, stat)
+    if (stat < 0) same = .false.
+    call h5tclose_f(tid, ignore)
+    if (.not. same) return
+    call h5aget_space_f(aid, sid, stat)
+    same = stat >= 0
+    if (.not. same) return
+    call space_dims(sid, -1, old, stat)
+    same = stat >= 0
+    if (same) same = size(old) == size(dims)
+    if (same) same = all(old == dims)
+    call h5sclose_f(sid, ignore)
+  end function same_type_and_shape
 
   ! ---------------------------------------------------------------- attributes: reading
 
@@ -1028,6 +1107,11 @@ contains
     type(c_ptr) :: ptr
     call open_dataset(file, name, did, error)
     if (allocated(error)) return
+    call check_numeric(did, file, name, error)
+    if (allocated(error)) then
+      call h5dclose_f(did, ignore)
+      return
+    end if
     ptr = buf
     call clear_os_error()
     call h5dread_f(did, memtype, ptr, stat)
@@ -1037,6 +1121,32 @@ contains
     end if
     call h5dclose_f(did, ignore)
   end subroutine read_raw
+
+  !> A dataset read into numbers must hold integers or floating-point numbers (not strings,
+  !> compounds, references, ...): the error names the file, the dataset and what it holds.
+  subroutine check_numeric(did, file, name, error)
+    integer(hid_t), intent(in) :: did
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: name
+    type(error_t), allocatable, intent(out) :: error
+    integer(hid_t) :: tid
+    integer :: stat, tclass, ignore
+    call h5dget_type_f(did, tid, stat)
+    if (stat < 0) then
+      call fail(error, file, 'get the type of dataset', name)
+      return
+    end if
+    call h5tget_class_f(tid, tclass, stat)
+    call h5tclose_f(tid, ignore)
+    if (stat < 0) then
+      call fail(error, file, 'get the type of dataset', name)
+    else if (tclass == H5T_STRING_F) then
+      call fatal_error(error, "HDF5: dataset '"//name//"' in '"//file%name()//"' holds strings, not numbers")
+    else if (tclass /= H5T_FLOAT_F .and. tclass /= H5T_INTEGER_F) then
+      call fatal_error(error, "HDF5: dataset '"//name//"' in '"//file%name()//"' does not hold numbers "// &
+        '(HDF5 type class '//to_str(tclass)//')')
+    end if
+  end subroutine check_numeric
 
   subroutine open_dataset(file, name, did, error)
     type(h5_file_t), intent(in) :: file
@@ -1257,23 +1367,23 @@ contains
     call h5dclose_f(did, ignore)
   end subroutine h5_read_entry
 
-  !> A file cut short by a write that failed (full disk, file size limit) after HDF5 had
-  !> recorded its new end in the superblock cannot be opened ("truncated file"). Extend such a
-  !> file with zeros to the end address its superblock records (superblock versions 0-3, 8-byte
-  !> addresses, no user block), so that what was written before can be read and checked.
-  !> `extended` tells whether the file was such a file; `old_size` and `new_size` its sizes.
-  subroutine h5_extend_truncated(path, extended, old_size, new_size, error)
+  !> The end address (EOA) the superblock of the HDF5 file `path` records, and the byte offset
+  !> of that field (superblock versions 0-3, 8-byte addresses, no user block); `found` is false
+  !> for anything else (not HDF5, other layouts, unreadable). `size` is the file's size.
+  subroutine superblock_end(path, size, eoa, at, version, found)
     character(len=*), intent(in) :: path
-    logical, intent(out) :: extended
-    integer(i8), intent(out) :: old_size, new_size
-    type(error_t), allocatable, intent(out) :: error
+    integer(i8), intent(out) :: size, eoa
+    integer, intent(out) :: at, version
+    logical, intent(out) :: found
     character(len=1) :: head(48)
     character(len=8), parameter :: signature = char(137)//'HDF'//achar(13)//achar(10)//achar(26)//achar(10)
-    integer :: unit, ios, version, at, k
-    extended = .false.
-    new_size = 0
-    inquire (file=path, size=old_size)
-    if (old_size < 48) return
+    integer :: unit, ios, k
+    found = .false.
+    eoa = 0
+    at = 0
+    version = -1
+    inquire (file=path, size=size)
+    if (size < 48) return
     open (newunit=unit, file=path, access='stream', form='unformatted', status='old', action='read', iostat=ios)
     if (ios /= 0) return
     read (unit, iostat=ios) head
@@ -1296,10 +1406,30 @@ contains
     case default
       return
     end select
-    new_size = 0
     do k = 8, 1, -1
-      new_size = new_size*256 + iachar(head(at + k))
+      eoa = eoa*256 + iachar(head(at + k))
     end do
+    found = .true.
+  end subroutine superblock_end
+
+  !> A file cut short by a write that failed (full disk, file size limit) after HDF5 had
+  !> recorded its new end in the superblock cannot be opened ("truncated file"). Extend such a
+  !> file with zeros to the end address its superblock records (superblock versions 0-3, 8-byte
+  !> addresses, no user block), so that what was written before can be read and checked.
+  !> `extended` tells whether the file was such a file; `old_size` and `new_size` its sizes.
+  subroutine h5_extend_truncated(path, extended, old_size, new_size, error)
+    character(len=*), intent(in) :: path
+    logical, intent(out) :: extended
+    integer(i8), intent(out) :: old_size, new_size
+    type(error_t), allocatable, intent(out) :: error
+    integer :: unit, ios, at, version
+    logical :: found
+    extended = .false.
+    call superblock_end(path, old_size, new_size, at, version, found)
+    if (.not. found) then
+      new_size = 0
+      return
+    end if
     if (new_size <= old_size .or. new_size > 1024_i8*old_size + 2_i8**30) return
     open (newunit=unit, file=path, access='stream', form='unformatted', status='old', action='readwrite', &
           iostat=ios)
@@ -1311,6 +1441,41 @@ contains
     end if
     extended = .true.
   end subroutine h5_extend_truncated
+
+  !> The opposite case: a process killed while HDF5 flushed the file may have written new
+  !> objects (a new chunk of an extendible dataset, new metadata) at its end and the references
+  !> to them, but not yet the superblock with the new end address. HDF5 then sees them beyond
+  !> the end of the file's address space, fails on them and would allocate that space again.
+  !> Raise the recorded end to the file's size (superblock versions 0 and 1, which carry no
+  !> checksum; later versions are left alone). `raised` tells whether the file was such a file;
+  !> `old_end` and `new_end` are the recorded end before and after.
+  subroutine h5_raise_end(path, raised, old_end, new_end, error)
+    character(len=*), intent(in) :: path
+    logical, intent(out) :: raised
+    integer(i8), intent(out) :: old_end, new_end
+    type(error_t), allocatable, intent(out) :: error
+    integer :: unit, ios, at, version, k
+    logical :: found
+    character(len=1) :: bytes(8)
+    raised = .false.
+    call superblock_end(path, new_end, old_end, at, version, found)
+    if (.not. found .or. version > 1 .or. new_end <= old_end) then
+      new_end = old_end
+      return
+    end if
+    do k = 1, 8
+      bytes(k) = achar(int(mod(shiftr(new_end, 8*(k - 1)), 256_i8)))
+    end do
+    open (newunit=unit, file=path, access='stream', form='unformatted', status='old', action='readwrite', &
+          iostat=ios)
+    if (ios == 0) write (unit, pos=at + 1, iostat=ios) bytes
+    if (ios == 0) close (unit, iostat=ios)
+    if (ios /= 0) then
+      call fatal_error(error, "cannot record the end of '"//path//"' in its superblock")
+      return
+    end if
+    raised = .true.
+  end subroutine h5_raise_end
 
   !> Set the length of the last (extendible) dimension to `length`: truncates (the entries
   !> beyond are dropped) or extends (new entries hold the fill value 0).
@@ -1480,6 +1645,18 @@ contains
     type(error_t), allocatable, intent(out) :: error
     call delete_link(file, name, error)
   end subroutine h5_delete
+
+  !> Rename the link `from` to `to` (same file; the object itself is kept as it is: nothing is
+  !> read or freed, so this also works for an object whose own structure is damaged).
+  subroutine h5_move(file, from, to, error)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: from, to
+    type(error_t), allocatable, intent(out) :: error
+    integer :: stat
+    call clear_os_error()
+    call h5lmove_f(file%id, from, file%id, to, stat)
+    if (stat < 0) call fail_io(error, file, 'rename to '//to//' the object', from)
+  end subroutine h5_move
 
   !> Delete link `name` if it exists.
   subroutine delete_link(file, name, error)

@@ -28,12 +28,13 @@ module kf_run_diagnostics
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_step_monitor, only: step_monitor_t
+  use kf_pairs, only: pair_count
   use kf_strand_passage, only: segments_pass
   use kf_pair_geometry, only: pair_geometry_t
   implicit none
   private
 
-  public :: configuration_diagnostics, prefiltered_passages, pair_count, diagnostics_memory
+  public :: configuration_diagnostics, prefiltered_passages, diagnostics_memory
 
   !> Sizes of the saved state (`get_state` / `set_state`).
   integer, parameter, public :: diag_n_counters = 5, diag_n_values = 5
@@ -78,16 +79,6 @@ module kf_run_diagnostics
   end type run_diagnostics_t
 
 contains
-
-  !> Number of pairs i < j of `n_beads` beads, N(N-1)/2, in 64-bit integers: the product
-  !> N(N-1) passes huge(int32) from N = 46,342 on (in default integers it overflowed there and
-  !> the diagnostics crashed), the count itself from N = 65,537.
-  pure integer(i8) function pair_count(n_beads)
-    integer, intent(in) :: n_beads
-    integer(i8) :: n
-    n = max(0_i8, int(n_beads, i8))
-    pair_count = n*max(0_i8, n - 1)/2
-  end function pair_count
 
   !> Bytes the run diagnostics of `n_beads` beads allocate, for the memory estimate at set-up:
   !> four work columns and the pair list's search arrays per bead (11 words), and the close pairs

@@ -11,6 +11,8 @@
 !>   the default has changed since (`hydro.update`: 'stage', the only behaviour before the
 !>   variable existed, while the default may be 'adaptive');
 !> - a file of a newer schema than this program writes is never reused;
+!> - an interrupted file without a checkpoint (killed while it was created, perhaps before its
+!>   scene attributes were written) holds nothing to reuse and is not compared;
 !> - `output.directory` (where the file is found) and `output.progress_interval` (wall-clock
 !>   progress lines only) do not take part: they do not change what is computed.
 module kf_case_match
@@ -21,7 +23,7 @@ module kf_case_match
   use kf_scene_items, only: scene_item_t, scene_items, item_value_text, item_string, &
     item_integer, item_real, item_logical, item_real_array
   use kf_h5, only: h5_file_t, h5_open_file, h5_close_file, h5_attr_exists, h5_read_attr
-  use kf_case_file, only: case_schema_version, case_file_status
+  use kf_case_file, only: case_schema_version, case_file_status, has_checkpoint
   implicit none
   private
 
@@ -114,6 +116,10 @@ contains
     call case_file_status(path, state, error)
     if (allocated(error)) return
     if (state /= 'finished' .and. state /= 'running') return
+    ! killed while it was created: nothing to reuse (the case runner moves it aside)
+    if (state == 'running') then
+      if (.not. has_checkpoint(path)) return
+    end if
     call scene_differences(path, sc, differences, read_error)
     if (allocated(read_error)) then
       if (present(unreadable)) unreadable = .true.

@@ -20,7 +20,7 @@ module kf_case_runner
   use kf_rheology, only: fibre_stresslet_t
   use kf_fs, only: remove_file, move_aside
   use kf_case_match, only: check_reusable
-  use kf_h5, only: h5_extend_truncated
+  use kf_h5, only: h5_extend_truncated, h5_raise_end
   implicit none
   private
 
@@ -70,6 +70,7 @@ contains
     class(stepper_t), allocatable :: integ
     type(stepper_checkpoint_t) :: saved
     integer(i8) :: hydro_base(4)   !< hydro counters of the run before a resume
+    integer(i8), allocatable :: saved_counters(:)
     type(shape_t) :: obs
     type(run_diagnostics_t), allocatable :: diag   !< allocated only with diagnostics: else absent
     type(fibre_stresslet_t), allocatable :: st     !< allocated only with the stresslet: else absent
@@ -110,6 +111,19 @@ contains
         end if
       end if
     end if
+    if (state == 'running') then
+      ! A kill while HDF5 flushed may have left objects written beyond the end the superblock
+      ! records: the end is raised to include them before the file is opened.
+      call h5_raise_end(path, extended, old_size, new_size, error)
+      if (allocated(error)) then
+        status = case_failed
+        message = error%message
+        return
+      end if
+      if (extended) call report%line('case '//name//': '//path//' holds '//to_str(new_size - old_size)// &
+        ' bytes written after the end its superblock records (killed while writing): end raised to '// &
+        to_str(new_size)//' bytes')
+    end if
     if (state == 'finished' .or. state == 'running') then
       ! Reused only when the stored scene is the requested one (knotflow checks every case at
       ! set-up already; this guards other callers).
@@ -133,7 +147,7 @@ contains
       deallocate (error)
     end if
     if (state == 'running') then
-      call file%open_resume(path, r, t, dt, steps, rejected, nframes, error, saved)
+      call file%open_resume(path, r, t, dt, steps, rejected, nframes, error, saved, saved_counters)
       if (.not. allocated(error)) then
         resumed = .true.
         ! a file written before the run diagnostics existed is continued without them
@@ -206,6 +220,9 @@ contains
       if (.not. allocated(error)) call write_scene_attributes(file, sc, error)
       if (.not. allocated(error) .and. with_diag) call file%enable_diagnostics(error)
       if (.not. allocated(error) .and. with_stresslet) call file%enable_stresslet(error)
+      ! every root attribute rewritten with the frames exists before the first frame, so that
+      ! later frames overwrite them in place
+      if (.not. allocated(error)) call write_hydro_counters(error)
       if (allocated(error)) then
         call write_failed(error%message)
         return
@@ -217,7 +234,7 @@ contains
       if (.not. allocated(error)) then
         if (with_diag) call diag%start(t, r)
         call integ%get_state(saved%reals, saved%ints)
-        call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt(), error, diag, saved, st)
+        call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt(), error, diag, saved, hydro_counts(), st)
         if (allocated(error)) then
           call write_failed(error%message)
           return
@@ -248,7 +265,8 @@ contains
         return
       end if
       call integ%get_state(saved%reals, saved%ints)
-      call file%append_frame(t, r, obs, integ%steps(), integ%rejected(), integ%dt(), error, diag, saved, st)
+      call file%append_frame(t, r, obs, integ%steps(), integ%rejected(), integ%dt(), error, diag, saved, &
+                             hydro_counts(), st)
       if (.not. allocated(error)) call write_hydro_counters(error)
       if (allocated(error)) then
         call write_failed(error%message)
@@ -285,24 +303,41 @@ contains
 
   contains
 
-    !> The counters of the hydrodynamic model (kf_hydro_model's hydro_stats_t) as root
-    !> attributes hydro.{evaluations, refreshes, reused, cg_iterations}, cumulative over resumes.
-    subroutine write_hydro_counters(err)
-      type(error_t), allocatable, intent(out) :: err
-      type(hydro_stats_t) :: st
+    !> The counters of the hydrodynamic model (kf_hydro_model's hydro_stats_t), cumulative over
+    !> resumes: saved with every checkpoint and written as the root attributes
+    !> hydro.{evaluations, refreshes, reused, cg_iterations}.
+    function hydro_counts() result(c)
       integer(i8) :: c(4)
-      integer :: k
+      type(hydro_stats_t) :: st
       st = dyn%model%statistics()
       c = hydro_base + [st%evaluations, st%refreshes, st%reused, st%cg_iterations]
+    end function hydro_counts
+
+    subroutine write_hydro_counters(err)
+      type(error_t), allocatable, intent(out) :: err
+      integer(i8) :: c(4)
+      integer :: k
+      c = hydro_counts()
       do k = 1, 4
         call file%write_attribute(trim(hydro_counters(k)), c(k), err)
         if (allocated(err)) return
       end do
     end subroutine write_hydro_counters
 
+    !> The counters of the run before the resume: from its checkpoint, or (files written before
+    !> the checkpoint held them) from the root attributes.
     subroutine read_hydro_counters(err)
       type(error_t), allocatable, intent(out) :: err
       integer :: k
+      if (allocated(saved_counters)) then
+        if (size(saved_counters) /= size(hydro_base)) then
+          call fatal_error(err, path//': the checkpoint holds '//to_str(size(saved_counters))// &
+            ' run counters, not '//to_str(size(hydro_base)))
+          return
+        end if
+        hydro_base = saved_counters
+        return
+      end if
       do k = 1, 4
         call file%read_counter(trim(hydro_counters(k)), hydro_base(k), err)
         if (allocated(err)) return

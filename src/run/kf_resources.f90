@@ -18,7 +18,8 @@ module kf_resources
   use kf_strings, only: to_str, to_str_exact
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: scene_t
-  use kf_run_diagnostics, only: pair_count, diagnostics_memory
+  use kf_run_diagnostics, only: diagnostics_memory
+  use kf_pairs, only: pair_count
   implicit none
   private
 

@@ -15,6 +15,7 @@ import sys
 
 import h5py
 import numpy as np
+from kf_legacy import to_single_checkpoint
 
 exe, work = sys.argv[1], sys.argv[2]
 shutil.rmtree(work, ignore_errors=True)
@@ -41,7 +42,8 @@ def run(path):
 run(scene("off", ", diagnostics = .false."))
 off_path = os.path.join(work, "off", "c.h5")
 with h5py.File(off_path, "r") as h:
-    assert "diagnostics" not in h["frames"] and "diagnostics" not in h["checkpoint"]
+    assert "diagnostics" not in h["frames"]
+    assert not [g for g in h["checkpoint"].values() if "diagnostics" in g]
     assert not [k for k in h.attrs if k.startswith("diagnostics.")]
     assert h.attrs["output.diagnostics"] == 0
     t_ref = h["frames/time"][:]
@@ -60,6 +62,7 @@ with h5py.File(old_path, "a") as h:
     h.attrs["output.directory"] = np.bytes_(os.path.join(work, "old"))
     del h.attrs["output.diagnostics"]
     h.attrs["status"] = np.bytes_("running")
+    to_single_checkpoint(h, schema=None)   # an older version: one /checkpoint, no schema_version
     k = 5
     c = h["checkpoint"]
     c["time"][()] = h["frames/time"][k]
@@ -74,6 +77,9 @@ assert "resuming" in out, out
 with h5py.File(old_path, "r") as h:
     assert h.attrs["status"] in (b"finished", "finished")
     assert "diagnostics" not in h["frames"] and "diagnostics" not in h["checkpoint"]
+    # resumed, an older file gets the current layout: two checkpoint slots, schema_version 3
+    assert sorted(h["checkpoint"].keys()) == ["slot0", "slot1"], list(h["checkpoint"].keys())
+    assert h.attrs["schema_version"] == 3
     t = h["frames/time"][:]
     r = h["frames/positions"][:]
 assert np.array_equal(t, t_ref), (t, t_ref)

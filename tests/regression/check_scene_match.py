@@ -5,7 +5,7 @@
    the group, variable and both values and what to do, and no case file changed. The same for
    an interrupted case (status 'running'). A change in output.progress_interval alone is not a
    change of the scene (skipped).
-2. New case files carry schema_version = 2. An older file (no schema_version, no hydro.update,
+2. New case files carry schema_version = 3. An older file (no schema_version, no hydro.update,
    no output.diagnostics attribute) counts the missing variables as their defaults, except
    hydro.update, which counts as 'stage' (the only behaviour before it existed, whatever the
    default is now): skipped when the requested scene has those values, refused naming the
@@ -22,6 +22,7 @@ import sys
 
 import h5py
 import numpy as np
+from kf_legacy import to_single_checkpoint
 
 exe, work = sys.argv[1], sys.argv[2]
 shutil.rmtree(work, ignore_errors=True)
@@ -86,7 +87,7 @@ r = run(base)
 assert r.returncode == 0, (r.stdout, r.stderr)
 case = os.path.join(out, "c.h5")
 with h5py.File(case, "r") as h:
-    assert h.attrs["schema_version"] == 2, dict(h.attrs)
+    assert h.attrs["schema_version"] == 3, dict(h.attrs)
     assert h.attrs["status"] in (b"finished", "finished")
 checks = 1
 
@@ -107,7 +108,9 @@ checks += 6
 
 # 2. an older file: missing variables are their defaults, except hydro.update, which was
 #    'stage' before it existed (whatever its default is now)
-set_attrs(schema_version=None, hydro__update=None, output__diagnostics=None)
+with h5py.File(case, "a") as h:     # an older file also has the older checkpoint layout
+    to_single_checkpoint(h, schema=None)
+set_attrs(hydro__update=None, output__diagnostics=None)
 skipped(base)
 refused(scene("adaptive_update", hydro=", update = 'adaptive'"),
         "&hydro: update = 'stage' in the file, 'adaptive' requested")

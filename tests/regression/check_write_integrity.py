@@ -150,7 +150,7 @@ def garbage(path):
 
 
 damaged("flipped", flip_positions, "checksum mismatch")
-damaged("zeros", zero_frames, "the checkpoint is not the last frame")
+damaged("zeros", zero_frames, "is not its last frame")
 damaged("truncated", truncate, "")
 damaged("garbage", garbage, "not an HDF5 file")
 checks += 4

@@ -102,3 +102,22 @@ def test_report_on_sweep(tmp_path):
     # ParaView-ready XDMF beside each case file, linked from the report
     assert (sweep / "A1_a.xdmf2").is_file() and (sweep / "A2_b.xdmf2").is_file()
     assert "[A1_a.xdmf2](../A1_a.xdmf2)" in md and "href='../A2_b.xdmf2'" in html
+
+
+def test_every_tool_answers_version(capsys):
+    """Every console script of pyproject.toml answers --version with '<program> <version>' and
+    exit status 0."""
+    import importlib
+    import re
+    import pytest
+    import knotflow_tools
+    with open(os.path.join(os.path.dirname(__file__), "..", "pyproject.toml"), encoding="utf-8") as fh:
+        text = fh.read()
+    scripts = re.findall(r'^(knotflow-[a-z-]+) = "([a-z_.]+):([a-z_]+)"', text, re.M)
+    assert len(scripts) >= 8, scripts
+    for prog, module, func in scripts:
+        main = getattr(importlib.import_module(module), func)
+        with pytest.raises(SystemExit) as stop:
+            main(["--version"])
+        assert stop.value.code in (0, None), prog
+        assert capsys.readouterr().out.strip() == f"{prog} {knotflow_tools.__version__}", prog

@@ -35,6 +35,22 @@ def test_read_case_truncates_to_checkpoint(tmp_path):
     assert io.read_case(path).nframes == 3
 
 
+def test_read_case_truncates_to_newest_slot(tmp_path):
+    """Schema 3: two checkpoint slots written alternately; the frames counted by the newer one
+    are complete, a frame beyond it was being written when the run stopped."""
+    pos = np.stack([open_trefoil() + k for k in range(5)])
+    path = write_case(tmp_path / "c.h5", pos)
+    with h5py.File(path, "a") as f:
+        del f["checkpoint"]
+        f["checkpoint/slot0/nframes"] = np.int64(4)
+        f["checkpoint/slot1/nframes"] = np.int64(3)
+        f.attrs["schema_version"] = np.int32(3)
+    assert io.read_case(path).nframes == 4
+    with h5py.File(path, "a") as f:
+        f["checkpoint/slot1/nframes"][()] = 5
+    assert io.read_case(path).nframes == 5
+
+
 def test_write_and_read_analysis(tmp_path):
     pos = np.stack([open_trefoil()] * 3)
     path = str(write_case(tmp_path / "c.h5", pos))

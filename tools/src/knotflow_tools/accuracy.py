@@ -14,6 +14,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from . import add_version_option  # noqa: E402
+
 BEGIN = "<!-- accuracy:begin -->"
 END = "<!-- accuracy:end -->"
 REUSE_BEGIN = "<!-- reuse:begin -->"
@@ -529,6 +531,7 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(
         prog="knotflow-accuracy-report",
         description="docs/accuracy.md and figures from the CSV tables of knotflow-accuracy.")
+    add_version_option(p)
     p.add_argument("results", nargs="?", default=None,
                    help="directory written by knotflow-accuracy --out")
     p.add_argument("--reuse", default=None, metavar="DIR",

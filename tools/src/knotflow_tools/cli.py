@@ -9,6 +9,7 @@ import sys
 
 import numpy as np
 
+from . import add_version_option
 from . import knots
 
 
@@ -17,6 +18,7 @@ def _kf_parser():
         prog="knotflow-kf",
         description="Knotted fraction, knot spectrum and knot matrix of an open chain "
                     "(text coordinate file or HDF5 case file).")
+    add_version_option(p)
     p.add_argument("chain", help="text file (x y z per line) or .h5 case file")
     p.add_argument("--frame", type=int, default=-1,
                    help="frame of a .h5 case file (0-based; negative from the end; default last)")
@@ -57,7 +59,11 @@ def main_kf(argv=None) -> int:
     if args.closures < 1 and points is None:
         print("knotflow-kf: error: --closures must be >= 1", file=sys.stderr)
         return 2
-    res = knots.analyze_chain(r, closures=args.closures, seed=args.seed, points=points)
+    try:
+        res = knots.analyze_chain(r, closures=args.closures, seed=args.seed, points=points)
+    except ValueError as exc:
+        print(f"knotflow-kf: error: {args.chain}: {exc}", file=sys.stderr)
+        return 2
     mat = None
     core = None
     slip = False
@@ -96,6 +102,7 @@ def main_plot(argv=None) -> int:
     """knotflow-plot entry point."""
     p = argparse.ArgumentParser(prog="knotflow-plot",
                                 description="Figures of a knotflow case file.")
+    add_version_option(p)
     p.add_argument("case", help="HDF5 case file")
     p.add_argument("--out", default=None, help="output directory (default: <case>_plots)")
     p.add_argument("--closures", type=int, default=200,
@@ -159,6 +166,7 @@ def main_report(argv=None) -> int:
     """knotflow-report entry point."""
     p = argparse.ArgumentParser(prog="knotflow-report",
                                 description="Report (markdown + html) of a sweep directory.")
+    add_version_option(p)
     p.add_argument("sweep_dir")
     p.add_argument("--closures", type=int, default=200)
     p.add_argument("--stride", type=int, default=0,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 
 import h5py
@@ -110,20 +111,87 @@ def check_frames(path, time, positions) -> None:
         raise ValueError(f"{path}: frame {k} (t = {time[k]:g}): {cause}{more}")
 
 
+def checkpoint_frames(f):
+    """Frames the newest checkpoint of the open case file `f` counts (None: no checkpoint).
+    Files of schema 3 have two slots written alternately (/checkpoint/slot0, slot1; a slot's
+    frame count is written last, so the larger one is whole or being finished); older files one
+    /checkpoint. Frames beyond it were being written when the run stopped."""
+    if "checkpoint" not in f:
+        return None
+    groups = [f["checkpoint"][s] for s in ("slot0", "slot1") if s in f["checkpoint"]]
+    groups.append(f["checkpoint"])
+    counts = [int(g["nframes"][()]) for g in groups if "nframes" in g]
+    return max(counts) if counts else None
+
+
+def open_case(path):
+    """The case file `path` opened read-only with h5py; a file HDF5 cannot open is a ValueError
+    naming it and telling why (missing, a directory, empty, not HDF5, truncated or damaged)."""
+    try:
+        return h5py.File(path, "r")
+    except OSError as exc:
+        if not os.path.exists(path):
+            why = "no such file"
+        elif os.path.isdir(path):
+            why = "it is a directory"
+        elif os.path.getsize(path) == 0:
+            why = "an empty file, not HDF5"
+        else:
+            with open(path, "rb") as fh:
+                head = fh.read(8)
+            why = ("an HDF5 file that is truncated or damaged" if head == b"\x89HDF\r\n\x1a\n"
+                   else "not an HDF5 file")
+        detail = " ".join(str(exc).split())
+        raise ValueError(f"{path}: cannot open as a case file ({why}: {detail})") from None
+
+
+def _frame_dataset(path, fr, name, ndim):
+    """The numbers of /frames/<name> (an array of `ndim` dimensions), or a ValueError."""
+    if name not in fr or not isinstance(fr[name], h5py.Dataset):
+        raise ValueError(f"{path}: no dataset /frames/{name} (not a knotflow case file)")
+    ds = fr[name]
+    if ds.dtype.kind not in "fiu":
+        raise ValueError(f"{path}: /frames/{name} holds {ds.dtype}, not numbers")
+    if ds.ndim != ndim:
+        raise ValueError(f"{path}: /frames/{name} has {ds.ndim} dimensions, expected {ndim}")
+    return np.asarray(_read(path, ds), dtype=float)
+
+
 def read_case(path) -> Case:
-    """Read a case file; missing optional parts are left empty. A frame with a non-finite
-    time or coordinate, or data that cannot be read (damaged), is a ValueError naming the
-    file, the frame or dataset and the cause."""
-    with h5py.File(path, "r") as f:
+    """Read a case file; missing optional parts are left empty. The frames are read up to those
+    the newest checkpoint counts (a frame beyond it was being written when the run stopped).
+    A ValueError names the file and the problem: a file that cannot be opened, no /frames
+    group, /frames/time or /frames/positions missing, not numbers or unreadable (damaged data),
+    positions not of shape (frames, beads, 3) or of fewer than 2 beads, time and positions of
+    different lengths (without a checkpoint), no frame, a frame with a non-finite time or
+    coordinate (naming the frame), times that do not increase."""
+    with open_case(path) as f:
         attrs = {k: _attr(v) for k, v in f.attrs.items()}
+        if "frames" not in f or not isinstance(f["frames"], h5py.Group):
+            raise ValueError(f"{path}: no /frames group (not a knotflow case file)")
         fr = f["frames"]
-        time = np.asarray(_read(path, fr["time"]), dtype=float)
-        pos = np.asarray(_read(path, fr["positions"]), dtype=float)
-        n = min(len(time), len(pos))
-        if "checkpoint" in f and "nframes" in f["checkpoint"]:
-            n = min(n, int(f["checkpoint"]["nframes"][()]))
+        time = _frame_dataset(path, fr, "time", 1)
+        pos = _frame_dataset(path, fr, "positions", 3)
+        if pos.shape[2] != 3:
+            raise ValueError(f"{path}: /frames/positions has shape {pos.shape}, expected "
+                             "(frames, beads, 3)")
+        if pos.shape[1] < 2:
+            raise ValueError(f"{path}: /frames/positions holds {pos.shape[1]} bead(s) per frame, "
+                             "a chain needs at least 2")
+        counted = checkpoint_frames(f)
+        if counted is None and len(time) != len(pos):
+            raise ValueError(f"{path}: /frames/time and /frames/positions have different lengths "
+                             f"({len(time)} and {len(pos)} frames)")
+        n = min(len(time), len(pos), len(time) if counted is None else counted)
+        if n < 1:
+            raise ValueError(f"{path}: no complete frame (/frames is empty)")
         time, pos = time[:n], pos[:n]
         check_frames(path, time, pos)
+        back = np.nonzero(~(np.diff(time) > 0))[0]
+        if len(back):
+            k = int(back[0]) + 1
+            raise ValueError(f"{path}: frame {k} (t = {time[k]:g}) is not after frame {k - 1} "
+                             f"(t = {time[k - 1]:g}): times must increase")
         obs = {}
         if "observables" in fr:
             for k in OBSERVABLES:
@@ -201,6 +269,8 @@ def read_xyz(path) -> np.ndarray:
             if not all(np.isfinite(xyz)):
                 raise ValueError(f"{path}:{lineno}: non-finite coordinate in '{s}'")
             pts.append(xyz)
+    if not pts:
+        raise ValueError(f"{path}: no coordinates (every line is blank or a comment)")
     return np.array(pts, dtype=float).reshape(-1, 3)
 
 

@@ -418,6 +418,9 @@ def analyze_chain(r: np.ndarray, closures: int = 1000, seed: int = 1,
     gives the same closure points and projections, hence the same result.
     """
     r = np.asarray(r, dtype=float)
+    if r.ndim != 2 or r.shape[1] != 3 or len(r) < 2:
+        raise ValueError(f"the chain has shape {r.shape}: at least 2 beads of 3 coordinates "
+                         "are needed")
     if not np.all(np.isfinite(r)):
         bead = int(np.flatnonzero(~np.isfinite(r).all(axis=1))[0])
         raise ValueError(f"the chain holds non-finite coordinates (first at bead {bead}): "

@@ -23,6 +23,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from . import add_version_option  # noqa: E402
 from .analysis import observables_of  # noqa: E402
 from .io import Case  # noqa: E402
 
@@ -294,6 +295,7 @@ def main(argv=None) -> int:
         description="Movie of a case file: the chain in 3-D (equal axis scales, halves "
                     "coloured, flow and vorticity directions marked) beside k_f(t) and the "
                     "shape panels with a moving time marker. MP4 with ffmpeg, else GIF.")
+    add_version_option(p)
     p.add_argument("case", help="HDF5 case file")
     p.add_argument("--out", default=None,
                    help="output file, .mp4 or .gif (default <case>.mp4 beside the case)")

@@ -20,6 +20,7 @@ from typing import Any
 import h5py
 import numpy as np
 
+from . import add_version_option
 from . import io
 
 COLUMNS = (
@@ -157,6 +158,7 @@ def main(argv=None) -> int:
         prog="knotflow-stress-summary",
         description="Table of stress runs: wall time, steps, rejections, strand passages, "
                     "overlaps, distances, bond strain, status (Markdown).")
+    add_version_option(p)
     p.add_argument("inputs", nargs="+", help="case files or directories holding them")
     p.add_argument("--wall-times", help="file of 'case seconds' lines (scripts/stress.sh)")
     p.add_argument("--output", "-o", help="write the table (with a header) here as well")

@@ -21,6 +21,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from . import add_version_option  # noqa: E402
 from .analysis import analyze_case  # noqa: E402
 from .io import read_case, write_xyz  # noqa: E402
 from .plot import MODE_NAMES, _draw_chain  # noqa: E402
@@ -449,6 +450,7 @@ def main(argv=None):
 
 def _main(argv=None):
     p = argparse.ArgumentParser(prog="knotflow-study", description=__doc__.splitlines()[0])
+    add_version_option(p)
     p.add_argument("--trefoil", help="output directory of inputs/trefoil_table2.nml")
     p.add_argument("--candycane", help="output directory of inputs/candycane.nml")
     p.add_argument("--ensemble", help="output directory of inputs/candycane_seeds.nml (optional)")

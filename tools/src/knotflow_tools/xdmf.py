@@ -28,6 +28,9 @@ import xml.etree.ElementTree as ET
 import h5py
 import numpy as np
 
+from . import add_version_option
+from .io import checkpoint_frames
+
 XDMF_SUFFIX = ".xdmf2"
 
 # numpy dtype kind + size -> (XDMF NumberType, Precision)
@@ -91,8 +94,9 @@ def _frame_count(f) -> int:
     """Frames the file holds completely (as ``io.read_case``: time, positions, checkpoint)."""
     fr = f["frames"]
     n = min(fr["time"].shape[0], fr["positions"].shape[0])
-    if "checkpoint" in f and "nframes" in f["checkpoint"]:
-        n = min(n, int(f["checkpoint"]["nframes"][()]))
+    counted = checkpoint_frames(f)
+    if counted is not None:
+        n = min(n, counted)
     return n
 
 
@@ -206,6 +210,7 @@ def main(argv=None) -> int:
         description="Write an XDMF file <case>.xdmf2 beside each case file for ParaView "
                     "(File > Open: its 'Xdmf Reader') and VisIt (open as type Xdmf); it points "
                     "into the case file, copying no data.")
+    add_version_option(p)
     p.add_argument("cases", nargs="+", help="HDF5 case files")
     p.add_argument("--out", default=None,
                    help="output file (only with one case file; default <case>.xdmf2)")
