@@ -114,6 +114,7 @@ def test_compare_cases_known_answer(tmp_path):
     assert "| viscosity | 3 / 6 / 12 | 4 ± 0.82 | 3 / 6 / 12 | 2 ± 0 | 3 | 2 ± 1 | 3 of 3 | 0.25 |" in md
     assert (tmp_path / "out" / "rheology_vs_kf.png").stat().st_size > 1000
     assert (tmp_path / "out" / "rheology_vs_mode.png").stat().st_size > 1000
+    assert "![viscosity against time](rheology_time.png)" in md
     with open(tmp_path / "out" / "rheology.json", encoding="utf-8") as fh:
         assert json.load(fh)["knot"]["all"]["viscosity"]["p_value"] == 0.25
     # t_from leaves out the first 3 frames: knotted frames 5 only (one interval)

@@ -267,6 +267,26 @@ def plot_against_kf(rows, path, series=("viscosity", "psi1")):
     return path
 
 
+def plot_series(rows, path, name="viscosity"):
+    """The series against time for every case (grey), its knotted frames marked (red)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(8.4, 3.0), constrained_layout=True)
+    for r in rows:
+        t, v = r["time"], r["values"][name]
+        ax.plot(t, v, color="0.6", lw=0.5)
+        k = np.array([c == KNOTTED for c in r["classes"]], dtype=bool)
+        ax.plot(t[k], v[k], ".", color="tab:red", ms=1.5)
+    ax.set_xscale("symlog", linthresh=10.0)
+    ax.set_xlabel(r"time $\dot\gamma t$ (linear below 10, logarithmic above)")
+    ax.set_ylabel(LABELS[name])
+    ax.set_title(f"{LABELS[name]} of every case; red: knotted frames", fontsize=9)
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+    return path
+
+
 def plot_against_mode(cases, path, series=("viscosity", "psi1"), t_from=0.0):
     """Box plots of each series per case for the frames at t >= t_from in mode I, mode II and
     neither (/analysis/shape/mode)."""
@@ -328,6 +348,9 @@ def write_rheology(knot_dirs, mode_dirs, out, t_from=0.0, threshold=KNOT_THRESHO
         md += [f"## {title}", "", f"Case files: {', '.join(f'`{d}`' for d in dirs)}.", ""]
         md += comparison_tables(rows, summary, by) + [""]
         if by == "knot":
+            md += [f"![viscosity against time]"
+                   f"({os.path.basename(plot_series(rows, os.path.join(out, 'rheology_time.png')))})",
+                   ""]
             fig = plot_against_kf(rows, os.path.join(out, "rheology_vs_kf.png"))
         else:
             fig = plot_against_mode(cases, os.path.join(out, "rheology_vs_mode.png"),
