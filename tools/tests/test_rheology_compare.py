@@ -104,6 +104,9 @@ def test_compare_cases_known_answer(tmp_path):
     assert v[KNOTTED]["frames"] == 12 and v[KNOTTED]["intervals"] == 6
     assert v[KNOTTED]["mean"] == pytest.approx(4.0) and v[UNKNOTTED]["mean"] == 2.0
     assert knot["all"]["psi2"]["p_value"] == 1.0
+    # by stiffness: one case per A, so Δ_A = the case's Δ
+    assert v["paired_stiffnesses"] == 3 and v["stiffness_difference_mean"] == pytest.approx(2.0)
+    assert v["stiffness_p_value"] == 0.25
     # modes: I at frames 0, 1, 5; II at 3, 4, 7 (2 intervals each)
     mode = res["mode"]["all"]["psi1"]
     assert mode[MODE_I]["frames"] == 9 and mode[MODE_I]["intervals"] == 6
@@ -121,6 +124,26 @@ def test_compare_cases_known_answer(tmp_path):
     late = rheology.write_rheology([str(sweep)], [], str(tmp_path / "late"), t_from=3.0)
     v = late["knot"]["cases"][0]["series"]["viscosity"]
     assert (v[KNOTTED]["frames"], v[KNOTTED]["intervals"], v[UNKNOTTED]["intervals"]) == (1, 1, 2)
+
+
+def test_stiffness_differences(tmp_path):
+    """A chain that stays knotted against its sibling that is never knotted (same A): no case
+    has both classes, the stiffness comparison has them."""
+    sweep = tmp_path / "sweep"
+    sweep.mkdir()
+    make_case(sweep / "A1_knotted.h5", 1.0, [0.9] * 4, [1] * 4, 3.0)
+    make_case(sweep / "A1_open.h5", 1.0, [0.1] * 4, [1] * 4, 3.0)
+    make_case(sweep / "A2_both.h5", 2.0, [0.9, 0.9, 0.9, 0.1], [1] * 4, -1.0)
+    res = rheology.write_rheology([str(sweep)], [], str(tmp_path / "out"))
+    v = res["knot"]["all"]["viscosity"]
+    assert v["paired_cases"] == 1 and v["difference_mean"] == pytest.approx(-1.0)
+    # A = 1: knotted frames 5, unknotted 2 (Δ = 3); A = 2: Δ = -1
+    assert v["paired_stiffnesses"] == 2 and v["stiffness_positive"] == 1
+    assert v["stiffness_difference_mean"] == pytest.approx(1.0)
+    assert v["stiffness_difference_std"] == pytest.approx(math.sqrt(8.0))
+    assert v["stiffness_p_value"] == 1.0     # |mean| of every sign assignment of (3, -1) >= 1
+    md = (tmp_path / "out" / "rheology.md").read_text()
+    assert "| viscosity | 2 | 1 ± 2.8 | 1 of 2 | 1 |" in md
 
 
 def test_cli_and_errors(tmp_path, capsys):
