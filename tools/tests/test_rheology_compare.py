@@ -114,7 +114,8 @@ def test_compare_cases_known_answer(tmp_path):
     assert mode["difference_mean"] == pytest.approx(-2.0 + 14.0 / 3.0)
     md = (tmp_path / "out" / "rheology.md").read_text()
     assert "| A1.00 | 4 / 2 | 4 / 2 | 3 ± 0 | 2 ± 0 | 1 |" in md
-    assert "| viscosity | 3 / 6 / 12 | 4 ± 0.82 | 3 / 6 / 12 | 2 ± 0 | 3 | 2 ± 1 | 3 of 3 | 0.25 |" in md
+    assert ("| viscosity | 3 / 6 / 12 | 4 ± 0.82 | 3 / 6 / 12 | 2 ± 0 | 3 | 2 ± 1 | 3 of 3 | "
+            "0.25 |") in md
     assert (tmp_path / "out" / "rheology_vs_kf.png").stat().st_size > 1000
     assert (tmp_path / "out" / "rheology_vs_mode.png").stat().st_size > 1000
     assert "![viscosity against time](rheology_time.png)" in md

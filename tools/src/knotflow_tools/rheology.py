@@ -380,9 +380,8 @@ def write_rheology(knot_dirs, mode_dirs, out, t_from=0.0, threshold=KNOT_THRESHO
         md += [f"## {title}", "", f"Case files: {', '.join(f'`{d}`' for d in dirs)}.", ""]
         md += comparison_tables(rows, summary, by) + [""]
         if by == "knot":
-            md += [f"![viscosity against time]"
-                   f"({os.path.basename(plot_series(rows, os.path.join(out, 'rheology_time.png')))})",
-                   ""]
+            series = plot_series(rows, os.path.join(out, "rheology_time.png"))
+            md += [f"![viscosity against time]({os.path.basename(series)})", ""]
             fig = plot_against_kf(rows, os.path.join(out, "rheology_vs_kf.png"))
         else:
             fig = plot_against_mode(cases, os.path.join(out, "rheology_vs_mode.png"),
