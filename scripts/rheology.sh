@@ -7,7 +7,7 @@
 #   scripts/rheology.sh [--no-run]
 # Output: results/trefoil_table2_p24_rheology/, results/candycane_rheology/ (case files) and
 # results/rheology/{all,late}/ (rheology.md, rheology.json, figures). Re-running continues:
-# finished cases are skipped, stored k_f reused. About 70 min of one core here (docs/RHEOLOGY.md).
+# finished cases are skipped, stored k_f reused. About 25 min of CPU (docs/RHEOLOGY.md).
 # Environment: KNOTFLOW_NP (MPI ranks, default 2), KNOTFLOW_NO_INSTALL=1 (see scripts/lib.sh).
 set -euo pipefail
 # shellcheck source=scripts/lib.sh
