@@ -33,3 +33,419 @@ def rheology_summary(case, t_from) -> dict | None:
         return None
     return {k: late_time_mean(case.time, case.stresslet[k], t_from)
             for k in SERIES if k in case.stresslet}
+
+
+# ------------------------------------------------------------------ knotted/unknotted, modes I/II
+
+#: Frame classes. A frame is knotted when k_f >= KNOT_THRESHOLD (no hysteresis by default);
+#: modes are those of kf_modes (/analysis/shape/mode: 1 mode I, 2 mode II, 0 neither).
+KNOTTED, UNKNOTTED, MODE_I, MODE_II, EXCLUDED = "knotted", "unknotted", "mode I", "mode II", None
+KNOT_THRESHOLD = 0.5
+
+
+def knot_classes(kf, threshold=KNOT_THRESHOLD, hysteresis=None) -> list:
+    """Class of each frame from its k_f: KNOTTED when k_f >= threshold, else UNKNOTTED. With
+    hysteresis = (low, high) instead the state of `transitions.states` (knotted above high,
+    unknotted below low, unchanged in between; frames before the first decision EXCLUDED)."""
+    kf = np.asarray(kf, dtype=float)
+    if hysteresis is None:
+        return [KNOTTED if v >= threshold else UNKNOTTED for v in kf]
+    from .transitions import states
+    low, high = hysteresis
+    return states(kf, low, high)
+
+
+def mode_classes(modes) -> list:
+    """Class of each frame from its shape mode: MODE_I, MODE_II, or EXCLUDED (mode 0)."""
+    names = {1: MODE_I, 2: MODE_II}
+    return [names.get(int(m), EXCLUDED) for m in np.asarray(modes)]
+
+
+def intervals(classes) -> list:
+    """Maximal runs of consecutive frames of one class: (class, first, stop) with frames
+    first..stop-1; runs of EXCLUDED frames are left out (they still separate intervals)."""
+    out = []
+    start = 0
+    for k in range(1, len(classes) + 1):
+        if k == len(classes) or classes[k] != classes[start]:
+            if classes[start] is not EXCLUDED:
+                out.append((classes[start], start, k))
+            start = k
+    return out
+
+
+def class_statistics(values, classes, names) -> dict:
+    """Per class name: frames, intervals, mean and standard deviation over its frames, and the
+    mean and standard deviation of its interval means (each interval one number)."""
+    v = np.asarray(values, dtype=float)
+    runs = intervals(classes)
+    out = {}
+    for name in names:
+        sel = np.array([c == name for c in classes], dtype=bool)
+        means = np.array([v[a:b].mean() for c, a, b in runs if c == name])
+        out[name] = {
+            "frames": int(sel.sum()), "intervals": int(len(means)),
+            "mean": float(v[sel].mean()) if sel.any() else float("nan"),
+            "std": float(v[sel].std()) if sel.any() else float("nan"),
+            "interval_mean": float(means.mean()) if len(means) else float("nan"),
+            "interval_std": float(means.std()) if len(means) else float("nan"),
+        }
+    return out
+
+
+def sign_flip_test(differences, exact_up_to=16, samples=200000, seed=1) -> float:
+    """Two-sided p-value of the mean of independent per-case differences under the null that
+    each difference is as likely positive as negative (a sign-flip permutation test): the
+    fraction of sign assignments whose |mean| >= the observed |mean|. Exact enumeration of all
+    2^n assignments for n <= exact_up_to, otherwise `samples` random ones, (count + 1) /
+    (samples + 1). nan for no differences."""
+    d = np.asarray(differences, dtype=float)
+    n = len(d)
+    if n == 0:
+        return float("nan")
+    observed = abs(d.mean()) * (1.0 - 1e-12)
+    if n <= exact_up_to:
+        k = np.arange(2 ** n)[:, None]
+        signs = 1.0 - 2.0 * ((k >> np.arange(n)[None, :]) & 1)
+        return float(np.mean(np.abs(signs @ d) / n >= observed))
+    rng = np.random.default_rng(seed)
+    signs = rng.choice((-1.0, 1.0), size=(samples, n))
+    return float((np.sum(np.abs(signs @ d) / n >= observed) + 1) / (samples + 1))
+
+
+#: The two comparisons: name -> (classes compared, first minus second).
+COMPARISONS = {"knot": (KNOTTED, UNKNOTTED), "mode": (MODE_I, MODE_II)}
+
+
+def case_classes(case, by, t_from=0.0, threshold=KNOT_THRESHOLD, hysteresis=None):
+    """(frame indices, classes) of the case's frames at t >= t_from that have a class source:
+    by 'knot' the frames of /analysis/knots (k_f), by 'mode' those of /analysis/shape/mode. A
+    file without that analysis is a ValueError naming it and what to run."""
+    if by == "knot":
+        if case.knots is None:
+            raise ValueError(f"{case.path}: no /analysis/knots (run knotflow-analyze on it first)")
+        frames = np.asarray(case.knots["frame_index"], dtype=np.int64)
+        classes = knot_classes(case.knots["kf"], threshold, hysteresis)
+    elif by == "mode":
+        if case.modes is None or len(case.modes) != case.nframes:
+            raise ValueError(f"{case.path}: no /analysis/shape/mode for every frame (run "
+                             "knotflow-analyze on it first)")
+        frames = np.arange(case.nframes)
+        classes = mode_classes(case.modes)
+    else:
+        raise ValueError(f"unknown comparison '{by}' (allowed: {', '.join(COMPARISONS)})")
+    keep = (frames < case.nframes) & (case.time[np.minimum(frames, case.nframes - 1)] >= t_from)
+    return frames[keep], [c for c, k in zip(classes, keep) if k]
+
+
+def compare_case(case, by, t_from=0.0, threshold=KNOT_THRESHOLD, hysteresis=None) -> dict:
+    """One case: per series the class statistics (class_statistics) and the difference of the
+    frame means, first class minus second (COMPARISONS; nan unless both classes occur)."""
+    if not case.stresslet:
+        raise ValueError(f"{case.path}: no /frames/stresslet (run the scene with "
+                         "&output stresslet = .true.)")
+    first, second = COMPARISONS[by]
+    frames, classes = case_classes(case, by, t_from, threshold, hysteresis)
+    row = {"case": case.name, "A": case.bending_a, "orientation": case.orientation,
+           "time": case.time[frames], "classes": classes, "series": {},
+           "values": {name: np.asarray(case.stresslet[name])[frames] for name in SERIES}}
+    if by == "knot":
+        row["kf"] = np.asarray(case.knots["kf"])[np.isin(case.knots["frame_index"], frames)]
+    for name in SERIES:
+        stats = class_statistics(row["values"][name], classes, (first, second))
+        stats["difference"] = stats[first]["mean"] - stats[second]["mean"]
+        row["series"][name] = stats
+    return row
+
+
+def compare_cases(rows, by, samples=200000, seed=1) -> dict:
+    """Across cases, per series: the frames and intervals of each class with the mean and
+    standard deviation over all their frames; the cases in which both classes occur, the mean
+    and standard deviation of their per-case differences and the sign-flip p-value of that mean
+    (sign_flip_test: the cases are independent runs, the frames of one case are not)."""
+    first, second = COMPARISONS[by]
+    out = {}
+    for name in SERIES:
+        pooled = {}
+        for cls in (first, second):
+            vals = [case_values(r, name, cls) for r in rows]
+            v = np.concatenate(vals) if vals else np.zeros(0)
+            pooled[cls] = {"frames": int(len(v)),
+                           "intervals": int(sum(r["series"][name][cls]["intervals"] for r in rows)),
+                           "cases": int(sum(len(x) > 0 for x in vals)),
+                           "mean": float(v.mean()) if len(v) else float("nan"),
+                           "std": float(v.std()) if len(v) else float("nan")}
+        d = np.array([r["series"][name]["difference"] for r in rows], dtype=float)
+        d = d[np.isfinite(d)]
+        pooled["paired_cases"] = int(len(d))
+        pooled["difference_mean"] = float(d.mean()) if len(d) else float("nan")
+        pooled["difference_std"] = float(d.std(ddof=1)) if len(d) > 1 else float("nan")
+        pooled["positive"] = int((d > 0).sum())
+        pooled["p_value"] = sign_flip_test(d, samples=samples, seed=seed)
+        s = stiffness_differences(rows, name, first, second)
+        pooled["paired_stiffnesses"] = int(len(s))
+        pooled["stiffness_difference_mean"] = float(s.mean()) if len(s) else float("nan")
+        pooled["stiffness_difference_std"] = float(s.std(ddof=1)) if len(s) > 1 else float("nan")
+        pooled["stiffness_positive"] = int((s > 0).sum())
+        pooled["stiffness_p_value"] = sign_flip_test(s, samples=samples, seed=seed)
+        out[name] = pooled
+    return out
+
+
+def stiffness_differences(rows, name, first, second) -> np.ndarray:
+    """Per bending stiffness A (in increasing order) at which both classes occur, over all the
+    cases of that A (orientations, seeds): the mean of series `name` over the frames of class
+    `first` minus that over the frames of class `second`. Compares a chain that stays knotted
+    with its siblings that untied, which the per-case differences cannot."""
+    out = []
+    for a in sorted({r["A"] for r in rows}):
+        same = [r for r in rows if r["A"] == a]
+        v1 = np.concatenate([case_values(r, name, first) for r in same])
+        v2 = np.concatenate([case_values(r, name, second) for r in same])
+        if len(v1) and len(v2):
+            out.append(v1.mean() - v2.mean())
+    return np.array(out, dtype=float)
+
+
+def case_values(row, name, cls) -> np.ndarray:
+    """The values of series `name` over the frames of class `cls` of one compare_case row."""
+    return np.asarray(row["values"][name])[[c == cls for c in row["classes"]]]
+
+
+# ------------------------------------------------------------------------- tables, figures, CLI
+
+LABELS = {"viscosity": "viscosity", "psi1": "psi1", "psi2": "psi2"}
+
+
+def _g(v, spec=".3g"):
+    return "–" if v is None or not np.isfinite(v) else format(v, spec)
+
+
+def comparison_tables(rows, summary, by) -> list:
+    """Markdown lines: the per-case table and the across-cases table of one comparison."""
+    first, second = COMPARISONS[by]
+    out = [f"Per case ({first} − {second}: difference of the frame means; frames / intervals of "
+           "each class):", "",
+           f"| case | {first} frames / intervals | {second} frames / intervals | "
+           + " | ".join(f"{LABELS[s]} {first} | {LABELS[s]} {second} | Δ {LABELS[s]}"
+                        for s in SERIES) + " |",
+           "|---|---|---|" + "---|---|---|" * len(SERIES)]
+    for r in rows:
+        st = r["series"][SERIES[0]]
+        cells = [r["case"], f"{st[first]['frames']} / {st[first]['intervals']}",
+                 f"{st[second]['frames']} / {st[second]['intervals']}"]
+        for s in SERIES:
+            x = r["series"][s]
+            cells += [f"{_g(x[first]['mean'])} ± {_g(x[first]['std'], '.2g')}",
+                      f"{_g(x[second]['mean'])} ± {_g(x[second]['std'], '.2g')}",
+                      _g(x["difference"])]
+        out.append("| " + " | ".join(cells) + " |")
+    out += ["", f"All cases (mean ± standard deviation over the frames of each class; Δ: mean ± "
+            "standard deviation over the cases in which both classes occur of the per-case "
+            "differences; p: two-sided sign-flip test of the mean Δ over those cases):", "",
+            f"| series | {first}: cases / intervals / frames | {first} mean ± sd | "
+            f"{second}: cases / intervals / frames | {second} mean ± sd | cases with both | "
+            "Δ mean ± sd | Δ > 0 in | p |", "|---|---|---|---|---|---|---|---|---|"]
+    for s in SERIES:
+        x = summary[s]
+        a, b = x[first], x[second]
+        out.append(
+            f"| {LABELS[s]} | {a['cases']} / {a['intervals']} / {a['frames']} | "
+            f"{_g(a['mean'])} ± {_g(a['std'], '.2g')} | {b['cases']} / {b['intervals']} / "
+            f"{b['frames']} | {_g(b['mean'])} ± {_g(b['std'], '.2g')} | {x['paired_cases']} | "
+            f"{_g(x['difference_mean'])} ± {_g(x['difference_std'], '.2g')} | "
+            f"{x['positive']} of {x['paired_cases']} | {_g(x['p_value'], '.2g')} |")
+    out += ["", f"By bending stiffness (Δ_A: mean over the {first} frames minus mean over the "
+            f"{second} frames of all the cases with stiffness A; mean ± standard deviation over "
+            "the stiffnesses at which both occur; p: sign-flip test over them):", "",
+            "| series | stiffnesses with both | Δ_A mean ± sd | Δ_A > 0 in | p |",
+            "|---|---|---|---|---|"]
+    for s in SERIES:
+        x = summary[s]
+        out.append(f"| {LABELS[s]} | {x['paired_stiffnesses']} | "
+                   f"{_g(x['stiffness_difference_mean'])} ± "
+                   f"{_g(x['stiffness_difference_std'], '.2g')} | {x['stiffness_positive']} of "
+                   f"{x['paired_stiffnesses']} | {_g(x['stiffness_p_value'], '.2g')} |")
+    return out
+
+
+def plot_against_kf(rows, path, series=("viscosity", "psi1")):
+    """Each series against k_f: every frame of every case (grey) and the mean over the frames
+    in k_f bins of width 0.1 (black, ± the standard deviation)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, len(series), figsize=(4.2 * len(series), 3.2),
+                             constrained_layout=True, squeeze=False)
+    kf = np.concatenate([r["kf"] for r in rows])
+    edges = np.linspace(0.0, 1.0, 11)
+    mid = 0.5 * (edges[1:] + edges[:-1])
+    which = np.clip(np.digitize(kf, edges) - 1, 0, len(mid) - 1)
+    for ax, s in zip(axes[0], series):
+        v = np.concatenate([r["values"][s] for r in rows])
+        ax.plot(kf, v, ".", color="0.6", ms=1.5, alpha=0.4, rasterized=True)
+        m = np.array([v[which == k].mean() if (which == k).any() else np.nan
+                      for k in range(len(mid))])
+        e = np.array([v[which == k].std() if (which == k).any() else np.nan
+                      for k in range(len(mid))])
+        ax.errorbar(mid, m, yerr=e, color="k", marker="o", ms=3, lw=1, capsize=2)
+        ax.axvline(KNOT_THRESHOLD, color="tab:red", lw=0.8, ls="--")
+        lo, hi = np.nanpercentile(v, [1, 99])
+        ax.set_ylim(lo - 0.1 * (hi - lo), hi + 0.1 * (hi - lo))
+        ax.set_xlabel("$k_f$")
+        ax.set_ylabel(LABELS[s])
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+    return path
+
+
+def plot_series(rows, path, name="viscosity"):
+    """The series against time for every case (grey), its knotted frames marked (red)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(8.4, 3.0), constrained_layout=True)
+    for r in rows:
+        t, v = r["time"], r["values"][name]
+        ax.plot(t, v, color="0.6", lw=0.5)
+        k = np.array([c == KNOTTED for c in r["classes"]], dtype=bool)
+        ax.plot(t[k], v[k], ".", color="tab:red", ms=1.5)
+    ax.set_xscale("symlog", linthresh=10.0)
+    ax.set_xlabel(r"time $\dot\gamma t$ (linear below 10, logarithmic above)")
+    ax.set_ylabel(LABELS[name])
+    ax.set_title(f"{LABELS[name]} of every case; red: knotted frames", fontsize=9)
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+    return path
+
+
+def plot_against_mode(cases, path, series=("viscosity", "psi1"), t_from=0.0):
+    """Box plots of each series per case for the frames at t >= t_from in mode I, mode II and
+    neither (/analysis/shape/mode)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, len(series), figsize=(4.2 * len(series), 3.2),
+                             constrained_layout=True, squeeze=False)
+    groups = ((1, "I"), (2, "II"), (0, "–"))
+    for ax, s in zip(axes[0], series):
+        data, labels = [], []
+        for case in cases:
+            late = case.time >= t_from
+            for m, lab in groups:
+                sel = late & (np.asarray(case.modes) == m)
+                if sel.any():
+                    data.append(np.asarray(case.stresslet[s])[sel])
+                    labels.append(f"A={_g(case.bending_a, 'g')}\n{lab}")
+        ax.boxplot(data, showfliers=False)
+        ax.set_xticks(range(1, len(labels) + 1), labels, fontsize=7)
+        ax.set_ylabel(LABELS[s])
+        ax.set_xlabel("case and shape mode (– : neither)")
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+    return path
+
+
+def _jsonable(rows, summary):
+    return {"cases": [{"case": r["case"], "A": r["A"], "orientation": r["orientation"],
+                       "series": r["series"]} for r in rows], "all": summary}
+
+
+def write_rheology(knot_dirs, mode_dirs, out, t_from=0.0, threshold=KNOT_THRESHOLD,
+                   hysteresis=None, samples=200000, seed=1) -> dict:
+    """Both comparisons for the case files of the given sweep directories: rheology.md,
+    rheology.json and the figures in out."""
+    import json
+    import os
+    from .io import read_case
+    from .report import find_case_files
+    os.makedirs(out, exist_ok=True)
+    rule = (f"knotted when k_f >= {threshold:g} (no hysteresis)" if hysteresis is None else
+            f"hysteresis: knotted above {hysteresis[1]:g}, unknotted below {hysteresis[0]:g}, "
+            "unchanged in between, undecided frames before the first decision left out")
+    md = ["# knotflow-rheology: does a knot change the fluid?", "",
+          f"Frames at t >= {t_from:g}. Knot rule: {rule}. Modes: /analysis/shape/mode (kf_modes); "
+          "frames in neither mode are left out of the mode comparison. Intervals: maximal runs "
+          "of consecutive analysed frames of one class.", ""]
+    result = {"t_from": t_from, "threshold": threshold, "hysteresis": hysteresis}
+    for by, dirs, title in (("knot", knot_dirs, "Knotted and unknotted intervals"),
+                            ("mode", mode_dirs, "Modes I and II")):
+        files = [f for d in dirs for f in find_case_files(d)]
+        if not files:
+            continue
+        cases = [read_case(f) for f in files]
+        cases = [c for c in cases if c.nframes > 0]
+        rows = [compare_case(c, by, t_from, threshold, hysteresis) for c in cases]
+        summary = compare_cases(rows, by, samples, seed)
+        md += [f"## {title}", "", f"Case files: {', '.join(f'`{d}`' for d in dirs)}.", ""]
+        md += comparison_tables(rows, summary, by) + [""]
+        if by == "knot":
+            series = plot_series(rows, os.path.join(out, "rheology_time.png"))
+            md += [f"![viscosity against time]({os.path.basename(series)})", ""]
+            fig = plot_against_kf(rows, os.path.join(out, "rheology_vs_kf.png"))
+        else:
+            fig = plot_against_mode(cases, os.path.join(out, "rheology_vs_mode.png"),
+                                    t_from=t_from)
+        md += [f"![{title}]({os.path.basename(fig)})", ""]
+        result[by] = _jsonable(rows, summary)
+    with open(os.path.join(out, "rheology.md"), "w", encoding="utf-8") as fh:
+        fh.write("\n".join(md) + "\n")
+    with open(os.path.join(out, "rheology.json"), "w", encoding="utf-8") as fh:
+        json.dump(result, fh, indent=1, default=float)
+    return result
+
+
+def main(argv=None):
+    """knotflow-rheology entry point: bad input or an unreadable file is one error line
+    (exit status 2)."""
+    import sys
+    try:
+        return _main(argv)
+    except (OSError, KeyError, ValueError) as exc:
+        print(f"knotflow-rheology: error: {exc}", file=sys.stderr)
+        return 2
+
+
+def _main(argv=None):
+    import argparse
+    import os
+    p = argparse.ArgumentParser(
+        prog="knotflow-rheology",
+        description="The fibre's viscosity and normal-stress coefficients in knotted against "
+        "unknotted intervals and in shape modes I against II (docs/RHEOLOGY.md).")
+    p.add_argument("--knots", nargs="+", default=[], metavar="DIR",
+                   help="sweep directories compared knotted against unknotted")
+    p.add_argument("--modes", nargs="+", default=[], metavar="DIR",
+                   help="sweep directories compared mode I against mode II")
+    p.add_argument("--out", default="rheology", help="where rheology.md, .json and figures go")
+    p.add_argument("--t-from", type=float, default=0.0, help="leave out frames before this time")
+    p.add_argument("--threshold", type=float, default=KNOT_THRESHOLD,
+                   help="knotted when k_f >= this (default 0.5)")
+    p.add_argument("--hysteresis", type=float, nargs=2, metavar=("LOW", "HIGH"),
+                   help="instead of --threshold: the hysteresis states of k_f (e.g. 0.1 0.9)")
+    p.add_argument("--samples", type=int, default=200000,
+                   help="random sign assignments of the test above 16 cases")
+    p.add_argument("--seed", type=int, default=1)
+    args = p.parse_args(argv)
+    if not (args.knots or args.modes):
+        p.error("give --knots DIR and/or --modes DIR")
+    for d in args.knots + args.modes:
+        if not os.path.isdir(d):
+            p.error(f"directory not found: {d}")
+    if not 0.0 < args.threshold <= 1.0:
+        p.error(f"--threshold {args.threshold:g} is not allowed (a number in (0, 1])")
+    if args.hysteresis and not 0.0 <= args.hysteresis[0] < args.hysteresis[1] <= 1.0:
+        p.error("--hysteresis LOW HIGH needs 0 <= LOW < HIGH <= 1")
+    if args.samples < 1:
+        p.error(f"--samples {args.samples} is not allowed (a positive integer)")
+    res = write_rheology(args.knots, args.modes, args.out, args.t_from, args.threshold,
+                         tuple(args.hysteresis) if args.hysteresis else None, args.samples,
+                         args.seed)
+    for by in COMPARISONS:
+        if by in res:
+            x = res[by]["all"]["viscosity"]
+            first, second = COMPARISONS[by]
+            print(f"{first} - {second}: viscosity difference {_g(x['difference_mean'])} over "
+                  f"{x['paired_cases']} case(s), p = {_g(x['p_value'], '.2g')}")
+    print(f"wrote {os.path.join(args.out, 'rheology.md')}")
+    return 0

@@ -1,0 +1,172 @@
+"""knotflow-rheology: knotted/unknotted and mode I/II intervals, their statistics and the
+sign-flip test, on small synthetic case files whose answers are known exactly."""
+
+import json
+import math
+
+import h5py
+import numpy as np
+import pytest
+
+from conftest import unknotting_trefoil_frames, write_case
+from knotflow_tools import io, rheology
+from knotflow_tools.rheology import KNOTTED, MODE_I, MODE_II, UNKNOTTED
+
+
+def test_classes_and_intervals():
+    kf = [0.9, 0.8, 0.2, 0.1, 0.5, 0.4]
+    classes = rheology.knot_classes(kf)
+    assert classes == [KNOTTED, KNOTTED, UNKNOTTED, UNKNOTTED, KNOTTED, UNKNOTTED]
+    assert rheology.intervals(classes) == [(KNOTTED, 0, 2), (UNKNOTTED, 2, 4), (KNOTTED, 4, 5),
+                                           (UNKNOTTED, 5, 6)]
+    # hysteresis (0.1, 0.9): undecided until 0.95, in-band frames keep the state
+    hyst = rheology.knot_classes([0.5, 0.95, 0.5, 0.05, 0.5, 0.95], hysteresis=(0.1, 0.9))
+    assert hyst == [None, KNOTTED, KNOTTED, UNKNOTTED, UNKNOTTED, KNOTTED]
+    assert rheology.intervals(hyst) == [(KNOTTED, 1, 3), (UNKNOTTED, 3, 5), (KNOTTED, 5, 6)]
+    modes = rheology.mode_classes([1, 1, 0, 1, 2, 2, 0])
+    assert modes == [MODE_I, MODE_I, None, MODE_I, MODE_II, MODE_II, None]
+    # an excluded frame separates two runs of the same class
+    assert rheology.intervals(modes) == [(MODE_I, 0, 2), (MODE_I, 3, 4), (MODE_II, 4, 6)]
+    assert rheology.intervals([]) == []
+
+
+def test_class_statistics():
+    classes = [KNOTTED, KNOTTED, UNKNOTTED, UNKNOTTED, KNOTTED, UNKNOTTED]
+    st = rheology.class_statistics([1.0, 3.0, 10.0, 20.0, 5.0, 7.0], classes,
+                                   (KNOTTED, UNKNOTTED, MODE_I))
+    k, u = st[KNOTTED], st[UNKNOTTED]
+    assert (k["frames"], k["intervals"], u["frames"], u["intervals"]) == (3, 2, 3, 2)
+    assert k["mean"] == pytest.approx(3.0) and k["std"] == pytest.approx(math.sqrt(8.0 / 3.0))
+    assert k["interval_mean"] == pytest.approx(3.5) and k["interval_std"] == pytest.approx(1.5)
+    assert u["mean"] == pytest.approx(37.0 / 3.0)
+    assert u["interval_mean"] == pytest.approx(11.0) and u["interval_std"] == pytest.approx(4.0)
+    assert st[MODE_I]["frames"] == 0 and math.isnan(st[MODE_I]["mean"])
+
+
+def test_sign_flip_exact_and_sampled():
+    # 3 differences of one sign: only all + and all - reach |mean| = 2, so p = 2/8
+    assert rheology.sign_flip_test([1.0, 2.0, 3.0]) == 0.25
+    assert rheology.sign_flip_test([1.0, -1.0]) == 1.0          # mean 0: every assignment
+    assert rheology.sign_flip_test([1.0, 1.0, -1.0]) == 1.0     # |mean| 1/3 is the smallest
+    assert math.isnan(rheology.sign_flip_test([]))
+    # above exact_up_to: 30 equal differences, exact p = 2^-29, sampled (0 + 1)/(samples + 1)
+    assert rheology.sign_flip_test(np.ones(30), samples=999) == 1.0 / 1000.0
+    # sampled against exact on the same data: within 4 binomial standard deviations
+    d = np.random.default_rng(5).normal(0.4, 1.0, size=12)
+    exact = rheology.sign_flip_test(d)
+    sampled = rheology.sign_flip_test(d, exact_up_to=0, samples=40000, seed=3)
+    assert abs(sampled - exact) < 4.0 * math.sqrt(exact * (1.0 - exact) / 40000) + 1e-4
+    assert 0.0 < exact < 1.0
+
+
+def make_case(path, a, kf, modes, shift):
+    """A case with known answers: viscosity = 2 + shift in knotted (k_f >= 0.5) and in mode I
+    frames' counterpart as set below, psi1 = -frame index, psi2 = 1."""
+    n = len(kf)
+    path = write_case(path, unknotting_trefoil_frames(n), attrs={"forces.bending_a": a})
+    kf = np.asarray(kf, dtype=float)
+    knotted = kf >= 0.5
+    with h5py.File(path, "a") as f:
+        g = f["frames"].create_group("stresslet")
+        g["hydrodynamic"] = np.zeros((n, 3, 3))
+        g["elastic"] = np.zeros((n, 3, 3))
+        g["viscosity"] = 2.0 + shift * knotted
+        g["psi1"] = -np.arange(n, dtype=float)
+        g["psi2"] = np.ones(n)
+    io.write_knots(path, np.arange(n), np.arange(n, dtype=float), kf, np.zeros((n, 10)),
+                   ["0_1"] * n, closures=10, seed=1)
+    io.write_modes(path, modes, case_mode=0)
+    return path
+
+
+def test_compare_cases_known_answer(tmp_path):
+    kf = [0.98, 0.9, 0.7, 0.3, 0.1, 0.6, 0.2, 0.05]
+    modes = [1, 1, 0, 2, 2, 1, 0, 2]
+    sweep = tmp_path / "sweep"
+    sweep.mkdir()
+    for a, shift in ((1.0, 1.0), (2.0, 2.0), (3.0, 3.0)):
+        make_case(sweep / f"A{a:.2f}.h5", a, kf, modes, shift)
+    res = rheology.write_rheology([str(sweep)], [str(sweep)], str(tmp_path / "out"))
+    knot = res["knot"]
+    for r, shift in zip(knot["cases"], (1.0, 2.0, 3.0)):
+        v = r["series"]["viscosity"]
+        assert (v[KNOTTED]["frames"], v[KNOTTED]["intervals"]) == (4, 2)
+        assert (v[UNKNOTTED]["frames"], v[UNKNOTTED]["intervals"]) == (4, 2)
+        assert v["difference"] == pytest.approx(shift)
+        # psi1 = -k: knotted frames 0, 1, 2, 5 and unknotted 3, 4, 6, 7
+        assert r["series"]["psi1"]["difference"] == pytest.approx(-8.0 / 4 + 20.0 / 4)
+        assert r["series"]["psi2"]["difference"] == 0.0
+    v = knot["all"]["viscosity"]
+    assert v["paired_cases"] == 3 and v["positive"] == 3
+    assert v["difference_mean"] == pytest.approx(2.0)
+    assert v["difference_std"] == pytest.approx(1.0)
+    assert v["p_value"] == 0.25
+    assert v[KNOTTED]["frames"] == 12 and v[KNOTTED]["intervals"] == 6
+    assert v[KNOTTED]["mean"] == pytest.approx(4.0) and v[UNKNOTTED]["mean"] == 2.0
+    assert knot["all"]["psi2"]["p_value"] == 1.0
+    # by stiffness: one case per A, so Δ_A = the case's Δ
+    assert v["paired_stiffnesses"] == 3 and v["stiffness_difference_mean"] == pytest.approx(2.0)
+    assert v["stiffness_p_value"] == 0.25
+    # modes: I at frames 0, 1, 5; II at 3, 4, 7 (2 intervals each)
+    mode = res["mode"]["all"]["psi1"]
+    assert mode[MODE_I]["frames"] == 9 and mode[MODE_I]["intervals"] == 6
+    assert mode[MODE_II]["intervals"] == 6
+    assert mode["difference_mean"] == pytest.approx(-2.0 + 14.0 / 3.0)
+    md = (tmp_path / "out" / "rheology.md").read_text()
+    assert "| A1.00 | 4 / 2 | 4 / 2 | 3 ± 0 | 2 ± 0 | 1 |" in md
+    assert ("| viscosity | 3 / 6 / 12 | 4 ± 0.82 | 3 / 6 / 12 | 2 ± 0 | 3 | 2 ± 1 | 3 of 3 | "
+            "0.25 |") in md
+    assert (tmp_path / "out" / "rheology_vs_kf.png").stat().st_size > 1000
+    assert (tmp_path / "out" / "rheology_vs_mode.png").stat().st_size > 1000
+    assert "![viscosity against time](rheology_time.png)" in md
+    with open(tmp_path / "out" / "rheology.json", encoding="utf-8") as fh:
+        assert json.load(fh)["knot"]["all"]["viscosity"]["p_value"] == 0.25
+    # t_from leaves out the first 3 frames: knotted frames 5 only (one interval)
+    late = rheology.write_rheology([str(sweep)], [], str(tmp_path / "late"), t_from=3.0)
+    v = late["knot"]["cases"][0]["series"]["viscosity"]
+    assert (v[KNOTTED]["frames"], v[KNOTTED]["intervals"], v[UNKNOTTED]["intervals"]) == (1, 1, 2)
+
+
+def test_stiffness_differences(tmp_path):
+    """A chain that stays knotted against its sibling that is never knotted (same A): no case
+    has both classes, the stiffness comparison has them."""
+    sweep = tmp_path / "sweep"
+    sweep.mkdir()
+    make_case(sweep / "A1_knotted.h5", 1.0, [0.9] * 4, [1] * 4, 3.0)
+    make_case(sweep / "A1_open.h5", 1.0, [0.1] * 4, [1] * 4, 3.0)
+    make_case(sweep / "A2_both.h5", 2.0, [0.9, 0.9, 0.9, 0.1], [1] * 4, -1.0)
+    res = rheology.write_rheology([str(sweep)], [], str(tmp_path / "out"))
+    v = res["knot"]["all"]["viscosity"]
+    assert v["paired_cases"] == 1 and v["difference_mean"] == pytest.approx(-1.0)
+    # A = 1: knotted frames 5, unknotted 2 (Δ = 3); A = 2: Δ = -1
+    assert v["paired_stiffnesses"] == 2 and v["stiffness_positive"] == 1
+    assert v["stiffness_difference_mean"] == pytest.approx(1.0)
+    assert v["stiffness_difference_std"] == pytest.approx(math.sqrt(8.0))
+    assert v["stiffness_p_value"] == 1.0     # |mean| of every sign assignment of (3, -1) >= 1
+    md = (tmp_path / "out" / "rheology.md").read_text()
+    assert "| viscosity | 2 | 1 ± 2.8 | 1 of 2 | 1 |" in md
+
+
+def test_cli_and_errors(tmp_path, capsys):
+    sweep = tmp_path / "sweep"
+    sweep.mkdir()
+    make_case(sweep / "A1.00.h5", 1.0, [0.9, 0.9, 0.1, 0.1], [1, 1, 2, 2], 0.5)
+    out = tmp_path / "out"
+    assert rheology.main(["--knots", str(sweep), "--out", str(out)]) == 0
+    assert "knotted - unknotted: viscosity difference 0.5 over 1 case(s), p = 1" in \
+        capsys.readouterr().out
+    bare = tmp_path / "bare"
+    bare.mkdir()
+    write_case(bare / "plain.h5", unknotting_trefoil_frames(3))
+    assert rheology.main(["--knots", str(bare), "--out", str(out)]) == 2
+    assert "plain.h5: no /frames/stresslet" in capsys.readouterr().err
+    with h5py.File(sweep / "A1.00.h5", "a") as f:
+        del f["analysis/knots"]
+    assert rheology.main(["--knots", str(sweep), "--out", str(out)]) == 2
+    assert "A1.00.h5: no /analysis/knots (run knotflow-analyze" in capsys.readouterr().err
+    for bad in (["--out", str(out)], ["--knots", str(tmp_path / "missing")],
+                ["--knots", str(sweep), "--threshold", "0"],
+                ["--knots", str(sweep), "--hysteresis", "0.9", "0.1"]):
+        with pytest.raises(SystemExit) as exc:
+            rheology.main(bad)
+        assert exc.value.code == 2
