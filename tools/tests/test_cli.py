@@ -109,7 +109,9 @@ def test_every_tool_answers_version(capsys):
     exit status 0."""
     import importlib
     import re
+
     import pytest
+
     import knotflow_tools
     with open(os.path.join(os.path.dirname(__file__), "..", "pyproject.toml"), encoding="utf-8") as fh:
         text = fh.read()

@@ -8,9 +8,10 @@ import h5py
 import numpy as np
 import pytest
 
-from conftest import unknotting_trefoil_frames, write_case
 from knotflow_tools import io, rheology
 from knotflow_tools.rheology import KNOTTED, MODE_I, MODE_II, UNKNOTTED
+
+from conftest import unknotting_trefoil_frames, write_case
 
 
 def test_classes_and_intervals():

@@ -9,8 +9,7 @@ import sys
 
 import numpy as np
 
-from . import add_version_option
-from . import knots
+from . import add_version_option, knots
 
 
 def _kf_parser():

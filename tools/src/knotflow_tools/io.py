@@ -189,9 +189,9 @@ def read_case(path) -> Case:
         check_frames(path, time, pos)
         back = np.nonzero(~(np.diff(time) > 0))[0]
         if len(back):
-            k = int(back[0]) + 1
-            raise ValueError(f"{path}: frame {k} (t = {time[k]:g}) is not after frame {k - 1} "
-                             f"(t = {time[k - 1]:g}): times must increase")
+            kb = int(back[0]) + 1
+            raise ValueError(f"{path}: frame {kb} (t = {time[kb]:g}) is not after frame {kb - 1} "
+                             f"(t = {time[kb - 1]:g}): times must increase")
         obs = {}
         if "observables" in fr:
             for k in OBSERVABLES:

@@ -5,7 +5,11 @@ give a viscosity of 5/2)."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+
+from . import add_version_option
 
 SERIES = ("viscosity", "psi1", "psi2")
 
@@ -166,7 +170,7 @@ def compare_cases(rows, by, samples=200000, seed=1) -> dict:
     first, second = COMPARISONS[by]
     out = {}
     for name in SERIES:
-        pooled = {}
+        pooled: dict[str, Any] = {}
         for cls in (first, second):
             vals = [case_values(r, name, cls) for r in rows]
             v = np.concatenate(vals) if vals else np.zeros(0)
@@ -240,7 +244,7 @@ def comparison_tables(rows, summary, by) -> list:
                       f"{_g(x[second]['mean'])} ± {_g(x[second]['std'], '.2g')}",
                       _g(x["difference"])]
         out.append("| " + " | ".join(cells) + " |")
-    out += ["", f"All cases (mean ± standard deviation over the frames of each class; Δ: mean ± "
+    out += ["", "All cases (mean ± standard deviation over the frames of each class; Δ: mean ± "
             "standard deviation over the cases in which both classes occur of the per-case "
             "differences; p: two-sided sign-flip test of the mean Δ over those cases):", "",
             f"| series | {first}: cases / intervals / frames | {first} mean ± sd | "
@@ -357,6 +361,7 @@ def write_rheology(knot_dirs, mode_dirs, out, t_from=0.0, threshold=KNOT_THRESHO
     rheology.json and the figures in out."""
     import json
     import os
+
     from .io import read_case
     from .report import find_case_files
     os.makedirs(out, exist_ok=True)
@@ -426,6 +431,7 @@ def _main(argv=None):
     p.add_argument("--samples", type=int, default=200000,
                    help="random sign assignments of the test above 16 cases")
     p.add_argument("--seed", type=int, default=1)
+    add_version_option(p)
     args = p.parse_args(argv)
     if not (args.knots or args.modes):
         p.error("give --knots DIR and/or --modes DIR")

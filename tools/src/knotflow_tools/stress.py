@@ -20,8 +20,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from . import add_version_option
-from . import io
+from . import add_version_option, io
 
 COLUMNS = (
     ("case", "case"),
