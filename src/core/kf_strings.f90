@@ -1,11 +1,14 @@
-!> Number-to-text conversion shared by the whole project (messages, logs, names).
+!> Number-to-text conversion shared by the whole project (messages, logs, names), and C strings
+!> as Fortran text.
 module kf_strings
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+  use, intrinsic :: iso_c_binding, only: c_char, c_null_char, c_ptr, c_size_t, c_associated, c_f_pointer
   use kf_kinds, only: wp, i8
   implicit none
   private
 
   public :: to_str, to_str_fixed, to_str_short, to_str_exact
+  public :: chars_to_string, c_string
 
   !> Text of a number without surrounding blanks: integers as `i0`, reals as `g0` or in the
   !> edit descriptor given as optional `fmt` (e.g. `'(es23.16e2)'`).
@@ -14,6 +17,14 @@ module kf_strings
   end interface to_str
 
   integer, parameter :: buf_len = 64
+
+  interface
+    function c_strlen(s) bind(c, name='strlen') result(n)
+      import :: c_ptr, c_size_t
+      type(c_ptr), value :: s
+      integer(c_size_t) :: n
+    end function c_strlen
+  end interface
 
 contains
 
@@ -129,5 +140,39 @@ contains
       end if
     end if
   end function to_str_exact
+
+
+  !> Bytes up to the first null as a string.
+  pure function chars_to_string(buf) result(s)
+    character(kind=c_char), intent(in) :: buf(:)
+    character(len=:), allocatable :: s
+    integer :: i, n
+    n = size(buf)
+    do i = 1, size(buf)
+      if (buf(i) == c_null_char) then
+        n = i - 1
+        exit
+      end if
+    end do
+    allocate (character(len=n) :: s)
+    do i = 1, n
+      s(i:i) = buf(i)
+    end do
+  end function chars_to_string
+
+  !> Copy of a null-terminated C string.
+  function c_string(p) result(s)
+    type(c_ptr), intent(in) :: p
+    character(len=:), allocatable :: s
+    character(kind=c_char), pointer :: chars(:)
+    integer :: n
+    if (.not. c_associated(p)) then
+      s = ''
+      return
+    end if
+    n = int(c_strlen(p))
+    call c_f_pointer(p, chars, [n])
+    s = chars_to_string(chars)
+  end function c_string
 
 end module kf_strings

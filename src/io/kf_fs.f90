@@ -2,8 +2,9 @@
 !> directory is writable, remove files, and lock a directory against a second writer.
 module kf_fs
   use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char, c_ptr, c_f_pointer, &
-    c_associated, c_funptr, c_intptr_t
+    c_funptr, c_intptr_t
   use kf_error, only: error_t, fatal_error
+  use kf_strings, only: c_string
   implicit none
   private
 
@@ -159,19 +160,10 @@ contains
   function os_error_text() result(text)
     character(len=:), allocatable :: text
     integer(c_int), pointer :: e
-    character(kind=c_char), pointer :: chars(:)
-    type(c_ptr) :: p
-    integer :: n
     text = ''
     call c_f_pointer(c_errno_location(), e)
     if (e == 0) return
-    p = c_strerror(e)
-    if (.not. c_associated(p)) return
-    call c_f_pointer(p, chars, [256])
-    do n = 1, 256
-      if (chars(n) == c_null_char) exit
-      text = text//chars(n)
-    end do
+    text = c_string(c_strerror(e))
   end function os_error_text
 
   !> Rename `old` to `new` (rename(2): atomic within one file system, replaces `new`).

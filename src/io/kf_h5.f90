@@ -16,11 +16,11 @@
 !> replaces it otherwise; writing a dataset that exists overwrites it in
 !> place when the shape matches (no file space is lost) and replaces it otherwise.
 module kf_h5
-  use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_f_pointer, c_char, c_size_t, &
+  use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_char, &
     c_associated, c_int, c_null_char
   use, intrinsic :: iso_fortran_env, only: int32, int64
   use kf_kinds, only: wp, i4, i8
-  use kf_strings, only: to_str
+  use kf_strings, only: to_str, chars_to_string, c_string
   use kf_error, only: error_t, fatal_error
   use kf_fs, only: clear_os_error, os_error_text
   use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5close_f, h5eset_auto_f, &
@@ -96,11 +96,6 @@ module kf_h5
   end interface h5_append
 
   interface
-    function c_strlen(s) bind(c, name='strlen') result(n)
-      import :: c_ptr, c_size_t
-      type(c_ptr), value :: s
-      integer(c_size_t) :: n
-    end function c_strlen
     function c_h5free_memory(p) bind(c, name='H5free_memory') result(status)
       import :: c_ptr, c_int
       type(c_ptr), value :: p
@@ -1597,39 +1592,6 @@ contains
       end do
     end do
   end subroutine pack_strings
-
-  !> Bytes up to the first null as a string.
-  pure function chars_to_string(buf) result(s)
-    character(kind=c_char), intent(in) :: buf(:)
-    character(len=:), allocatable :: s
-    integer :: i, n
-    n = size(buf)
-    do i = 1, size(buf)
-      if (buf(i) == c_null_char) then
-        n = i - 1
-        exit
-      end if
-    end do
-    allocate (character(len=n) :: s)
-    do i = 1, n
-      s(i:i) = buf(i)
-    end do
-  end function chars_to_string
-
-  !> Copy of a null-terminated C string.
-  function c_string(p) result(s)
-    type(c_ptr), intent(in) :: p
-    character(len=:), allocatable :: s
-    character(kind=c_char), pointer :: chars(:)
-    integer :: n
-    if (.not. c_associated(p)) then
-      s = ''
-      return
-    end if
-    n = int(c_strlen(p))
-    call c_f_pointer(p, chars, [n])
-    s = chars_to_string(chars)
-  end function c_string
 
   pure function c_null() result(p)
     use, intrinsic :: iso_c_binding, only: c_null_ptr

@@ -31,6 +31,7 @@ module kf_run_diagnostics
   use kf_pairs, only: pair_count
   use kf_strand_passage, only: segments_pass
   use kf_pair_geometry, only: pair_geometry_t
+  use kf_vector_ops, only: sort_index
   implicit none
   private
 
@@ -222,6 +223,15 @@ contains
     pair_key = int(i - 1, i8)*int(n, i8) + int(j, i8)
   end function pair_key
 
+  !> Beads i < j of the pair with key `key` (the inverse of pair_key).
+  pure subroutine pair_of_key(key, n, i, j)
+    integer(i8), intent(in) :: key
+    integer, intent(in) :: n
+    integer, intent(out) :: i, j
+    i = int((key - 1)/n) + 1
+    j = int(key - int(i - 1, i8)*n)
+  end subroutine pair_of_key
+
   !> Room for m entries in a key list and its start times (contents kept).
   subroutine grow(key, start, m)
     integer(i8), allocatable, intent(inout) :: key(:)
@@ -290,9 +300,7 @@ contains
     integer(i8), intent(out) :: counters(diag_n_counters)
     real(wp), intent(out) :: values(diag_n_values)
     real(wp), allocatable, intent(out) :: ongoing(:, :)
-    integer :: m, n
-    integer(i8) :: key
-    n = max(this%n_beads, 1)
+    integer :: m, i, j
     counters = [this%strand_passages, this%overlap_episodes, this%completed_episodes, &
                 int(this%max_overlapping_pairs, i8), int(this%n_over, i8)]
     values = [this%first_passage_time, this%duration_sum, this%duration_max, this%min_distance2, &
@@ -300,8 +308,8 @@ contains
     allocate (ongoing(3, max(1, this%n_over)))
     ongoing = 0.0_wp
     do m = 1, this%n_over
-      key = this%over_key(m)
-      ongoing(:, m) = [real((key - 1)/n + 1, wp), real(key - ((key - 1)/n)*n, wp), this%over_start(m)]
+      call pair_of_key(this%over_key(m), this%n_beads, i, j)
+      ongoing(:, m) = [real(i, wp), real(j, wp), this%over_start(m)]
     end do
   end subroutine diagnostics_get_state
 
@@ -312,8 +320,9 @@ contains
     real(wp), intent(in) :: values(:)
     real(wp), intent(in) :: ongoing(:, :)
     type(error_t), allocatable, intent(out) :: error
-    integer :: i, j, k, m, n_on
-    integer(i8) :: key
+    integer :: i, j, m, n_on
+    integer(i8), allocatable :: keys(:)
+    integer, allocatable :: order(:)
     if (size(counters) /= diag_n_counters .or. size(values) /= diag_n_values .or. size(ongoing, 1) /= 3) then
       call fatal_error(error, 'diagnostics state: wrong sizes (counters '//to_str(size(counters))// &
         ', values '//to_str(size(values))//', ongoing rows '//to_str(size(ongoing, 1))//')')
@@ -324,7 +333,7 @@ contains
       call fatal_error(error, 'diagnostics state: '//to_str(n_on)//' ongoing episodes do not fit')
       return
     end if
-    call grow(this%over_key, this%over_start, n_on)
+    allocate (keys(n_on))
     do m = 1, n_on
       i = nint(ongoing(1, m))
       j = nint(ongoing(2, m))
@@ -333,23 +342,22 @@ contains
           to_str(j)//') is not a pair of '//to_str(this%n_beads)//' beads')
         return
       end if
-      ! insert in key order (files before the sorted list stored them column by column)
-      key = pair_key(i, j, this%n_beads)
-      k = m
-      do while (k > 1)
-        if (this%over_key(k - 1) < key) exit
-        if (this%over_key(k - 1) == key) then
-          call fatal_error(error, 'diagnostics state: pair ('//to_str(i)//', '//to_str(j)// &
-            ') has two ongoing episodes')
-          return
-        end if
-        this%over_key(k) = this%over_key(k - 1)
-        this%over_start(k) = this%over_start(k - 1)
-        k = k - 1
-      end do
-      this%over_key(k) = key
-      this%over_start(k) = ongoing(3, m)
+      keys(m) = pair_key(i, j, this%n_beads)
     end do
+    ! in key order (files before the sorted list stored them column by column); keys < N^2 are
+    ! exact in real(wp)
+    order = sort_index(real(keys, wp))
+    do m = 2, n_on
+      if (keys(order(m)) == keys(order(m - 1))) then
+        call pair_of_key(keys(order(m)), this%n_beads, i, j)
+        call fatal_error(error, 'diagnostics state: pair ('//to_str(i)//', '//to_str(j)// &
+          ') has two ongoing episodes')
+        return
+      end if
+    end do
+    call grow(this%over_key, this%over_start, n_on)
+    this%over_key(1:n_on) = keys(order)
+    this%over_start(1:n_on) = ongoing(3, order)
     this%n_over = n_on
     this%strand_passages = counters(1)
     this%overlap_episodes = counters(2)
