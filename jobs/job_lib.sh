@@ -24,6 +24,15 @@ kf_job_environment() {
   esac
 }
 
+# What every sweep job checks before it starts anything: the executable of BUILD_DIR (set as
+# KF_JOB_EXE), the sweep file and MAX_RESUBMITS.
+kf_sweep_job_checks() {
+  KF_JOB_EXE="${BUILD_DIR}/bin/knotflow"
+  [[ -x "${KF_JOB_EXE}" ]] || kf_job_die "${KF_JOB_EXE} not found or not executable (set BUILD_DIR; build with scripts/build.sh)"
+  [[ -r "${SWEEP}" ]] || kf_job_die "sweep file ${SWEEP} not found in ${KNOTFLOW_DIR}"
+  [[ "${MAX_RESUBMITS}" =~ ^[0-9]+$ ]] || kf_job_die "MAX_RESUBMITS must be a number >= 0, not '${MAX_RESUBMITS}'"
+}
+
 # The PMI type for srun --mpi (see SRUN_MPI above). Open MPI as Debian/Ubuntu build it needs
 # pmix; MPICH and Intel MPI usually pmi2. Printed on stdout.
 kf_srun_mpi() {

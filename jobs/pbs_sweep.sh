@@ -48,10 +48,7 @@ cd "${KNOTFLOW_DIR}"
 # shellcheck source=jobs/job_lib.sh
 source "${KNOTFLOW_DIR}/jobs/job_lib.sh"
 kf_job_environment
-exe="${BUILD_DIR}/bin/knotflow"
-[[ -x "${exe}" ]] || kf_job_die "${exe} not found or not executable (set BUILD_DIR; build with scripts/build.sh)"
-[[ -r "${SWEEP}" ]] || kf_job_die "sweep file ${SWEEP} not found in ${KNOTFLOW_DIR}"
-[[ "${MAX_RESUBMITS}" =~ ^[0-9]+$ ]] || kf_job_die "MAX_RESUBMITS must be a number >= 0, not '${MAX_RESUBMITS}'"
+kf_sweep_job_checks
 
 # Ranks: one per line of the PBS node file (mpiprocs per node), passed to the launcher; 1 outside PBS.
 nranks=1
@@ -76,7 +73,7 @@ echo "knotflow sweep ${SWEEP}: job ${PBS_JOBID:-none}, ${nranks} ranks, $(date -
 status=0
 out="$(mktemp)"
 # shellcheck disable=SC2086  # MPIRUN_FLAGS is a list of options
-"${MPIRUN}" ${MPIRUN_FLAGS} "${hosts[@]}" -n "${nranks}" "${exe}" "${SWEEP}" | tee "${out}" || status=$?
+"${MPIRUN}" ${MPIRUN_FLAGS} "${hosts[@]}" -n "${nranks}" "${KF_JOB_EXE}" "${SWEEP}" | tee "${out}" || status=$?
 echo "knotflow exited with status ${status} at $(date -u)"
 
 # As in slurm_sweep.sh: a walltime kill ends this script before this point.

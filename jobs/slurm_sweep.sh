@@ -43,10 +43,7 @@ cd "${KNOTFLOW_DIR}"
 # shellcheck source=jobs/job_lib.sh
 source "${KNOTFLOW_DIR}/jobs/job_lib.sh"
 kf_job_environment
-exe="${BUILD_DIR}/bin/knotflow"
-[[ -x "${exe}" ]] || kf_job_die "${exe} not found or not executable (set BUILD_DIR; build with scripts/build.sh)"
-[[ -r "${SWEEP}" ]] || kf_job_die "sweep file ${SWEEP} not found in ${KNOTFLOW_DIR}"
-[[ "${MAX_RESUBMITS}" =~ ^[0-9]+$ ]] || kf_job_die "MAX_RESUBMITS must be a number >= 0, not '${MAX_RESUBMITS}'"
+kf_sweep_job_checks
 kf_slurm_launcher
 
 # Chain a follow-up job before starting, so it also runs when this job hits its walltime.
@@ -63,7 +60,7 @@ fi
 echo "knotflow sweep ${SWEEP}: job ${SLURM_JOB_ID:-none}, ${SLURM_NTASKS:-?} ranks on ${SLURM_JOB_NUM_NODES:-?} node(s), launcher ${KF_LAUNCH[*]}, $(date -u)"
 status=0
 out="$(mktemp)"
-"${KF_LAUNCH[@]}" "${exe}" "${SWEEP}" | tee "${out}" || status=$?
+"${KF_LAUNCH[@]}" "${KF_JOB_EXE}" "${SWEEP}" | tee "${out}" || status=$?
 echo "knotflow exited with status ${status} at $(date -u)"
 
 # A walltime kill ends this script before this point, and the follow-up continues the sweep.

@@ -184,6 +184,13 @@ kf_build() {
   cmake --build "$dir" -j "$KF_JOBS" "${target_args[@]}" || kf_die "$type build failed"
 }
 
+# The number of MPI ranks of the run scripts: KNOTFLOW_NP (default 2), checked; printed.
+kf_ranks() {
+  local np="${KNOTFLOW_NP:-2}"
+  [[ "$np" =~ ^[1-9][0-9]*$ ]] || kf_die "KNOTFLOW_NP must be a positive integer (got '$np')"
+  printf '%s\n' "$np"
+}
+
 # mpirun flags: --oversubscribe for Open MPI, plus --allow-run-as-root when root.
 kf_mpirun_flags() {
   KF_MPIRUN_FLAGS=()

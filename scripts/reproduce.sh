@@ -55,8 +55,7 @@ case "$hydro" in
   multipole) suffix="_multipole"; extras=0 ;;
   *) kf_die "--hydro $hydro is unknown (allowed: rpy, multipole)" ;;
 esac
-np="${KNOTFLOW_NP:-2}"
-[[ "$np" =~ ^[1-9][0-9]*$ ]] || kf_die "KNOTFLOW_NP must be a positive integer (got '$np')"
+np="$(kf_ranks)"
 
 cd "$KF_ROOT"
 if [ "$build" = 1 ]; then

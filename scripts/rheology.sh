@@ -20,8 +20,7 @@ while [ $# -gt 0 ]; do
     *) kf_die "unknown argument '$1' (allowed: --no-run)" ;;
   esac
 done
-np="${KNOTFLOW_NP:-2}"
-[[ "$np" =~ ^[1-9][0-9]*$ ]] || kf_die "KNOTFLOW_NP must be a positive integer (got '$np')"
+np="$(kf_ranks)"
 
 cd "$KF_ROOT"
 kf_ensure_system_packages

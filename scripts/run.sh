@@ -19,8 +19,7 @@ case "$sweep" in
   *) sweep="$caller_dir/$sweep" ;;
 esac
 [ -f "$sweep" ] || kf_die "sweep file not found: $sweep"
-np="${KNOTFLOW_NP:-2}"
-[[ "$np" =~ ^[1-9][0-9]*$ ]] || kf_die "KNOTFLOW_NP must be a positive integer (got '$np')"
+np="$(kf_ranks)"
 
 cd "$KF_ROOT"
 kf_ensure_system_packages

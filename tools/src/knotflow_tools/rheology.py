@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from . import add_version_option
+from . import add_version_option, run_reporting_errors
 
 SERIES = ("viscosity", "psi1", "psi2")
 
@@ -403,12 +403,7 @@ def write_rheology(knot_dirs, mode_dirs, out, t_from=0.0, threshold=KNOT_THRESHO
 def main(argv=None):
     """knotflow-rheology entry point: bad input or an unreadable file is one error line
     (exit status 2)."""
-    import sys
-    try:
-        return _main(argv)
-    except (OSError, KeyError, ValueError) as exc:
-        print(f"knotflow-rheology: error: {exc}", file=sys.stderr)
-        return 2
+    return run_reporting_errors("knotflow-rheology", _main, argv)
 
 
 def _main(argv=None):

@@ -13,7 +13,6 @@ import argparse
 import json
 import math
 import os
-import sys
 
 import matplotlib
 
@@ -21,7 +20,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from . import add_version_option  # noqa: E402
+from . import add_version_option, run_reporting_errors  # noqa: E402
 from .analysis import analyze_case  # noqa: E402
 from .io import read_case, write_xyz  # noqa: E402
 from .plot import MODE_NAMES, _draw_chain  # noqa: E402
@@ -441,11 +440,7 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
 def main(argv=None):
     """knotflow-study entry point: a file that cannot be read (damaged, non-finite frames) is an
     error naming it (exit status 2)."""
-    try:
-        return _main(argv)
-    except (OSError, KeyError, ValueError) as exc:
-        print(f"knotflow-study: error: {exc}", file=sys.stderr)
-        return 2
+    return run_reporting_errors("knotflow-study", _main, argv)
 
 
 def _main(argv=None):
