@@ -100,7 +100,7 @@ module kf_hydro_multipole
     real(wp), allocatable, private :: xl(:, :)    !< x_L(ref), 6N x 5
     real(wp), allocatable, private :: zh(:, :), xh(:, :) !< their change since the previous refresh
     real(wp), allocatable, private :: pf(:, :)    !< Cholesky factor of the preconditioner
-    real(wp), allocatable, private :: rp(:, :), fp(:, :), us(:, :) !< rotated positions, forces; velocities
+    real(wp), allocatable, private :: fp(:, :), us(:, :) !< rotated forces; velocities
     real(wp), allocatable, private :: b(:), x(:), rs(:), z(:), p(:), q(:), xs(:) !< 6N work
     type(hydro_stats_t), private :: stats
   contains
@@ -181,7 +181,7 @@ contains
     if (allocated(this%zt)) then
       if (size(this%zt, 1) == 6*nb) return
       deallocate (this%mu, this%dist, this%zt, this%x6, this%v3, this%w3)
-      if (allocated(this%zl)) deallocate (this%zl, this%xl, this%zh, this%xh, this%pf, this%r_ref, this%rp, this%fp, this%us, &
+      if (allocated(this%zl)) deallocate (this%zl, this%xl, this%zh, this%xh, this%pf, this%r_ref, this%fp, this%us, &
                                           this%b, this%x, this%rs, this%z, this%p, this%q, this%xs)
     end if
     allocate (this%mu(3*nb, 3*nb), this%dist(3*nb, 5), this%zt(6*nb, 6*nb), this%x6(6*nb, 5), &
@@ -189,7 +189,7 @@ contains
     if (this%adaptive) then
       allocate (this%zl(6*nb, 6*nb), this%xl(6*nb, 5), this%zh(6*nb, 6*nb), this%xh(6*nb, 5), &
                 this%pf(6*nb, 6*nb), this%r_ref(3, nb), &
-                this%rp(3, nb), this%fp(3, nb), this%us(3, nb))
+                this%fp(3, nb), this%us(3, nb))
       allocate (this%b(6*nb), this%x(6*nb), this%rs(6*nb), this%z(6*nb), this%p(6*nb), this%q(6*nb), &
                 this%xs(6*nb))
     end if
@@ -396,7 +396,7 @@ contains
     end if
     call best_rotation(this%r_ref, r, qrot, error)
     if (allocated(error)) return
-    call align(this, r, qrot, deform)
+    call measure_deformation(this, r, qrot, deform)
     w = 0.0_wp
     if (this%has_prev) w = (t - this%t_ref)/(this%t_ref - this%t_prev)
     g = growth(this, t, this%has_prev)
@@ -451,7 +451,7 @@ contains
     if (present(e)) ez = e
     call best_rotation(this%r_ref, r, qrot, error)
     if (allocated(error)) return
-    call align(this, r, qrot, deform)
+    call measure_deformation(this, r, qrot, deform)
     call reused_solve(this, r, f, ez, qrot, 0.0_wp, 1.0e-3_wp*this%tolerance, u, converged)
     if (.not. converged) call fatal_error(error, 'multipole: conjugate gradients did not converge')
   end subroutine multipole_reused_velocities
@@ -467,10 +467,10 @@ contains
     if (extrapolated) g = g*abs(t - this%t_prev)
   end function growth
 
-  !> rp = Q^T (r - c) + c_ref, the configuration r rotated onto the reference, and its
-  !> deformation D = max_i |rp_i - r_ref,i|.
-  subroutine align(this, r, qrot, deform)
-    class(multipole_model_t), intent(inout) :: this
+  !> The deformation D = max_i |rp_i - r_ref,i| of r since the reference, with
+  !> rp = Q^T (r - c) + c_ref the configuration r rotated onto the reference.
+  subroutine measure_deformation(this, r, qrot, deform)
+    class(multipole_model_t), intent(in) :: this
     real(wp), intent(in) :: r(:, :), qrot(3, 3)
     real(wp), intent(out) :: deform
     real(wp) :: c(3), qt(3, 3)
@@ -479,10 +479,9 @@ contains
     qt = transpose(qrot)
     deform = 0.0_wp
     do i = 1, size(r, 2)
-      this%rp(:, i) = matmul(qt, r(:, i) - c) + this%c_ref
-      deform = max(deform, norm2(this%rp(:, i) - this%r_ref(:, i)))
+      deform = max(deform, norm2(matmul(qt, r(:, i) - c) + this%c_ref - this%r_ref(:, i)))
     end do
-  end subroutine align
+  end subroutine measure_deformation
 
   !> Exact velocities at r, which becomes the reference: assemble and factorise the system,
   !> keep zeta_L and x_L (and, when there was a reference, their change since it, rotated into
@@ -602,7 +601,7 @@ contains
   end subroutine right_hand_side
 
   !> Velocities from the reused many-body part (extrapolated with weight w) at r seen in the
-  !> reference frame (rotation qrot: the aligned configuration this%rp): lubrication of the
+  !> reference frame (rotation qrot: the aligned configuration rp of `measure_deformation`): lubrication of the
   !> rotated pairs, conjugate gradients on (zeta_L(ref) + w zeta_hist + sum dzeta) U = b.
   !> `converged` is false when CG did not reach the stopping error. `pairs`: the close pairs
   !> of r if the caller has them.
