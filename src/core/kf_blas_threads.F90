@@ -9,8 +9,9 @@
 !> Linux; 1 where unknown) less those busy at start-up (the 1-minute load average, rounded),
 !> at least 1. Threads that must share a busy CPU slow a BLAS call down several-fold (measured:
 !> 4x for a 2-thread factorisation with the other core busy), hence the load. A sweep that keeps
-!> every core busy keeps 1 thread per rank. An explicit OPENBLAS_NUM_THREADS > 1 in the
-!> environment is the user's choice and is left alone.
+!> every core busy keeps 1 thread per rank. An explicit OPENBLAS_NUM_THREADS (any count >= 1) in
+!> the environment is the user's choice and is left alone: `OPENBLAS_NUM_THREADS=1 knotflow ...`
+!> really runs on one core (scripts/lib.sh sets 1 unless the caller set it).
 module kf_blas_threads
 #ifdef KNOTFLOW_HAVE_OPENBLAS_THREADS
   use, intrinsic :: iso_c_binding, only: c_int
@@ -18,7 +19,7 @@ module kf_blas_threads
   implicit none
   private
 
-  public :: allowed_cpus, cpu_list_count, load_average, blas_threads_for, set_blas_threads
+  public :: allowed_cpus, cpu_list_count, load_average, blas_threads_for, requested_threads, set_blas_threads
 
 contains
 
@@ -98,8 +99,19 @@ contains
     if (ranks_on_node == 1) threads = max(1, cpus - nint(load))
   end function blas_threads_for
 
+  !> The thread count the user asked for in the value `env` of OPENBLAS_NUM_THREADS (a whole
+  !> number >= 1), or 0 when it asks for none (empty, not a number, < 1).
+  pure integer function requested_threads(env) result(n)
+    character(len=*), intent(in) :: env
+    integer :: ios
+    n = 0
+    if (len_trim(env) == 0 .or. verify(trim(adjustl(env)), '0123456789') /= 0) return
+    read (env, *, iostat=ios) n
+    if (ios /= 0 .or. n < 1) n = 0
+  end function requested_threads
+
   !> Ask the BLAS library for `threads` threads; `applied` is false when it cannot be told (not
-  !> OpenBLAS) or the environment sets OPENBLAS_NUM_THREADS > 1 (left to the user).
+  !> OpenBLAS) or the environment sets OPENBLAS_NUM_THREADS (left to the user).
   subroutine set_blas_threads(threads, applied)
     integer, intent(in) :: threads
     logical, intent(out) :: applied
@@ -111,12 +123,11 @@ contains
       end subroutine openblas_set_num_threads
     end interface
     character(len=32) :: env
-    integer :: status, given, ios
+    integer :: status
     applied = .false.
     call get_environment_variable('OPENBLAS_NUM_THREADS', env, status=status)
     if (status == 0) then
-      read (env, *, iostat=ios) given
-      if (ios == 0 .and. given > 1) return
+      if (requested_threads(env) > 0) return
     end if
     call openblas_set_num_threads(int(max(1, threads), c_int))
     applied = .true.
