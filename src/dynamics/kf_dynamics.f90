@@ -4,6 +4,9 @@
 !> One pair-geometry pass per evaluation (kf_pair_geometry, to the largest range the forces and
 !> the model need) serves the excluded volume and the lubrication corrections; the run
 !> diagnostics use it too when it was built at the configuration they look at (`pairs`).
+!> The overlap rule (kf_overlap_rule) says at which configuration the hydrodynamics is evaluated:
+!> the positions themselves, or, under 'separate' and only while beads overlap, the nearest
+!> configuration without overlaps, whose velocities (ambient flow included) the beads then take.
 module kf_dynamics
   use kf_kinds, only: wp, i8
   use kf_error, only: error_t
@@ -12,6 +15,7 @@ module kf_dynamics
   use kf_flow, only: flow_t
   use kf_hydro_model, only: hydro_model_t
   use kf_hydro_factory, only: make_hydro_model
+  use kf_overlap_rule, only: overlap_rule_t, make_overlap_rule
   use kf_ode_system, only: ode_system_t
   use kf_pair_geometry, only: pair_geometry_t
   use kf_rheology, only: fibre_stresslet_t, elastic_stresslet, shear_observables
@@ -27,8 +31,11 @@ module kf_dynamics
     integer(i8) :: evaluations = 0       !< calls of velocity
     real(wp) :: pair_cutoff = 0.0_wp     !< range of the pair list (0: none is built)
     type(pair_geometry_t) :: pairs       !< close pairs of the last evaluation's positions
+    class(overlap_rule_t), allocatable :: overlap !< where the hydrodynamics is evaluated
+    type(pair_geometry_t) :: hydro_pairs !< close pairs of the separated configuration
     real(wp), allocatable :: f(:, :)     !< work: forces of the last evaluation
     real(wp), allocatable :: u(:, :)     !< work: mu F + C:E of the last evaluation
+    real(wp), allocatable :: rh(:, :)    !< work: the separated configuration
   contains
     procedure :: init => dynamics_init
     procedure :: velocity => dynamics_velocity
@@ -54,9 +61,13 @@ contains
     if (allocated(error)) return
     call make_hydro_model(scene%hydro, scene%integrator%tolerance, this%model, error)
     if (allocated(error)) return
+    ! eps_lub < 0 means the integration tolerance (as in make_hydro_model)
+    call make_overlap_rule(scene%hydro%overlap, merge(scene%hydro%eps_lub, &
+      scene%integrator%tolerance, scene%hydro%eps_lub > 0.0_wp), this%overlap, error)
+    if (allocated(error)) return
     this%n = n_beads
     this%pair_cutoff = max(this%forces%pair_range(), this%model%pair_cutoff())
-    allocate (this%f(3, n_beads), this%u(3, n_beads))
+    allocate (this%f(3, n_beads), this%u(3, n_beads), this%rh(3, n_beads))
   end subroutine dynamics_init
 
   !> Build the pair list of every evaluation to at least `cutoff` (for a monitor that shares it).
@@ -74,8 +85,15 @@ contains
     type(fibre_stresslet_t), intent(out) :: st
     type(error_t), allocatable, intent(out) :: error
     real(wp) :: g(3, 3)
+    logical :: moved
     call this%forces%compute(r, this%f)
-    call this%model%stresslet(r, this%f, this%flow%e, st%hydrodynamic, error)
+    call this%overlap%hydro_configuration(r, this%pairs, this%rh, moved, error)
+    if (allocated(error)) return
+    if (moved) then
+      call this%model%stresslet(this%rh, this%f, this%flow%e, st%hydrodynamic, error)
+    else
+      call this%model%stresslet(r, this%f, this%flow%e, st%hydrodynamic, error)
+    end if
     if (allocated(error)) return
     st%elastic = elastic_stresslet(r, this%f)
     g = this%flow%g
@@ -92,17 +110,34 @@ contains
     real(wp), intent(out) :: v(:, :)
     type(error_t), allocatable, intent(out) :: error
     real(wp), intent(in), optional :: t
+    logical :: moved
     this%evaluations = this%evaluations + 1
     if (this%pair_cutoff > 0.0_wp) call this%pairs%build(r, this%pair_cutoff)
     call this%forces%compute(r, this%f, this%pairs)
-    if (this%flow%has_strain) then
-      call this%model%velocities(r, this%f, this%u, error, this%flow%e, t, this%pairs)
-    else
-      call this%model%velocities(r, this%f, this%u, error, t=t, pairs=this%pairs)
-    end if
+    call this%overlap%hydro_configuration(r, this%pairs, this%rh, moved, error)
     if (allocated(error)) return
-    call this%flow%velocity(r, v)
-    v = v + this%u
+    if (moved) then
+      call this%hydro_pairs%build(this%rh, this%pair_cutoff)
+      call hydro_velocities(this%rh, this%hydro_pairs)
+    else
+      call hydro_velocities(r, this%pairs)
+    end if
+
+  contains
+
+    !> v = v0(x) + mu F + C:E with the hydrodynamics of configuration x.
+    subroutine hydro_velocities(x, x_pairs)
+      real(wp), intent(in) :: x(:, :)
+      type(pair_geometry_t), intent(in) :: x_pairs
+      if (this%flow%has_strain) then
+        call this%model%velocities(x, this%f, this%u, error, this%flow%e, t, x_pairs)
+      else
+        call this%model%velocities(x, this%f, this%u, error, t=t, pairs=x_pairs)
+      end if
+      if (allocated(error)) return
+      call this%flow%velocity(x, v)
+      v = v + this%u
+    end subroutine hydro_velocities
   end subroutine dynamics_velocity
 
   !> The ode_system_t interface: dydt = velocity(y) (the system is autonomous).

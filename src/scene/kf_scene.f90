@@ -46,6 +46,7 @@ module kf_scene
     logical :: lubrication = .true.                 !< multipole: lubrication corrections
     real(wp) :: eps_lub = -1.0_wp                   !< BWE overlap shift; < 0 means the tolerance
     character(len=name_len) :: update = 'adaptive'  !< multipole: adaptive (reuse, the default) | stage (exact every stage)
+    character(len=name_len) :: overlap = 'pair'     !< multipole: pair (BWE per pair) | separate (kf_overlap_rule)
   end type hydro_params_t
 
   !> &integrator: time stepping.

@@ -72,6 +72,7 @@ contains
       call add_l(items, 'hydro.lubrication', h%lubrication)
       call add_r(items, 'hydro.eps_lub', h%eps_lub)
       call add_s(items, 'hydro.update', h%update)
+      call add_s(items, 'hydro.overlap', h%overlap)
     end associate
     associate (g => sc%integrator)
       call add_s(items, 'integrator.method', g%method)

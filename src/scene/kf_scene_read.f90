@@ -10,6 +10,7 @@ module kf_scene_read
                       integrator_params_t, output_params_t, path_len, name_len
   use kf_scene_items, only: scene_item_t, scene_items, group_names, item_string, item_integer, &
                             item_real, item_logical, item_real_array
+  use kf_overlap_rule, only: overlap_rule_names
   use kf_namelist_scan, only: nml_group_t, nml_assignment_t, scan_namelist_file, group_text, count_values
   implicit none
   private
@@ -165,14 +166,14 @@ contains
       integer :: order
       logical :: lubrication
       real(wp) :: eps_lub
-      character(len=name_len) :: update
-      namelist /hydro/ model, order, lubrication, eps_lub, update
+      character(len=name_len) :: update, overlap
+      namelist /hydro/ model, order, lubrication, eps_lub, update, overlap
       associate (p => sc%hydro)
         model = p%model; order = p%order; lubrication = p%lubrication; eps_lub = p%eps_lub
-        update = p%update
+        update = p%update; overlap = p%overlap
         read (text, nml=hydro, iostat=ios, iomsg=msg)
         p%model = model; p%order = order; p%lubrication = lubrication; p%eps_lub = eps_lub
-        p%update = update
+        p%update = update; p%overlap = overlap
       end associate
     end subroutine read_hydro
 
@@ -481,6 +482,13 @@ contains
       end if
       if (.not. one_of(h%update, updates)) then
         call bad(error, f, 'hydro', 'update', quoted(h%update), 'one of '//updates); return
+      end if
+      if (.not. one_of(h%overlap, overlap_rule_names)) then
+        call bad(error, f, 'hydro', 'overlap', quoted(h%overlap), 'one of '//overlap_rule_names); return
+      end if
+      if (h%overlap /= 'pair' .and. h%model /= 'multipole') then
+        call bad(error, f, 'hydro', 'overlap', quoted(h%overlap), &
+          "'pair' with model = "//quoted(h%model)//" (the rule is for the multipole model)"); return
       end if
     end associate
     associate (g => sc%integrator)

@@ -1,0 +1,181 @@
+!> How the hydrodynamics treats overlapping beads (&hydro overlap; README "Known facts").
+!>
+!> 'pair' is the BWE procedure as PHYSICS.md words it: an overlapping pair's lubrication
+!> correction is evaluated at (1 + eps_lub) times its unit separation and everything else is left
+!> as it is (kf_lubrication clamps each pair's distance). The pair's ambient velocity difference
+!> G (r_j - r_i) is then that of the overlapping geometry while its hydrodynamic coupling to the
+!> strain is that of a pair at contact; the mismatch, about (1 + eps_lub - r) G r^, is not
+!> resisted, so in the compressional quadrant of the shear a pressed pair approaches at a rate
+!> that grows with its overlap (measured: an A = 1 trefoil's pair went from 0.9995 d at t = 24 to
+!> 0.717 d at t = 39, then the friction matrix lost positive definiteness).
+!>
+!> 'separate' evaluates the whole hydrodynamic problem (many-body multipole, lubrication and the
+!> ambient flow at the beads) at the nearest configuration without overlaps: every pair at least
+!> 1 + eps_lub apart, found by moving the two beads of each overlapping pair apart along their
+!> line of centres by equal amounts (which keeps every pair's midpoint, so the centre of the
+!> chain) until none is left; the beads then move with those velocities. For one isolated pair
+!> this is BWE's shift applied to the geometry as a whole, so its relative motion is that of a
+!> lubricated pair at the gap eps_lub. Forces are always those of the real positions.
+module kf_overlap_rule
+  use kf_kinds, only: wp
+  use kf_strings, only: to_str
+  use kf_error, only: error_t, fatal_error
+  use kf_pair_geometry, only: pair_geometry_t
+  implicit none
+  private
+
+  public :: make_overlap_rule
+
+  !> The names of the rules, as &hydro overlap takes them (one source for the scene's check).
+  character(len=*), parameter, public :: overlap_rule_names = 'pair, separate'
+
+  !> The configuration at which the hydrodynamics of positions r is evaluated.
+  type, abstract, public :: overlap_rule_t
+  contains
+    procedure(hydro_configuration_i), deferred :: hydro_configuration
+  end type overlap_rule_t
+
+  abstract interface
+    !> Set rh(3, N) to the configuration whose hydrodynamics the beads at r(3, N) get and
+    !> `moved` to .true., or leave rh alone and set `moved` to .false. when it is r itself.
+    !> `pairs` is a pair list of some configuration; a rule uses it only when it covers r.
+    subroutine hydro_configuration_i(this, r, pairs, rh, moved, error)
+      import :: overlap_rule_t, wp, pair_geometry_t, error_t
+      class(overlap_rule_t), intent(inout) :: this
+      real(wp), intent(in) :: r(:, :)
+      type(pair_geometry_t), intent(in) :: pairs
+      real(wp), intent(inout) :: rh(:, :)
+      logical, intent(out) :: moved
+      type(error_t), allocatable, intent(out) :: error
+    end subroutine hydro_configuration_i
+  end interface
+
+  !> 'pair': the hydrodynamics of the real positions (the lubrication clamps each pair).
+  type, extends(overlap_rule_t) :: overlap_pair_t
+  contains
+    procedure :: hydro_configuration => pair_configuration
+  end type overlap_pair_t
+
+  !> 'separate': the hydrodynamics of the nearest configuration with all pairs >= 1 + eps_lub.
+  type, extends(overlap_rule_t) :: overlap_separate_t
+    private
+    real(wp) :: target = 1.0_wp          !< 1 + eps_lub
+    type(pair_geometry_t) :: work        !< close pairs of the configuration being separated
+    integer, allocatable :: i_(:), j_(:) !< the pairs being separated
+  contains
+    procedure :: hydro_configuration => separate_configuration
+  end type overlap_separate_t
+
+  !> Pairs closer than target - slack overlap, so that sweeps end after finitely many steps (a
+  !> moved pair ends at target; the lubrication clamps distances below target to target anyway,
+  !> and the far-field part changes by O(slack)). Candidates: the pairs within target + margin, which
+  !> includes those a sweep's moves may push together.
+  real(wp), parameter :: slack = 1.0e-10_wp, margin = 0.1_wp
+  integer, parameter :: max_rounds = 20, max_sweeps = 10000
+
+contains
+
+  !> The rule `name` (one of overlap_rule_names) for the BWE parameter eps_lub > 0.
+  subroutine make_overlap_rule(name, eps_lub, rule, error)
+    character(len=*), intent(in) :: name
+    real(wp), intent(in) :: eps_lub
+    class(overlap_rule_t), allocatable, intent(out) :: rule
+    type(error_t), allocatable, intent(out) :: error
+    select case (trim(name))
+    case ('pair')
+      allocate (overlap_pair_t :: rule)
+    case ('separate')
+      if (.not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) then
+        call fatal_error(error, 'overlap rule separate: eps_lub = '//to_str(eps_lub, '(es12.4)')// &
+          ' out of range (0 < eps_lub < 0.5)')
+        return
+      end if
+      block
+        type(overlap_separate_t), allocatable :: s
+        allocate (s)
+        s%target = 1.0_wp + eps_lub
+        call move_alloc(s, rule)
+      end block
+    case default
+      call fatal_error(error, 'overlap rule "'//trim(name)//'" unknown (one of '// &
+        overlap_rule_names//')')
+    end select
+  end subroutine make_overlap_rule
+
+  subroutine pair_configuration(this, r, pairs, rh, moved, error)
+    class(overlap_pair_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    type(pair_geometry_t), intent(in) :: pairs
+    real(wp), intent(inout) :: rh(:, :)
+    logical, intent(out) :: moved
+    type(error_t), allocatable, intent(out) :: error
+    moved = .false.
+  end subroutine pair_configuration
+
+  !> Rounds of: find the pairs of rh closer than target + margin (cell list), then sweep over
+  !> them moving the beads of each overlapping one apart (Gauss-Seidel, in the pair list's order,
+  !> so the result is deterministic) until none overlaps; a round that finds no overlap ends it.
+  subroutine separate_configuration(this, r, pairs, rh, moved, error)
+    class(overlap_separate_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    type(pair_geometry_t), intent(in) :: pairs
+    real(wp), intent(inout) :: rh(:, :)
+    logical, intent(out) :: moved
+    type(error_t), allocatable, intent(out) :: error
+    integer :: round, sweep, k, m, i, j
+    real(wp) :: d(3), dist, shift, worst, limit
+
+    moved = .false.
+    limit = this%target - slack
+    ! the usual case: the caller's list of r shows no overlap, nothing to do
+    if (pairs%covers(r, this%target)) then
+      if (count_overlaps(pairs, limit) == 0) return
+    end if
+    rh = r
+    do round = 1, max_rounds
+      call this%work%build(rh, this%target + margin)
+      if (count_overlaps(this%work, limit) == 0) return
+      moved = .true.
+      m = this%work%size()
+      if (allocated(this%i_)) deallocate (this%i_, this%j_)
+      allocate (this%i_(m), this%j_(m))
+      do k = 1, m
+        call this%work%pair(k, this%i_(k), this%j_(k))
+      end do
+      do sweep = 1, max_sweeps
+        worst = 0.0_wp
+        do k = 1, m
+          i = this%i_(k)
+          j = this%j_(k)
+          d = rh(:, j) - rh(:, i)
+          dist = norm2(d)
+          if (dist >= limit) cycle
+          if (.not. dist > 0.0_wp) then
+            call fatal_error(error, 'overlap rule separate: beads '//to_str(i)//' and '// &
+              to_str(j)//' coincide, their line of centres is undefined')
+            return
+          end if
+          shift = 0.5_wp*(this%target - dist)/dist
+          rh(:, i) = rh(:, i) - shift*d
+          rh(:, j) = rh(:, j) + shift*d
+          worst = max(worst, this%target - dist)
+        end do
+        if (worst == 0.0_wp) exit
+      end do
+    end do
+    call fatal_error(error, 'overlap rule separate: the overlaps could not be removed in '// &
+      to_str(max_rounds)//' rounds of '//to_str(max_sweeps)//' sweeps')
+  end subroutine separate_configuration
+
+  !> Pairs of the list closer than `limit`.
+  integer function count_overlaps(pairs, limit) result(m)
+    type(pair_geometry_t), intent(in) :: pairs
+    real(wp), intent(in) :: limit
+    integer :: k
+    m = 0
+    do k = 1, pairs%size()
+      if (pairs%distance(k) < limit) m = m + 1
+    end do
+  end function count_overlaps
+
+end module kf_overlap_rule
