@@ -1,8 +1,9 @@
 !> How the hydrodynamics treats overlapping beads (&hydro overlap; README "Known facts").
 !>
 !> 'pair' is the BWE procedure as PHYSICS.md words it: an overlapping pair's lubrication
-!> correction is evaluated at (1 + eps_lub) times its unit separation and everything else is left
-!> as it is (kf_lubrication clamps each pair's distance). The pair's ambient velocity difference
+!> correction (and its multipole pair blocks, docs/multipole.md) is evaluated at (1 + eps_lub)
+!> times its unit separation and everything else is left as it is (kf_lubrication and
+!> kf_multipole_system clamp each pair's distance). The pair's ambient velocity difference
 !> G (r_j - r_i) is then that of the overlapping geometry while its hydrodynamic coupling to the
 !> strain is that of a pair at contact; the mismatch, about (1 + eps_lub - r) G r^, is not
 !> resisted, so in the compressional quadrant of the shear a pressed pair approaches at a rate
