@@ -24,8 +24,9 @@ module kf_scene_read
 
 contains
 
-  !> Read, validate and resolve the scene in `path`. Groups listed in `extra_groups` (e.g. 'sweep') are
-  !> accepted and left to their own readers, which get the scanned groups through `scanned`.
+  !> Read, validate and resolve the scene in `path`. Groups listed in `extra_groups` (e.g.
+  !> 'sweep') are accepted and left to their own readers, which get the scanned groups through
+  !> `scanned`.
   subroutine read_scene(path, sc, error, extra_groups, scanned)
     character(len=*), intent(in) :: path
     type(scene_t), intent(out) :: sc
