@@ -17,7 +17,6 @@ program knotflow
   use kf_case_runner, only: case_path
   use kf_case_match, only: check_reusable
   use kf_resources, only: check_resources, physical_memory
-  use kf_chain_shapes, only: chain_bead_count
   use kf_dynamics, only: dynamics_t
   use kf_stepper, only: stepper_t
   use kf_stepper_factory, only: make_stepper
@@ -128,16 +127,7 @@ contains
     character(len=:), allocatable :: name
     integer :: n_beads
     call sw%case_scene(1, sc, name)
-    call chain_bead_count(sc%chain, n_beads, err)
-    if (allocated(err)) then
-      if (index(err%message, 'chain: ') == 1) then
-        err%message = trim(scene_file)//': &'//err%message
-      else
-        err%message = trim(scene_file)//': &chain: coordinate_file = '''//trim(sc%chain%coordinate_file)// &
-          ''': '//err%message
-      end if
-      return
-    end if
+    n_beads = sc%chain%n_beads   ! resolved when the scene was read
     call check_resources(sc, n_beads, physical_memory(), err)
     if (allocated(err)) return
     ! What the models themselves reject is refused here too, not by every case at run time.

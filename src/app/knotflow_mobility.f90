@@ -22,7 +22,8 @@ program knotflow_mobility
   use kf_text_coords, only: read_coordinates
   use kf_hydro_model, only: hydro_model_t
   use kf_hydro_multipole, only: multipole_model_t
-  use kf_hydro_factory, only: make_hydro_model
+  use kf_hydro_factory, only: make_hydro_model, hydro_model_names
+  use kf_scene_check, only: name_list
   use kf_scene, only: hydro_params_t
   implicit none
 
@@ -60,8 +61,8 @@ program knotflow_mobility
       i = i + 2
       select case (arg)
       case ('--model')
-        if (val /= 'none' .and. val /= 'rpy' .and. val /= 'multipole') &
-          call die('--model '//val//': allowed values are none, rpy, multipole')
+        if (.not. any(hydro_model_names == val)) &
+          call die('--model '//val//': allowed values are '//name_list(hydro_model_names))
         model_name = val
       case ('--order')
         read (val, *, iostat=ios) order

@@ -2,19 +2,17 @@
 !> candy-cane with a seeded random rotation, straight and random chains, and coordinate files.
 module kf_chain_shapes
   use kf_kinds, only: wp
-  use kf_strings, only: to_str
   use kf_constants, only: pi, two_pi
   use kf_error, only: error_t, fatal_error
-  use kf_scene, only: chain_params_t
+  use kf_scene_chain, only: chain_params_t, shape_trefoil, shape_candycane, shape_straight, shape_random, &
+                            shape_file, trefoil_points, candycane_beads, check_chain, resolve_chain, &
+                            read_chain_file
   use kf_random, only: rng_t
-  use kf_text_coords, only: read_coordinates
   implicit none
   private
 
-  public :: build_initial_chain, trefoil_closed_points, random_rotation, chain_bead_count
+  public :: build_initial_chain, trefoil_closed_points, random_rotation
 
-  integer, parameter, public :: trefoil_points = 100     !< points on the closed trefoil
-  integer, parameter, public :: candycane_beads = 152
   integer, parameter :: candycane_arc_points = 62
   real(wp), parameter :: candycane_radius = 20.0_wp
   real(wp), parameter :: candycane_ds = 0.05105_wp
@@ -28,89 +26,39 @@ module kf_chain_shapes
 
 contains
 
-  !> Build the initial bead positions r(3, N) described by `params`. `rotation` is the random
-  !> rotation applied to the candy-cane (r = rotation * r_unrotated), the identity otherwise.
+  !> Build the initial bead positions r(3, N) described by `params`, after checking them by the
+  !> &chain group's own rules (kf_scene_chain: names, ranges, the bead count of the shape, the
+  !> coordinate file). `rotation` is the random rotation applied to the candy-cane
+  !> (r = rotation * r_unrotated), the identity otherwise.
   subroutine build_initial_chain(params, r, rotation, error)
     type(chain_params_t), intent(in) :: params
     real(wp), allocatable, intent(out) :: r(:, :)
     real(wp), intent(out) :: rotation(3, 3)
     type(error_t), allocatable, intent(out) :: error
+    type(chain_params_t) :: p
 
     rotation = identity3()
-    if (.not. (params%bond_length > 0.0_wp .and. params%bond_length < huge(1.0_wp))) then
-      call fatal_error(error, 'chain: bond_length = '//to_str(params%bond_length)//' is invalid (must be > 0)')
+    p = params
+    call check_chain(p, '', error)
+    if (allocated(error)) return
+    if (p%shape == shape_file) then
+      call read_chain_file(p%coordinate_file, r, error)
+      if (allocated(error)) error%message = '&chain: '//error%message
       return
     end if
-    select case (trim(params%shape))
-    case ('trefoil')
-      call build_trefoil(params, r, error)
-    case ('candycane')
-      call build_candycane(params, r, rotation)
-    case ('straight')
-      call build_straight(params, r, error)
-    case ('random')
-      call build_random(params, r, error)
-    case ('file')
-      if (len_trim(params%coordinate_file) == 0) then
-        call fatal_error(error, "chain: shape = 'file' needs coordinate_file (it is empty)")
-        return
-      end if
-      call read_coordinates(trim(params%coordinate_file), r, error)
-      if (allocated(error)) return
-      if (size(r, 2) < 2) then
-        call fatal_error(error, "chain: coordinate_file '"//trim(params%coordinate_file)// &
-          "' holds fewer than 2 beads")
-        return
-      end if
-      call check_coincident(r, trim(params%coordinate_file), error)
-    case default
-      call fatal_error(error, "chain: shape = '"//trim(params%shape)// &
-        "' is unknown (allowed: trefoil, candycane, straight, random, file)")
+    call resolve_chain(p, '', error)
+    if (allocated(error)) return
+    select case (trim(p%shape))
+    case (shape_trefoil)
+      call build_trefoil(p, r)
+    case (shape_candycane)
+      call build_candycane(p, r, rotation)
+    case (shape_straight)
+      call build_straight(p, r)
+    case (shape_random)
+      call build_random(p, r, error)
     end select
   end subroutine build_initial_chain
-
-  !> The number of beads of the chain `params` describes, without building it (a coordinate
-  !> file is read): for the resource estimate at set-up.
-  subroutine chain_bead_count(params, n, error)
-    type(chain_params_t), intent(in) :: params
-    integer, intent(out) :: n
-    type(error_t), allocatable, intent(out) :: error
-    real(wp), allocatable :: r(:, :)
-    real(wp) :: rotation(3, 3)
-    select case (trim(params%shape))
-    case ('trefoil')
-      n = trefoil_points - 1
-    case ('candycane')
-      n = candycane_beads
-    case ('straight', 'random')
-      n = params%n_beads
-    case default
-      call build_initial_chain(params, r, rotation, error)
-      n = 0
-      if (allocated(r)) n = size(r, 2)
-    end select
-  end subroutine chain_bead_count
-
-  !> Beads at the same place (closer than 1e-9 d) make the hydrodynamic and bending terms
-  !> singular: refused, naming the two beads (1-based, the points of the file in order). Every
-  !> pair is compared up to 20,000 beads, the bonded neighbours beyond.
-  subroutine check_coincident(r, file, error)
-    real(wp), intent(in) :: r(:, :)
-    character(len=*), intent(in) :: file
-    type(error_t), allocatable, intent(out) :: error
-    real(wp), parameter :: tiny_distance2 = 1.0e-18_wp
-    integer :: i, j, n
-    n = size(r, 2)
-    do j = 2, n
-      do i = merge(1, j - 1, n <= 20000), j - 1
-        if (sum((r(:, j) - r(:, i))**2) < tiny_distance2) then
-          call fatal_error(error, "chain: coordinate_file '"//file//"': beads "//to_str(i)//' and '// &
-            to_str(j)//' coincide (allowed: distinct points)')
-          return
-        end if
-      end do
-    end do
-  end subroutine check_coincident
 
   pure function identity3() result(m)
     real(wp) :: m(3, 3)
@@ -172,18 +120,13 @@ contains
   end subroutine trefoil_closed_points
 
   !> The open trefoil: drop point `trefoil_removed_point` and start the chain after it.
-  subroutine build_trefoil(params, r, error)
+  subroutine build_trefoil(params, r)
     type(chain_params_t), intent(in) :: params
     real(wp), allocatable, intent(out) :: r(:, :)
-    type(error_t), allocatable, intent(out) :: error
     real(wp) :: p(3, trefoil_points), rot(3, 3), scale
     integer :: k, m
 
     m = params%trefoil_removed_point
-    if (m < 1 .or. m > trefoil_points) then
-      call fatal_error(error, 'chain: trefoil_removed_point = '//to_str(m)//' is out of range (allowed: 1..100)')
-      return
-    end if
     rot = 0.0_wp
     select case (params%orientation)
     case ('a')
@@ -204,10 +147,6 @@ contains
       rot(2, 1) = -1.0_wp
       rot(1, 2) = 1.0_wp
       rot(3, 3) = 1.0_wp
-    case default
-      call fatal_error(error, "chain: orientation = '"//params%orientation// &
-        "' is unknown (allowed: a, b, c, d, e)")
-      return
     end select
     call trefoil_closed_points(params%bond_length, p, scale)
     allocate (r(3, trefoil_points - 1))
@@ -259,22 +198,12 @@ contains
   end function random_rotation
 
   !> n_beads along straight_direction with spacing bond_length, centred at the origin.
-  subroutine build_straight(params, r, error)
+  subroutine build_straight(params, r)
     type(chain_params_t), intent(in) :: params
     real(wp), allocatable, intent(out) :: r(:, :)
-    type(error_t), allocatable, intent(out) :: error
-    real(wp) :: u(3), norm
+    real(wp) :: u(3)
     integer :: k
-    if (params%n_beads < 2) then
-      call fatal_error(error, 'chain: n_beads = '//to_str(params%n_beads)//' is too small (must be >= 2)')
-      return
-    end if
-    norm = norm2(params%straight_direction)
-    if (.not. norm > 0.0_wp) then
-      call fatal_error(error, 'chain: straight_direction = 0 0 0 is invalid (must be non-zero)')
-      return
-    end if
-    u = params%straight_direction/norm
+    u = params%straight_direction/norm2(params%straight_direction)
     allocate (r(3, params%n_beads))
     do k = 1, params%n_beads
       r(:, k) = (k - 0.5_wp*(params%n_beads + 1))*params%bond_length*u
@@ -293,15 +222,6 @@ contains
     integer :: n, i, j, attempt, restart
     logical :: ok
     n = params%n_beads
-    if (n < 2) then
-      call fatal_error(error, 'chain: n_beads = '//to_str(n)//' is too small (must be >= 2)')
-      return
-    end if
-    if (params%bond_length <= 0.5_wp) then
-      call fatal_error(error, 'chain: bond_length = '//to_str(params%bond_length)// &
-        ' is too small for shape = random (must be > 0.5 so that non-adjacent beads can be 1 apart)')
-      return
-    end if
     allocate (r(3, n))
     call rng%init(params%seed)
     do restart = 1, 100

@@ -16,6 +16,7 @@ module kf_dynamics
   use kf_hydro_model, only: hydro_model_t
   use kf_hydro_factory, only: make_hydro_model
   use kf_overlap_rule, only: overlap_rule_t, make_overlap_rule
+  use kf_scene_hydro, only: effective_eps_lub
   use kf_ode_system, only: ode_system_t
   use kf_pair_geometry, only: pair_geometry_t
   use kf_rheology, only: fibre_stresslet_t, elastic_stresslet, shear_observables
@@ -61,9 +62,8 @@ contains
     if (allocated(error)) return
     call make_hydro_model(scene%hydro, scene%integrator%tolerance, this%model, error)
     if (allocated(error)) return
-    ! eps_lub < 0 means the integration tolerance (as in make_hydro_model)
-    call make_overlap_rule(scene%hydro%overlap, merge(scene%hydro%eps_lub, &
-      scene%integrator%tolerance, scene%hydro%eps_lub > 0.0_wp), this%overlap, error)
+    call make_overlap_rule(scene%hydro%overlap, &
+      effective_eps_lub(scene%hydro, scene%integrator%tolerance), this%overlap, error)
     if (allocated(error)) return
     this%n = n_beads
     this%pair_cutoff = max(this%forces%pair_range(), this%model%pair_cutoff())

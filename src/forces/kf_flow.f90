@@ -2,9 +2,8 @@
 !> a general traceless linear flow, or quiescent fluid.
 module kf_flow
   use kf_kinds, only: wp
-  use kf_strings, only: to_str
-  use kf_error, only: error_t, fatal_error
-  use kf_scene, only: flow_params_t
+  use kf_error, only: error_t
+  use kf_scene_flow, only: flow_params_t, flow_shear, flow_linear, flow_quiescent, check_flow
   implicit none
   private
 
@@ -22,38 +21,21 @@ module kf_flow
 
 contains
 
-  !> Set up the flow from the &flow parameters; a linear flow must be traceless.
+  !> Set up the flow from the &flow parameters, checked by the &flow group's own rules
+  !> (kf_scene_flow: the names, a traceless linear flow).
   subroutine flow_init(this, params, error)
     class(flow_t), intent(out) :: this
     type(flow_params_t), intent(in) :: params
     type(error_t), allocatable, intent(out) :: error
-    real(wp) :: tr
+    call check_flow(params, '', error)
+    if (allocated(error)) return
+    this%g = 0.0_wp
     select case (trim(params%flow_type))
-    case ('shear')
-      if (.not. abs(params%shear_rate) < huge(1.0_wp)) then
-        call fatal_error(error, 'flow: shear_rate is not a finite number')
-        return
-      end if
-      this%g = 0.0_wp
+    case (flow_shear)
       this%g(1, 3) = params%shear_rate
-    case ('linear')
-      if (.not. all(abs(params%velocity_gradient) < huge(1.0_wp))) then
-        call fatal_error(error, 'flow: velocity_gradient contains a non-finite value')
-        return
-      end if
-      tr = params%velocity_gradient(1, 1) + params%velocity_gradient(2, 2) + params%velocity_gradient(3, 3)
-      if (abs(tr) > 1.0e-12_wp*max(1.0_wp, maxval(abs(params%velocity_gradient)))) then
-        call fatal_error(error, 'flow: velocity_gradient has trace '//to_str(tr, '(es12.4)')// &
-          ' (must be traceless for an incompressible flow)')
-        return
-      end if
+    case (flow_linear)
       this%g = params%velocity_gradient
-    case ('quiescent')
-      this%g = 0.0_wp
-    case default
-      call fatal_error(error, "flow: flow_type = '"//trim(params%flow_type)// &
-        "' is unknown (allowed: shear, linear, quiescent)")
-      return
+    case (flow_quiescent)
     end select
     this%e = 0.5_wp*(this%g + transpose(this%g))
     this%omega = 0.5_wp*[this%g(3, 2) - this%g(2, 3), this%g(1, 3) - this%g(3, 1), this%g(2, 1) - this%g(1, 2)]

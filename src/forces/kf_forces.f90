@@ -11,7 +11,7 @@ module kf_forces
   use kf_vector_ops, only: cross
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
-  use kf_scene, only: forces_params_t
+  use kf_scene_forces, only: forces_params_t, check_forces
   use kf_pair_geometry, only: pair_geometry_t
   implicit none
   private
@@ -38,7 +38,7 @@ module kf_forces
 
 contains
 
-  !> Validate the parameters and set up the enabled terms for a chain of n_beads.
+  !> Validate the parameters (the &forces group's own rules, kf_scene_forces) and set up the enabled terms for a chain of n_beads.
   subroutine forces_init(this, params, n_beads, bond_length, error)
     class(forces_t), intent(out) :: this
     type(forces_params_t), intent(in) :: params
@@ -53,24 +53,8 @@ contains
       call fatal_error(error, 'forces: bond_length = '//to_str(bond_length)//' (must be > 0)')
       return
     end if
-    if (params%springs .and. .not. params%spring_k >= 0.0_wp) then
-      call fatal_error(error, 'forces: spring_k = '//to_str(params%spring_k)//' (must be >= 0)')
-      return
-    end if
-    if (params%bending .and. .not. params%bending_a >= 0.0_wp) then
-      call fatal_error(error, 'forces: bending_a = '//to_str(params%bending_a)//' (must be >= 0)')
-      return
-    end if
-    if (params%excluded_volume) then
-      if (.not. params%ev_strength >= 0.0_wp) then
-        call fatal_error(error, 'forces: ev_strength = '//to_str(params%ev_strength)//' (must be >= 0)')
-        return
-      end if
-      if (.not. params%ev_range > 0.0_wp) then
-        call fatal_error(error, 'forces: ev_range = '//to_str(params%ev_range)//' (must be > 0)')
-        return
-      end if
-    end if
+    call check_forces(params, '', error)
+    if (allocated(error)) return
     this%n = n_beads
     this%l0 = bond_length
     this%springs = params%springs

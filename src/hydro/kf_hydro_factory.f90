@@ -1,8 +1,12 @@
-!> The hydrodynamic-model factory: the scene's model name is resolved here, once.
+!> The hydrodynamic-model factory: the scene's model name is resolved here, once. The names of
+!> the models, their parameters' validation and the eps_lub rule are those of the &hydro group
+!> (kf_scene_hydro, the one source the scene validation uses too); `hydro_model_names` passes
+!> the names on.
 module kf_hydro_factory
   use kf_kinds, only: wp
   use kf_error, only: error_t, fatal_error
-  use kf_scene, only: hydro_params_t
+  use kf_scene_hydro, only: hydro_params_t, hydro_model_names => model_names, model_none, model_rpy, &
+                            model_multipole, check_hydro, effective_eps_lub
   use kf_hydro_model, only: hydro_model_t
   use kf_hydro_none, only: none_model_t
   use kf_hydro_rpy, only: rpy_model_t
@@ -10,13 +14,13 @@ module kf_hydro_factory
   implicit none
   private
 
-  public :: make_hydro_model
+  public :: make_hydro_model, hydro_model_names
 
 contains
 
-  !> Allocate the model named by params%model (none | rpy | multipole). `tolerance` is the
-  !> integration accuracy: the multipole model uses it as eps_lub when params%eps_lub < 0
-  !> (none and rpy ignore it).
+  !> Allocate the model named by params%model (none | rpy | multipole) after checking the
+  !> parameters. `tolerance` is the integration accuracy: the multipole model's reuse budget,
+  !> and its eps_lub when params%eps_lub is not given (a resolved scene has it set already).
   subroutine make_hydro_model(params, tolerance, model, error)
     type(hydro_params_t), intent(in) :: params
     real(wp), intent(in) :: tolerance
@@ -26,26 +30,22 @@ contains
       call fatal_error(error, 'hydro: the integration tolerance must be > 0 (it sets the default eps_lub)')
       return
     end if
+    call check_hydro(params, '', error)
+    if (allocated(error)) return
     select case (trim(params%model))
-    case ('none')
+    case (model_none)
       allocate (none_model_t :: model)
-    case ('rpy')
+    case (model_rpy)
       allocate (rpy_model_t :: model)
-    case ('multipole')
+    case (model_multipole)
       block
         type(multipole_model_t), allocatable :: mp
-        real(wp) :: eps_lub
         allocate (mp)
-        eps_lub = params%eps_lub
-        if (eps_lub < 0.0_wp) eps_lub = tolerance
-        call mp%init(params%order, params%lubrication, eps_lub, error, update=trim(params%update), &
-                     tolerance=tolerance)
+        call mp%init(params%order, params%lubrication, effective_eps_lub(params, tolerance), error, &
+                     update=trim(params%update), tolerance=tolerance)
         if (allocated(error)) return
         call move_alloc(mp, model)
       end block
-    case default
-      call fatal_error(error, "hydro: model = '"//trim(params%model)// &
-        "' is unknown (allowed: none, rpy, multipole)")
     end select
   end subroutine make_hydro_model
 

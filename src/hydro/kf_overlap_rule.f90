@@ -22,13 +22,12 @@ module kf_overlap_rule
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_pair_geometry, only: pair_geometry_t
+  use kf_scene_hydro, only: overlap_pair, overlap_separate, overlap_names
+  use kf_scene_check, only: name_list
   implicit none
   private
 
   public :: make_overlap_rule
-
-  !> The names of the rules, as &hydro overlap takes them (one source for the scene's check).
-  character(len=*), parameter, public :: overlap_rule_names = 'pair, separate'
 
   !> The configuration at which the hydrodynamics of positions r is evaluated.
   type, abstract, public :: overlap_rule_t
@@ -76,16 +75,16 @@ module kf_overlap_rule
 
 contains
 
-  !> The rule `name` (one of overlap_rule_names) for the BWE parameter eps_lub > 0.
+  !> The rule `name` (one of kf_scene_hydro's overlap_names) for the BWE parameter eps_lub > 0.
   subroutine make_overlap_rule(name, eps_lub, rule, error)
     character(len=*), intent(in) :: name
     real(wp), intent(in) :: eps_lub
     class(overlap_rule_t), allocatable, intent(out) :: rule
     type(error_t), allocatable, intent(out) :: error
     select case (trim(name))
-    case ('pair')
+    case (overlap_pair)
       allocate (overlap_pair_t :: rule)
-    case ('separate')
+    case (overlap_separate)
       if (.not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) then
         call fatal_error(error, 'overlap rule separate: eps_lub = '//to_str(eps_lub, '(es12.4)')// &
           ' out of range (0 < eps_lub < 0.5)')
@@ -99,7 +98,7 @@ contains
       end block
     case default
       call fatal_error(error, 'overlap rule "'//trim(name)//'" unknown (one of '// &
-        overlap_rule_names//')')
+        name_list(overlap_names)//')')
     end select
   end subroutine make_overlap_rule
 

@@ -10,6 +10,11 @@
 !>   what the older program did: its default, or the value listed in `value_when_absent` where
 !>   the default has changed since (`hydro.update`: 'stage', the only behaviour before the
 !>   variable existed, while the default may be 'adaptive');
+!> - the scene attributes hold effective values (kf_scene_read: resolve_scene). Files written
+!>   before the scene was resolved recorded `hydro.eps_lub = -1` (not given: the tolerance) and
+!>   `chain.n_beads` = the namelist default 99 also where the shape fixes the count (trefoil,
+!>   candy-cane, file): a negative stored eps_lub counts as the file's `integrator.tolerance`,
+!>   and `chain.n_beads` is compared with the number of beads the file holds (root `n_beads`);
 !> - a file of a newer schema than this program writes is never reused;
 !> - an interrupted file without a checkpoint (killed while it was created, perhaps before its
 !>   scene attributes were written) holds nothing to reuse and is not compared;
@@ -20,8 +25,9 @@ module kf_case_match
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: scene_t
-  use kf_scene_items, only: scene_item_t, scene_items, item_value_text, item_string, &
-    item_integer, item_real, item_logical, item_real_array
+  use kf_scene_items, only: scene_items
+  use kf_scene_item, only: scene_item_t, item_value_text, item_string, item_integer, item_real, &
+    item_logical, item_real_array
   use kf_h5, only: h5_file_t, h5_open_file, h5_close_file, h5_attr_exists, h5_read_attr
   use kf_case_file, only: case_schema_version, case_file_status, has_checkpoint
   implicit none
@@ -88,6 +94,8 @@ contains
       else
         stored = value_when_absent(default_items(k))
       end if
+      call as_effective(file, stored, error)
+      if (allocated(error)) exit
       if (.not. same_value(stored, wanted(k))) then
         dot = index(wanted(k)%name, '.')
         if (len(differences) > 0) differences = differences//'; '
@@ -170,6 +178,28 @@ contains
     end do
   end function value_when_absent
 
+
+  !> A stored value as the effective value the run used (files from before the scene was
+  !> resolved): a negative hydro.eps_lub is the file's integrator.tolerance, chain.n_beads the
+  !> file's bead count.
+  subroutine as_effective(file, stored, error)
+    type(h5_file_t), intent(in) :: file
+    type(scene_item_t), intent(inout) :: stored
+    type(error_t), allocatable, intent(out) :: error
+    integer(i4) :: n
+    select case (trim(stored%name))
+    case ('hydro.eps_lub')
+      if (stored%r < 0.0_wp) then
+        if (h5_attr_exists(file, '/', 'integrator.tolerance')) &
+          call h5_read_attr(file, '/', 'integrator.tolerance', stored%r, error)
+      end if
+    case ('chain.n_beads')
+      if (h5_attr_exists(file, '/', 'n_beads')) then
+        call h5_read_attr(file, '/', 'n_beads', n, error)
+        if (.not. allocated(error)) stored%i = n
+      end if
+    end select
+  end subroutine as_effective
 
   !> Equal values (exact: the attributes hold the values the run used, bit for bit).
   pure logical function same_value(a, b)

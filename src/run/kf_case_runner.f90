@@ -7,8 +7,8 @@ module kf_case_runner
   use kf_strings, only: to_str, to_str_short, to_str_exact
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: scene_t
-  use kf_scene_items, only: scene_item_t, scene_items, scene_text, item_string, item_integer, &
-                            item_real, item_logical, item_real_array
+  use kf_scene_items, only: scene_items, scene_text
+  use kf_scene_item, only: scene_item_t, item_string, item_integer, item_real, item_logical, item_real_array
   use kf_chain_shapes, only: build_initial_chain
   use kf_dynamics, only: dynamics_t
   use kf_hydro_model, only: hydro_stats_t

@@ -1,32 +1,32 @@
 !> Reading a scene from a namelist file the CaNS way: defaults first, one group per concern, every
-!> read checked; unknown groups and variables are rejected by name; then a validation pass whose
-!> messages name the file, group, variable, value and what is allowed.
+!> read checked (each group by its own module, kf_scene_<group>); unknown groups and variables are
+!> rejected by name; then a validation pass whose messages name the file, group, variable, value
+!> and what is allowed; then the resolution of the effective values (resolve_scene).
 module kf_scene_read
-  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
-  use kf_kinds, only: wp, i8
-  use kf_strings, only: to_str, to_str_exact
+  use kf_kinds, only: wp
+  use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
-  use kf_scene, only: scene_t, chain_params_t, forces_params_t, flow_params_t, hydro_params_t, &
-                      integrator_params_t, output_params_t, path_len, name_len
-  use kf_scene_items, only: scene_item_t, scene_items, group_names, item_string, item_integer, &
-                            item_real, item_logical, item_real_array
-  use kf_overlap_rule, only: overlap_rule_names
+  use kf_scene, only: scene_t
+  use kf_scene_item, only: scene_item_t, item_string, item_integer, item_real, item_logical, item_real_array
+  use kf_scene_items, only: scene_items, group_names
+  use kf_scene_check, only: refuse
+  use kf_scene_chain, only: read_chain_group, check_chain, resolve_chain
+  use kf_scene_forces, only: read_forces_group, check_forces
+  use kf_scene_flow, only: read_flow_group, check_flow, flow_shear
+  use kf_scene_hydro, only: read_hydro_group, check_hydro, resolve_hydro, model_multipole
+  use kf_scene_integrator, only: read_integrator_group, check_integrator
+  use kf_scene_output, only: read_output_group, check_output
   use kf_namelist_scan, only: nml_group_t, nml_assignment_t, scan_namelist_file, group_text, count_values
   implicit none
   private
 
-  public :: read_scene, validate_scene, find_group
-
-  character(len=*), parameter :: shapes = 'trefoil, candycane, straight, random, file'
-  character(len=*), parameter :: flows = 'shear, linear, quiescent'
-  character(len=*), parameter :: models = 'none, rpy, multipole'
-  character(len=*), parameter :: methods = 'dopri45, rk4'
-  character(len=*), parameter :: updates = 'stage, adaptive'
+  public :: read_scene, validate_scene, resolve_scene, find_group
 
 contains
 
-  !> Read and validate the scene in `path`. Groups listed in `extra_groups` (e.g. 'sweep') are
-  !> accepted and left to their own readers, which get the scanned groups through `scanned`.
+  !> Read, validate and resolve the scene in `path`. Groups listed in `extra_groups` (e.g.
+  !> 'sweep') are accepted and left to their own readers, which get the scanned groups through
+  !> `scanned`.
   subroutine read_scene(path, sc, error, extra_groups, scanned)
     character(len=*), intent(in) :: path
     type(scene_t), intent(out) :: sc
@@ -48,6 +48,9 @@ contains
       if (allocated(error)) return
     end do
     call validate_scene(sc, error)
+    if (allocated(error)) return
+    call resolve_scene(sc, error)
+    if (allocated(error)) return
     if (present(scanned)) call move_alloc(groups, scanned)
 
   contains
@@ -87,129 +90,19 @@ contains
       ios = 0
       select case (name)
       case ('chain')
-        call read_chain(text, ios, msg)
+        call read_chain_group(sc%chain, text, ios, msg)
       case ('forces')
-        call read_forces(text, ios, msg)
+        call read_forces_group(sc%forces, text, ios, msg)
       case ('flow')
-        call read_flow(text, ios, msg)
+        call read_flow_group(sc%flow, text, ios, msg)
       case ('hydro')
-        call read_hydro(text, ios, msg)
+        call read_hydro_group(sc%hydro, text, ios, msg)
       case ('integrator')
-        call read_integrator(text, ios, msg)
+        call read_integrator_group(sc%integrator, text, ios, msg)
       case ('output')
-        call read_output(text, ios, msg)
+        call read_output_group(sc%output, text, ios, msg)
       end select
     end subroutine read_text
-
-    ! Each reader declares the namelist over local copies of one parameter type.
-    subroutine read_chain(text, ios, msg)
-      character(len=*), intent(in) :: text
-      integer, intent(out) :: ios
-      character(len=*), intent(inout) :: msg
-      character(len=name_len) :: shape
-      integer :: n_beads, trefoil_removed_point
-      character(len=1) :: orientation
-      real(wp) :: bond_length, straight_direction(3)
-      character(len=path_len) :: coordinate_file
-      integer(i8) :: seed
-      namelist /chain/ shape, n_beads, orientation, trefoil_removed_point, bond_length, &
-        coordinate_file, seed, straight_direction
-      associate (p => sc%chain)
-        shape = p%shape; n_beads = p%n_beads; orientation = p%orientation
-        trefoil_removed_point = p%trefoil_removed_point; bond_length = p%bond_length
-        coordinate_file = p%coordinate_file; seed = p%seed; straight_direction = p%straight_direction
-        read (text, nml=chain, iostat=ios, iomsg=msg)
-        p%shape = shape; p%n_beads = n_beads; p%orientation = orientation
-        p%trefoil_removed_point = trefoil_removed_point; p%bond_length = bond_length
-        p%coordinate_file = coordinate_file; p%seed = seed; p%straight_direction = straight_direction
-      end associate
-    end subroutine read_chain
-
-    subroutine read_forces(text, ios, msg)
-      character(len=*), intent(in) :: text
-      integer, intent(out) :: ios
-      character(len=*), intent(inout) :: msg
-      logical :: springs, bending, excluded_volume
-      real(wp) :: spring_k, bending_a, ev_strength, ev_range, external_force(3)
-      namelist /forces/ springs, spring_k, bending, bending_a, excluded_volume, ev_strength, &
-        ev_range, external_force
-      associate (p => sc%forces)
-        springs = p%springs; spring_k = p%spring_k; bending = p%bending; bending_a = p%bending_a
-        excluded_volume = p%excluded_volume; ev_strength = p%ev_strength; ev_range = p%ev_range
-        external_force = p%external_force
-        read (text, nml=forces, iostat=ios, iomsg=msg)
-        p%springs = springs; p%spring_k = spring_k; p%bending = bending; p%bending_a = bending_a
-        p%excluded_volume = excluded_volume; p%ev_strength = ev_strength; p%ev_range = ev_range
-        p%external_force = external_force
-      end associate
-    end subroutine read_forces
-
-    subroutine read_flow(text, ios, msg)
-      character(len=*), intent(in) :: text
-      integer, intent(out) :: ios
-      character(len=*), intent(inout) :: msg
-      character(len=name_len) :: flow_type
-      real(wp) :: shear_rate, velocity_gradient(3, 3)
-      namelist /flow/ flow_type, shear_rate, velocity_gradient
-      associate (p => sc%flow)
-        flow_type = p%flow_type; shear_rate = p%shear_rate; velocity_gradient = p%velocity_gradient
-        read (text, nml=flow, iostat=ios, iomsg=msg)
-        p%flow_type = flow_type; p%shear_rate = shear_rate; p%velocity_gradient = velocity_gradient
-      end associate
-    end subroutine read_flow
-
-    subroutine read_hydro(text, ios, msg)
-      character(len=*), intent(in) :: text
-      integer, intent(out) :: ios
-      character(len=*), intent(inout) :: msg
-      character(len=name_len) :: model
-      integer :: order
-      logical :: lubrication
-      real(wp) :: eps_lub
-      character(len=name_len) :: update, overlap
-      namelist /hydro/ model, order, lubrication, eps_lub, update, overlap
-      associate (p => sc%hydro)
-        model = p%model; order = p%order; lubrication = p%lubrication; eps_lub = p%eps_lub
-        update = p%update; overlap = p%overlap
-        read (text, nml=hydro, iostat=ios, iomsg=msg)
-        p%model = model; p%order = order; p%lubrication = lubrication; p%eps_lub = eps_lub
-        p%update = update; p%overlap = overlap
-      end associate
-    end subroutine read_hydro
-
-    subroutine read_integrator(text, ios, msg)
-      character(len=*), intent(in) :: text
-      integer, intent(out) :: ios
-      character(len=*), intent(inout) :: msg
-      character(len=name_len) :: method
-      real(wp) :: t_end, tolerance, dt_initial, dt_min, dt_max
-      integer(i8) :: max_steps
-      namelist /integrator/ method, t_end, tolerance, dt_initial, dt_min, dt_max, max_steps
-      associate (p => sc%integrator)
-        method = p%method; t_end = p%t_end; tolerance = p%tolerance; dt_initial = p%dt_initial
-        dt_min = p%dt_min; dt_max = p%dt_max; max_steps = p%max_steps
-        read (text, nml=integrator, iostat=ios, iomsg=msg)
-        p%method = method; p%t_end = t_end; p%tolerance = tolerance; p%dt_initial = dt_initial
-        p%dt_min = dt_min; p%dt_max = dt_max; p%max_steps = max_steps
-      end associate
-    end subroutine read_integrator
-
-    subroutine read_output(text, ios, msg)
-      character(len=*), intent(in) :: text
-      integer, intent(out) :: ios
-      character(len=*), intent(inout) :: msg
-      character(len=path_len) :: directory, case_name
-      real(wp) :: frame_interval, progress_interval
-      logical :: diagnostics, stresslet
-      namelist /output/ directory, case_name, frame_interval, progress_interval, diagnostics, stresslet
-      associate (p => sc%output)
-        directory = p%directory; case_name = p%case_name; frame_interval = p%frame_interval
-        progress_interval = p%progress_interval; diagnostics = p%diagnostics; stresslet = p%stresslet
-        read (text, nml=output, iostat=ios, iomsg=msg)
-        p%directory = directory; p%case_name = case_name; p%frame_interval = frame_interval
-        p%progress_interval = progress_interval; p%diagnostics = diagnostics; p%stresslet = stresslet
-      end associate
-    end subroutine read_output
 
   end subroutine read_scene
 
@@ -356,239 +249,47 @@ contains
     end do
   end function find_group
 
-  !> Check every value against its allowed range. Messages: "<file>: &group: var = value: allowed".
+  !> Check every value against its allowed range: each group's own check (kf_scene_<group>),
+  !> then what ties groups together. Messages: "<file>: &group: var = value is not allowed (...)".
   subroutine validate_scene(sc, error)
     type(scene_t), intent(in) :: sc
     type(error_t), allocatable, intent(out) :: error
     character(len=:), allocatable :: f
-    logical :: exists
-    real(wp) :: g(3, 3)
 
     f = trim(sc%source_file)
-    ! Every real must be finite (checked first, with ieee_is_finite: the range tests below would
-    ! trap on NaN in a build with -ffpe-trap=invalid).
-    block
-      type(scene_item_t), allocatable :: items(:)
-      integer :: k, dot
-      call scene_items(sc, items)
-      do k = 1, size(items)
-        dot = index(items(k)%name, '.')
-        select case (items(k)%kind)
-        case (item_real)
-          if (ieee_is_finite(items(k)%r)) cycle
-          call bad(error, f, items(k)%name(1:dot - 1), trim(items(k)%name(dot + 1:)), &
-            to_str_exact(items(k)%r), 'a finite number'); return
-        case (item_real_array)
-          if (all(ieee_is_finite(items(k)%ra))) cycle
-          call bad(error, f, items(k)%name(1:dot - 1), trim(items(k)%name(dot + 1:)), &
-            vector_text(items(k)%ra), 'finite numbers'); return
-        end select
-      end do
-    end block
-    associate (c => sc%chain)
-      if (.not. one_of(c%shape, shapes)) then
-        call bad(error, f, 'chain', 'shape', quoted(c%shape), 'one of '//shapes); return
-      end if
-      if (c%shape == 'straight' .or. c%shape == 'random') then
-        if (c%n_beads < 2) then
-          call bad(error, f, 'chain', 'n_beads', to_str(c%n_beads), 'an integer >= 2'); return
-        end if
-        if (c%n_beads > 100000) then
-          call bad(error, f, 'chain', 'n_beads', to_str(c%n_beads), 'at most 100000'); return
-        end if
-      end if
-      if (.not. one_of(c%orientation, 'a, b, c, d, e')) then
-        call bad(error, f, 'chain', 'orientation', quoted(c%orientation), 'one of a, b, c, d, e'); return
-      end if
-      if (c%trefoil_removed_point < 1 .or. c%trefoil_removed_point > 100) then
-        call bad(error, f, 'chain', 'trefoil_removed_point', to_str(c%trefoil_removed_point), &
-          'an integer from 1 to 100'); return
-      end if
-      if (.not. (c%bond_length > 0.0_wp .and. c%bond_length < 100.0_wp)) then
-        call bad(error, f, 'chain', 'bond_length', to_str_exact(c%bond_length), 'a number in (0, 100)'); return
-      end if
-      if (c%shape == 'file') then
-        if (len_trim(c%coordinate_file) == 0) then
-          call bad(error, f, 'chain', 'coordinate_file', "''", &
-            "a file name (required with shape = 'file')"); return
-        end if
-        inquire (file=trim(c%coordinate_file), exist=exists)
-        if (.not. exists) then
-          call bad(error, f, 'chain', 'coordinate_file', quoted(c%coordinate_file), &
-            'an existing file (not found)'); return
-        end if
-      end if
-      if (.not. all(ieee_is_finite(c%straight_direction))) then
-        call bad(error, f, 'chain', 'straight_direction', vector_text(c%straight_direction), &
-          'finite numbers'); return
-      end if
-      if (c%shape == 'straight' .and. .not. norm2(c%straight_direction) > 0.0_wp) then
-        call bad(error, f, 'chain', 'straight_direction', vector_text(c%straight_direction), &
-          'a non-zero vector'); return
-      end if
-    end associate
-    associate (p => sc%forces)
-      if (.not. (p%spring_k >= 0.0_wp .and. p%spring_k < 1.0e7_wp)) then
-        call bad(error, f, 'forces', 'spring_k', to_str_exact(p%spring_k), 'a number in [0, 1e7)'); return
-      end if
-      if (.not. (p%bending_a >= 0.0_wp .and. p%bending_a < 1.0e7_wp)) then
-        call bad(error, f, 'forces', 'bending_a', to_str_exact(p%bending_a), 'a number in [0, 1e7)'); return
-      end if
-      if (.not. (p%ev_strength >= 0.0_wp .and. p%ev_strength < 1.0e7_wp)) then
-        call bad(error, f, 'forces', 'ev_strength', to_str_exact(p%ev_strength), 'a number in [0, 1e7)'); return
-      end if
-      if (.not. (p%ev_range > 0.0_wp .and. p%ev_range <= 10.0_wp)) then
-        call bad(error, f, 'forces', 'ev_range', to_str_exact(p%ev_range), 'a number in (0, 10]'); return
-      end if
-      if (.not. all(abs(p%external_force) < 1.0e7_wp)) then
-        call bad(error, f, 'forces', 'external_force', 'non-finite', 'finite numbers'); return
-      end if
-    end associate
-    associate (w => sc%flow)
-      if (.not. one_of(w%flow_type, flows)) then
-        call bad(error, f, 'flow', 'flow_type', quoted(w%flow_type), 'one of '//flows); return
-      end if
-      if (.not. (abs(w%shear_rate) < 1.0e6_wp)) then
-        call bad(error, f, 'flow', 'shear_rate', to_str_exact(w%shear_rate), 'a finite number'); return
-      end if
-      g = w%velocity_gradient
-      if (w%flow_type == 'linear') then
-        if (.not. all(abs(g) < 1.0e6_wp)) then
-          call bad(error, f, 'flow', 'velocity_gradient', 'non-finite', 'finite numbers'); return
-        end if
-        if (abs(g(1, 1) + g(2, 2) + g(3, 3)) > 1.0e-12_wp*max(1.0_wp, maxval(abs(g)))) then
-          call bad(error, f, 'flow', 'velocity_gradient', 'trace '//to_str_exact(g(1, 1) + g(2, 2) + g(3, 3)), &
-            'a traceless matrix (incompressible flow)'); return
-        end if
-      end if
-    end associate
-    associate (h => sc%hydro)
-      if (.not. one_of(h%model, models)) then
-        call bad(error, f, 'hydro', 'model', quoted(h%model), 'one of '//models); return
-      end if
-      if (h%model == 'multipole') then
-        if (h%order < 1 .or. h%order > 8) then
-          call bad(error, f, 'hydro', 'order', to_str(h%order), 'an integer from 1 to 8'); return
-        end if
-        if (h%lubrication .and. h%order > 6) then
-          call bad(error, f, 'hydro', 'order', to_str(h%order), &
-            'at most 6 with lubrication = .true. (tables exist for L = 1..6)'); return
-        end if
-      end if
-      ! the lubrication model's own range (kf_lubrication, kf_hydro_multipole): 0 < eps_lub < 0.5
-      if (.not. (h%eps_lub < 0.5_wp .and. h%eps_lub /= 0.0_wp)) then
-        call bad(error, f, 'hydro', 'eps_lub', to_str_exact(h%eps_lub), &
-          'a number in (0, 0.5), or negative for the integration tolerance'); return
-      end if
-      if (.not. one_of(h%update, updates)) then
-        call bad(error, f, 'hydro', 'update', quoted(h%update), 'one of '//updates); return
-      end if
-      if (.not. one_of(h%overlap, overlap_rule_names)) then
-        call bad(error, f, 'hydro', 'overlap', quoted(h%overlap), 'one of '//overlap_rule_names); return
-      end if
-      if (h%overlap /= 'pair' .and. h%model /= 'multipole') then
-        call bad(error, f, 'hydro', 'overlap', quoted(h%overlap), &
-          "'pair' with model = "//quoted(h%model)//" (the rule is for the multipole model)"); return
-      end if
-    end associate
-    associate (g => sc%integrator)
-      if (.not. one_of(g%method, methods)) then
-        call bad(error, f, 'integrator', 'method', quoted(g%method), 'one of '//methods); return
-      end if
-      if (.not. (g%t_end > 0.0_wp .and. g%t_end < 1.0e12_wp)) then
-        call bad(error, f, 'integrator', 't_end', to_str_exact(g%t_end), 'a number > 0'); return
-      end if
-      if (.not. (g%tolerance > 0.0_wp .and. g%tolerance < 1.0_wp)) then
-        call bad(error, f, 'integrator', 'tolerance', to_str_exact(g%tolerance), 'a number in (0, 1)'); return
-      end if
-      if (.not. (g%dt_min > 0.0_wp)) then
-        call bad(error, f, 'integrator', 'dt_min', to_str_exact(g%dt_min), 'a number > 0'); return
-      end if
-      if (.not. (g%dt_max > g%dt_min)) then
-        call bad(error, f, 'integrator', 'dt_max', to_str_exact(g%dt_max), 'a number > dt_min = '//to_str_exact(g%dt_min))
-        return
-      end if
-      if (.not. (g%dt_initial >= g%dt_min .and. g%dt_initial <= g%dt_max)) then
-        call bad(error, f, 'integrator', 'dt_initial', to_str_exact(g%dt_initial), &
-          'a number in [dt_min, dt_max] = ['//to_str_exact(g%dt_min)//', '//to_str_exact(g%dt_max)//']'); return
-      end if
-      if (g%max_steps < 1) then
-        call bad(error, f, 'integrator', 'max_steps', to_str(int(g%max_steps)), 'an integer >= 1'); return
-      end if
-    end associate
+    call check_chain(sc%chain, f, error)
+    if (.not. allocated(error)) call check_forces(sc%forces, f, error)
+    if (.not. allocated(error)) call check_flow(sc%flow, f, error)
+    if (.not. allocated(error)) call check_hydro(sc%hydro, f, error)
+    if (.not. allocated(error)) call check_integrator(sc%integrator, f, error)
+    if (.not. allocated(error)) call check_output(sc%output, f, error)
+    if (allocated(error)) return
+    ! the stresslet's rheological observables are those of simple shear (kf_rheology), and a
+    ! multipole model represents the beads' stresslets only from L = 2 on
     associate (o => sc%output)
-      if (len_trim(o%directory) == 0) then
-        call bad(error, f, 'output', 'directory', "''", 'a directory name'); return
-      end if
-      if (.not. (o%frame_interval > 0.0_wp)) then
-        call bad(error, f, 'output', 'frame_interval', to_str_exact(o%frame_interval), 'a number > 0'); return
-      end if
-      if (.not. (o%progress_interval >= 0.0_wp)) then
-        call bad(error, f, 'output', 'progress_interval', to_str_exact(o%progress_interval), &
-          'a number >= 0 (seconds; 0 = every frame)'); return
-      end if
-      if (verify(trim(o%case_name), 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.-+') /= 0) then
-        call bad(error, f, 'output', 'case_name', quoted(o%case_name), &
-          'letters, digits and _ . - + only'); return
-      end if
-      ! the stresslet's rheological observables are those of simple shear (kf_rheology), and a
-      ! multipole model represents the beads' stresslets only from L = 2 on
-      if (o%stresslet .and. .not. (sc%flow%flow_type == 'shear' .and. sc%flow%shear_rate /= 0.0_wp)) then
-        call bad(error, f, 'output', 'stresslet', '.true.', ".false. unless &flow flow_type = 'shear' "// &
+      if (o%stresslet .and. .not. (sc%flow%flow_type == flow_shear .and. sc%flow%shear_rate /= 0.0_wp)) then
+        call refuse(error, f, 'output', 'stresslet', '.true.', ".false. unless &flow flow_type = 'shear' "// &
           'with shear_rate /= 0 (the viscosity and normal-stress coefficients are those of simple shear)'); return
       end if
-      if (o%stresslet .and. sc%hydro%model == 'multipole' .and. sc%hydro%order < 2) then
-        call bad(error, f, 'output', 'stresslet', '.true.', '.false. with &hydro model = '// &
+      if (o%stresslet .and. sc%hydro%model == model_multipole .and. sc%hydro%order < 2) then
+        call refuse(error, f, 'output', 'stresslet', '.true.', '.false. with &hydro model = '// &
           "'multipole' and order = 1 (L = 1 has no stresslet moments; use order >= 2)"); return
       end if
     end associate
   end subroutine validate_scene
 
-  subroutine bad(error, file, group, var, value, allowed)
+  !> Turn a validated scene into its effective values, once at set-up: eps_lub from the
+  !> integration tolerance when it is not given, chain.n_beads the real bead count of the shape
+  !> (a coordinate file is read and checked). A given value that contradicts the shape is
+  !> refused. Resolving a resolved scene changes nothing.
+  subroutine resolve_scene(sc, error)
+    type(scene_t), intent(inout) :: sc
     type(error_t), allocatable, intent(out) :: error
-    character(len=*), intent(in) :: file, group, var, value, allowed
-    call fatal_error(error, file//': &'//group//': '//var//' = '//value//' is not allowed ('// &
-      allowed//')')
-  end subroutine bad
-
-  !> Is `value` one of the comma-separated words in `list`?
-  logical function one_of(value, list)
-    character(len=*), intent(in) :: value, list
-    integer :: start, comma
-    character(len=:), allocatable :: word
-    one_of = .false.
-    start = 1
-    do
-      comma = index(list(start:), ',')
-      if (comma == 0) then
-        word = trim(adjustl(list(start:)))
-      else
-        word = trim(adjustl(list(start:start + comma - 2)))
-      end if
-      if (trim(value) == word) then
-        one_of = .true.
-        return
-      end if
-      if (comma == 0) return
-      start = start + comma
-    end do
-  end function one_of
-
-  function vector_text(v) result(t)
-    real(wp), intent(in) :: v(:)
-    character(len=:), allocatable :: t
-    integer :: k
-    t = ''
-    do k = 1, size(v)
-      t = t//merge(', ', '  ', k > 1)//to_str_exact(v(k))
-    end do
-    t = trim(adjustl(t))
-  end function vector_text
-
-  function quoted(s) result(t)
-    character(len=*), intent(in) :: s
-    character(len=:), allocatable :: t
-    t = "'"//trim(s)//"'"
-  end function quoted
+    character(len=:), allocatable :: f
+    f = trim(sc%source_file)
+    call resolve_chain(sc%chain, f, error)
+    if (allocated(error)) return
+    call resolve_hydro(sc%hydro, sc%integrator%tolerance, f, error)
+  end subroutine resolve_scene
 
 end module kf_scene_read

@@ -12,7 +12,7 @@ mkdir -p "${work}/project/build/bin" "${work}/project/inputs"
 cp -r "${src}/jobs" "${work}/project/"
 ln -s "${build}/bin/knotflow" "${work}/project/build/bin/knotflow"
 cat >"${work}/project/inputs/tiny.nml" <<'NML'
-&chain shape = 'trefoil', n_beads = 30 /
+&chain shape = 'trefoil' /
 &forces excluded_volume = .true. /
 &integrator t_end = 3.0 /
 &output directory = 'results/tiny', frame_interval = 1.0, progress_interval = 0.0 /

@@ -69,12 +69,12 @@ for f in "${proj}"/jobs/slurm_*.sh; do
          -e 's/^#SBATCH --ntasks-per-node=.*/#SBATCH --ntasks-per-node=2/' -e 's/^#SBATCH --time=.*/#SBATCH --time=00:10:00/' "${f}"
 done
 
-scene() {   # scene NAME "sweep line" "integrator extras" [n_beads] [frame interval]
+scene() {   # scene NAME "sweep line" "integrator extras" [frame interval]
   cat >"${proj}/inputs/$1.nml" <<NML
-&chain shape = 'trefoil', n_beads = ${4:-40} /
+&chain shape = 'trefoil' /
 &forces excluded_volume = .true. /
 &integrator $3 /
-&output directory = 'results/$1', frame_interval = ${5:-1.0}, progress_interval = 0.0 /
+&output directory = 'results/$1', frame_interval = ${4:-1.0}, progress_interval = 0.0 /
 $2
 NML
 }
@@ -119,7 +119,7 @@ PY
 }
 
 # --- 3. (started first: it is the longest) walltime kill with follow-ups ----------------------
-scene walltime "" "t_end = 5000.0" 40 50.0
+scene walltime "" "t_end = 5000.0" 50.0
 w1=$(as_user "sbatch --parsable --time=1 --ntasks=1 --export=ALL,MAX_RESUBMITS=12 jobs/slurm_sweep.sh inputs/walltime.nml") \
   || fail "sbatch of the walltime sweep"
 log "walltime sweep: job ${w1} (--time=1 --ntasks=1, MAX_RESUBMITS=12)"
@@ -140,7 +140,7 @@ expect_state "${j}" FAILED
 log "the same sweep with srun --mpi=none fails (the old script's srun call on this site)"
 
 # --- 2. scancel and resubmit ------------------------------------------------------------------
-scene cancel "" "t_end = 600.0" 40 5.0
+scene cancel "" "t_end = 600.0" 5.0
 c1=$(as_user "sbatch --parsable --ntasks=1 jobs/slurm_sweep.sh inputs/cancel.nml") || fail "sbatch cancel"
 for (( k = 0; k < 240; k++ )); do   # until the case has written frames up to t = 20
   [[ -f "${proj}/results/cancel/case.h5" ]] && grep -q "t = 20.0" "${proj}/knotflow-sweep-${c1}.out" 2>/dev/null && break

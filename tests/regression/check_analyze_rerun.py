@@ -31,7 +31,7 @@ os.makedirs(work)
 out = os.path.join(work, "cases")
 sweep = os.path.join(work, "sweep.nml")
 with open(sweep, "w") as f:
-    f.write("""&chain shape = 'trefoil', n_beads = 40 /
+    f.write("""&chain shape = 'trefoil' /
 &forces excluded_volume = .true. /
 &integrator t_end = 4.0 /
 &output directory = '%s', frame_interval = 1.0, progress_interval = 0.0 /

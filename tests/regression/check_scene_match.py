@@ -13,6 +13,12 @@
 3. Sweeps whose cases would share a file (A = 2.201 and 2.204, a seed listed twice, a zip
    repeating a pair) are refused at set-up with exit status 2, naming both cases, and
    nothing is written (no output directory).
+4. Case files record effective values: chain.n_beads is the bead count of the shape (trefoil
+   100 - 1, candy-cane 90 + 62, a coordinate file its bead lines, straight 99 when not given),
+   equal to the root n_beads and to the stored positions, and hydro.eps_lub not given is the
+   integration tolerance. A file from before (chain.n_beads = 99 for a candy-cane, hydro.eps_lub
+   = -1) is still skipped when finished and resumed when interrupted; another tolerance is
+   still refused.
 Usage: check_scene_match.py KNOTFLOW WORKDIR
 """
 import os
@@ -142,5 +148,57 @@ for name, sweep, fragments in [
         assert frag in line, (frag, line)
     assert not os.path.exists(fresh), "a refused sweep created its output directory"
     checks += 1
+
+# 4. effective values in the case file, and files from before they were recorded
+out4 = os.path.join(work, "effective")
+coords = os.path.join(work, "seven.xyz")
+with open(coords, "w") as f:
+    f.write("# seven beads\n\n" + "".join("%.2f 0 0\n" % (1.02 * k) for k in range(7)))
+n_file = sum(1 for ln in open(coords) if ln.strip() and not ln.lstrip().startswith("#"))
+
+
+def scene4(name, chain, tolerance="1e-3"):
+    path = os.path.join(work, name + ".nml")
+    with open(path, "w") as f:
+        f.write("&chain %s /\n&hydro model = 'rpy' /\n&integrator t_end = 0.5, tolerance = %s /\n"
+                "&output directory = '%s', case_name = '%s', frame_interval = 0.25 /\n"
+                % (chain, tolerance, out4, name))
+    return path
+
+
+for name, chain, n_expected in [("cc", "shape = 'candycane'", 90 + 62),
+                                ("tref", "shape = 'trefoil'", 100 - 1),
+                                ("coords", "shape = 'file', coordinate_file = '%s'" % coords, n_file),
+                                ("line", "shape = 'straight'", 99)]:
+    r = run(scene4(name, chain))
+    assert r.returncode == 0, (name, r.stdout, r.stderr)
+    with h5py.File(os.path.join(out4, name + ".h5"), "r") as h:
+        assert int(h.attrs["chain.n_beads"]) == n_expected == int(h.attrs["n_beads"]), (name, dict(h.attrs))
+        assert h["frames/positions"].shape[1:] == (n_expected, 3), h["frames/positions"].shape
+        assert h.attrs["hydro.eps_lub"] == 1e-3 == h.attrs["integrator.tolerance"], dict(h.attrs)
+        text = h.attrs["scene"]
+        text = text.decode() if isinstance(text, bytes) else text
+        assert "n_beads = %d\n" % n_expected in text and "eps_lub = -" not in text, text
+    checks += 1
+
+cc = os.path.join(out4, "cc.h5")
+with h5py.File(cc, "a") as h:       # as knotflow wrote it before the scene was resolved
+    h.attrs["chain.n_beads"] = np.int64(99)
+    h.attrs["hydro.eps_lub"] = -1.0
+r = run(scene4("cc", "shape = 'candycane'"))
+assert r.returncode == 0 and "1 skipped" in r.stdout, (r.stdout, r.stderr)
+with h5py.File(cc, "a") as h:
+    h.attrs["status"] = np.bytes_("running")
+r = run(scene4("cc", "shape = 'candycane'"))
+assert r.returncode == 0 and "1 finished" in r.stdout, (r.stdout, r.stderr)
+with h5py.File(cc, "r") as h:
+    assert h.attrs["status"] in (b"finished", "finished")
+    assert list(h["frames/time"][:]) == [0.0, 0.25, 0.5], h["frames/time"][:]
+r = run(scene4("cc", "shape = 'candycane'", tolerance="1e-4"))
+assert r.returncode == 2, (r.stdout, r.stderr)
+assert "&integrator: tolerance = 0.001 in the file, 0.0001 requested" in r.stderr, r.stderr
+assert "&hydro: eps_lub = 0.001 in the file, 0.0001 requested" in r.stderr, r.stderr
+checks += 3
 print("scene match: %d checks passed (skip on equal scene, refusal on changed A / t_end, "
-      "old schema defaults, newer schema, 3 clashing sweeps)" % checks)
+      "old schema defaults, newer schema, 3 clashing sweeps, effective values recorded for 4 shapes, "
+      "a file with eps_lub = -1 and n_beads = 99 skipped and resumed)" % checks)

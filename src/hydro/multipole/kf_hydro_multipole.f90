@@ -53,11 +53,12 @@ module kf_hydro_multipole
   use kf_pair_blocks, only: pair_blocks_t
   use kf_pair_geometry, only: pair_geometry_t
   use kf_rigid_fit, only: best_rotation, centroid
+  use kf_scene_hydro, only: update_stage, update_adaptive, update_names
+  use kf_scene_check, only: name_list
   implicit none
   private
 
   !> Names of the update modes (`&hydro update`), in the order of their codes.
-  character(len=*), parameter, public :: update_names = 'stage, adaptive'
   !> Velocity error budget of a reused many-body part, as a fraction of tolerance / step size.
   real(wp), parameter :: budget_fraction = 0.25_wp
   !> Conjugate-gradient stopping error, as a fraction of the budget.
@@ -140,7 +141,7 @@ contains
                        ' not allowed (0 < eps_lub < 0.5)')
       return
     end if
-    mode = 'stage'
+    mode = update_stage
     if (present(update)) mode = update
     tol = 1.0e-4_wp
     if (present(tolerance)) tol = tolerance
@@ -149,12 +150,12 @@ contains
       return
     end if
     select case (mode)
-    case ('stage')
+    case (update_stage)
       this%adaptive = .false.
-    case ('adaptive')
+    case (update_adaptive)
       this%adaptive = .true.
     case default
-      call fatal_error(error, "multipole: update = '"//mode//"' is unknown (allowed: "//update_names//')')
+      call fatal_error(error, "multipole: update = '"//mode//"' is unknown (allowed: "//name_list(update_names)//')')
       return
     end select
     if (lubrication) then

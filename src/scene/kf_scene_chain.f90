@@ -1,0 +1,205 @@
+!> The &chain group: the initial shape. Owns the parameter type with its defaults, the reading
+!> of the group, its part of the item catalogue, its validation, the names of the shapes (the
+!> shape factory kf_chain_shapes builds from them) and the resolution of the bead count.
+module kf_scene_chain
+  use kf_kinds, only: wp, i8
+  use kf_strings, only: to_str, to_str_exact
+  use kf_error, only: error_t, fatal_error
+  use kf_scene_item, only: scene_item_t, add_s, add_i, add_r, add_a, path_len, name_len
+  use kf_scene_check, only: refuse, name_list, quoted, vector_text, check_finite
+  use kf_text_coords, only: read_coordinates
+  implicit none
+  private
+
+  character(len=*), parameter, public :: shape_trefoil = 'trefoil', shape_candycane = 'candycane', &
+    shape_straight = 'straight', shape_random = 'random', shape_file = 'file'
+  !> The valid values of &chain shape.
+  character(len=*), parameter, public :: shape_names(5) = [character(len=9) :: shape_trefoil, &
+    shape_candycane, shape_straight, shape_random, shape_file]
+  !> The valid values of &chain orientation (trefoil).
+  character(len=*), parameter, public :: orientation_names(5) = ['a', 'b', 'c', 'd', 'e']
+
+  integer, parameter, public :: trefoil_points = 100     !< points on the closed trefoil (one is removed)
+  integer, parameter, public :: candycane_beads = 152    !< beads of the candy-cane
+  integer, parameter, public :: default_n_beads = 99     !< straight and random chains without n_beads
+  integer, parameter :: max_beads = 100000
+
+  !> &chain: the initial shape.
+  type, public :: chain_params_t
+    character(len=name_len) :: shape = shape_trefoil !< trefoil | candycane | straight | random | file
+    !> 0 (not given): the shape's own count (trefoil 99, candy-cane 152, a file its lines,
+    !> straight and random 99); resolve_chain sets the real count. An explicit value that
+    !> contradicts the shape is refused.
+    integer :: n_beads = 0
+    character(len=1) :: orientation = 'a'           !< trefoil orientation a..e
+    integer :: trefoil_removed_point = 100          !< which of the 100 trefoil points is removed
+    real(wp) :: bond_length = 1.02_wp               !< l0, rest length of the springs
+    character(len=path_len) :: coordinate_file = '' !< shape = 'file': one bead per line, x y z
+    integer(i8) :: seed = 20150509_i8               !< candy-cane rotation, random chain
+    real(wp) :: straight_direction(3) = [0.0_wp, 0.0_wp, 1.0_wp] !< axis of the straight chain
+  end type chain_params_t
+
+  public :: read_chain_group, chain_items, check_chain, resolve_chain, read_chain_file
+
+contains
+
+  !> Read the namelist text of &chain into `p` (the values `p` holds are the defaults).
+  subroutine read_chain_group(p, text, ios, msg)
+    type(chain_params_t), intent(inout) :: p
+    character(len=*), intent(in) :: text
+    integer, intent(out) :: ios
+    character(len=*), intent(inout) :: msg
+    character(len=name_len) :: shape
+    integer :: n_beads, trefoil_removed_point
+    character(len=1) :: orientation
+    real(wp) :: bond_length, straight_direction(3)
+    character(len=path_len) :: coordinate_file
+    integer(i8) :: seed
+    namelist /chain/ shape, n_beads, orientation, trefoil_removed_point, bond_length, &
+      coordinate_file, seed, straight_direction
+    shape = p%shape; n_beads = p%n_beads; orientation = p%orientation
+    trefoil_removed_point = p%trefoil_removed_point; bond_length = p%bond_length
+    coordinate_file = p%coordinate_file; seed = p%seed; straight_direction = p%straight_direction
+    read (text, nml=chain, iostat=ios, iomsg=msg)
+    p%shape = shape; p%n_beads = n_beads; p%orientation = orientation
+    p%trefoil_removed_point = trefoil_removed_point; p%bond_length = bond_length
+    p%coordinate_file = coordinate_file; p%seed = seed; p%straight_direction = straight_direction
+  end subroutine read_chain_group
+
+  !> The variables of &chain, in namelist order, appended to `items`.
+  subroutine chain_items(p, items)
+    type(chain_params_t), intent(in) :: p
+    type(scene_item_t), allocatable, intent(inout) :: items(:)
+    call add_s(items, 'chain.shape', p%shape)
+    call add_i(items, 'chain.n_beads', int(p%n_beads, i8))
+    call add_s(items, 'chain.orientation', p%orientation)
+    call add_i(items, 'chain.trefoil_removed_point', int(p%trefoil_removed_point, i8))
+    call add_r(items, 'chain.bond_length', p%bond_length)
+    call add_s(items, 'chain.coordinate_file', p%coordinate_file)
+    call add_i(items, 'chain.seed', p%seed)
+    call add_a(items, 'chain.straight_direction', p%straight_direction, [3, 0])
+  end subroutine chain_items
+
+  !> Check &chain (`file`: the scene file named in the messages, '' from code).
+  subroutine check_chain(p, file, error)
+    type(chain_params_t), intent(in) :: p
+    character(len=*), intent(in) :: file
+    type(error_t), allocatable, intent(out) :: error
+    type(scene_item_t), allocatable :: items(:)
+    logical :: exists
+    allocate (items(0))
+    call chain_items(p, items)
+    call check_finite(items, file, error)
+    if (allocated(error)) return
+    if (.not. any(shape_names == p%shape)) then
+      call refuse(error, file, 'chain', 'shape', quoted(p%shape), 'one of '//name_list(shape_names)); return
+    end if
+    ! 0: not given (the shape's own count)
+    if (p%n_beads /= 0 .and. p%n_beads < 2) then
+      call refuse(error, file, 'chain', 'n_beads', to_str(p%n_beads), 'an integer >= 2'); return
+    end if
+    if (p%n_beads > max_beads) then
+      call refuse(error, file, 'chain', 'n_beads', to_str(p%n_beads), 'at most '//to_str(max_beads)); return
+    end if
+    if (.not. any(orientation_names == p%orientation)) then
+      call refuse(error, file, 'chain', 'orientation', quoted(p%orientation), &
+        'one of '//name_list(orientation_names)); return
+    end if
+    if (p%trefoil_removed_point < 1 .or. p%trefoil_removed_point > trefoil_points) then
+      call refuse(error, file, 'chain', 'trefoil_removed_point', to_str(p%trefoil_removed_point), &
+        'an integer from 1 to '//to_str(trefoil_points)); return
+    end if
+    if (.not. (p%bond_length > 0.0_wp .and. p%bond_length < 100.0_wp)) then
+      call refuse(error, file, 'chain', 'bond_length', to_str_exact(p%bond_length), 'a number in (0, 100)'); return
+    end if
+    ! the random chain keeps non-bonded beads 1 d apart, which steps of l0 <= 0.5 cannot do
+    if (p%shape == shape_random .and. .not. p%bond_length > 0.5_wp) then
+      call refuse(error, file, 'chain', 'bond_length', to_str_exact(p%bond_length), &
+        "a number > 0.5 with shape = 'random' (non-bonded beads stay 1 d apart)"); return
+    end if
+    if (p%shape == shape_file) then
+      if (len_trim(p%coordinate_file) == 0) then
+        call refuse(error, file, 'chain', 'coordinate_file', "''", &
+          "a file name (required with shape = 'file')"); return
+      end if
+      inquire (file=trim(p%coordinate_file), exist=exists)
+      if (.not. exists) then
+        call refuse(error, file, 'chain', 'coordinate_file', quoted(p%coordinate_file), &
+          'an existing file (not found)'); return
+      end if
+    end if
+    if (p%shape == shape_straight .and. .not. norm2(p%straight_direction) > 0.0_wp) then
+      call refuse(error, file, 'chain', 'straight_direction', vector_text(p%straight_direction), &
+        'a non-zero vector'); return
+    end if
+  end subroutine check_chain
+
+  !> Set n_beads to the real bead count of the shape (a coordinate file is read and checked).
+  !> An n_beads given in the scene that contradicts the shape is refused.
+  subroutine resolve_chain(p, file, error)
+    type(chain_params_t), intent(inout) :: p
+    character(len=*), intent(in) :: file
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: r(:, :)
+    integer :: n
+    select case (p%shape)
+    case (shape_trefoil)
+      n = trefoil_points - 1
+    case (shape_candycane)
+      n = candycane_beads
+    case (shape_file)
+      call read_chain_file(p%coordinate_file, r, error)
+      if (allocated(error)) then
+        error%message = prefix(file)//'&chain: '//error%message
+        return
+      end if
+      n = size(r, 2)
+    case default
+      if (p%n_beads == 0) p%n_beads = default_n_beads
+      return
+    end select
+    if (p%n_beads /= 0 .and. p%n_beads /= n) then
+      call refuse(error, file, 'chain', 'n_beads', to_str(p%n_beads), to_str(n)//', the bead count of shape = '// &
+        quoted(p%shape)//", or not given (n_beads is chosen only for 'straight' and 'random')"); return
+    end if
+    p%n_beads = n
+  end subroutine resolve_chain
+
+  !> The beads of a coordinate file, checked: at least 2, no two at the same place (closer than
+  !> 1e-9 d, which makes the hydrodynamic and bending terms singular; every pair is compared up
+  !> to 20,000 beads, the bonded neighbours beyond). Messages start with "coordinate_file = ".
+  subroutine read_chain_file(path, r, error)
+    character(len=*), intent(in) :: path
+    real(wp), allocatable, intent(out) :: r(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), parameter :: tiny_distance2 = 1.0e-18_wp
+    integer :: i, j, n
+    call read_coordinates(trim(path), r, error)
+    if (allocated(error)) then
+      error%message = 'coordinate_file = '//quoted(path)//': '//error%message
+      return
+    end if
+    n = size(r, 2)
+    if (n < 2) then
+      call fatal_error(error, 'coordinate_file = '//quoted(path)//' holds fewer than 2 beads (allowed: at least 2)')
+      return
+    end if
+    do j = 2, n
+      do i = merge(1, j - 1, n <= 20000), j - 1
+        if (sum((r(:, j) - r(:, i))**2) < tiny_distance2) then
+          call fatal_error(error, 'coordinate_file = '//quoted(path)//': beads '//to_str(i)//' and '// &
+            to_str(j)//' coincide (allowed: distinct points)')
+          return
+        end if
+      end do
+    end do
+  end subroutine read_chain_file
+
+  pure function prefix(file) result(t)
+    character(len=*), intent(in) :: file
+    character(len=:), allocatable :: t
+    t = ''
+    if (len(file) > 0) t = file//': '
+  end function prefix
+
+end module kf_scene_chain

@@ -1,0 +1,137 @@
+!> The &hydro group: the hydrodynamic model. Owns the parameter type with its defaults, the
+!> reading of the group, its part of the item catalogue, its validation, the names of the models
+!> and update modes (kf_hydro_factory and the multipole model build from them), the overlap rules
+!> (kf_overlap_rule) and the resolution of eps_lub.
+module kf_scene_hydro
+  use kf_kinds, only: wp, i8
+  use kf_strings, only: to_str, to_str_exact
+  use kf_error, only: error_t
+  use kf_scene_item, only: scene_item_t, add_s, add_i, add_l, add_r, name_len
+  use kf_scene_check, only: refuse, name_list, quoted, check_finite
+  implicit none
+  private
+
+  character(len=*), parameter, public :: model_none = 'none', model_rpy = 'rpy', model_multipole = 'multipole'
+  !> The valid values of &hydro model.
+  character(len=*), parameter, public :: model_names(3) = [character(len=9) :: model_none, model_rpy, &
+    model_multipole]
+  character(len=*), parameter, public :: update_stage = 'stage', update_adaptive = 'adaptive'
+  !> The valid values of &hydro update (multipole).
+  character(len=*), parameter, public :: update_names(2) = [character(len=8) :: update_stage, update_adaptive]
+
+  character(len=*), parameter, public :: overlap_pair = 'pair', overlap_separate = 'separate'
+  !> The valid values of &hydro overlap (multipole).
+  character(len=*), parameter, public :: overlap_names(2) = [character(len=8) :: overlap_pair, overlap_separate]
+
+  real(wp), parameter :: eps_lub_max = 0.5_wp    !< the lubrication model's range: 0 < eps_lub < 0.5
+
+  !> &hydro: the hydrodynamic model.
+  type, public :: hydro_params_t
+    character(len=name_len) :: model = model_rpy    !< none | rpy | multipole
+    integer :: order = 2                            !< multipole order L
+    logical :: lubrication = .true.                 !< multipole: lubrication corrections
+    !> BWE overlap shift; < 0 (the default): not given, resolve_hydro sets the integration tolerance
+    real(wp) :: eps_lub = -1.0_wp
+    !> multipole: adaptive (reuse, the default) | stage (exact every stage)
+    character(len=name_len) :: update = update_adaptive
+    !> multipole: pair (BWE per pair, the default) | separate (the configuration without overlaps)
+    character(len=name_len) :: overlap = overlap_pair
+  end type hydro_params_t
+
+  public :: read_hydro_group, hydro_items, check_hydro, resolve_hydro, effective_eps_lub
+
+contains
+
+  !> Read the namelist text of &hydro into `p` (the values `p` holds are the defaults).
+  subroutine read_hydro_group(p, text, ios, msg)
+    type(hydro_params_t), intent(inout) :: p
+    character(len=*), intent(in) :: text
+    integer, intent(out) :: ios
+    character(len=*), intent(inout) :: msg
+    character(len=name_len) :: model
+    integer :: order
+    logical :: lubrication
+    real(wp) :: eps_lub
+    character(len=name_len) :: update, overlap
+    namelist /hydro/ model, order, lubrication, eps_lub, update, overlap
+    model = p%model; order = p%order; lubrication = p%lubrication; eps_lub = p%eps_lub
+    update = p%update; overlap = p%overlap
+    read (text, nml=hydro, iostat=ios, iomsg=msg)
+    p%model = model; p%order = order; p%lubrication = lubrication; p%eps_lub = eps_lub
+    p%update = update; p%overlap = overlap
+  end subroutine read_hydro_group
+
+  !> The variables of &hydro, in namelist order, appended to `items`.
+  subroutine hydro_items(p, items)
+    type(hydro_params_t), intent(in) :: p
+    type(scene_item_t), allocatable, intent(inout) :: items(:)
+    call add_s(items, 'hydro.model', p%model)
+    call add_i(items, 'hydro.order', int(p%order, i8))
+    call add_l(items, 'hydro.lubrication', p%lubrication)
+    call add_r(items, 'hydro.eps_lub', p%eps_lub)
+    call add_s(items, 'hydro.update', p%update)
+    call add_s(items, 'hydro.overlap', p%overlap)
+  end subroutine hydro_items
+
+  !> Check &hydro (`file`: the scene file named in the messages, '' from code).
+  subroutine check_hydro(p, file, error)
+    type(hydro_params_t), intent(in) :: p
+    character(len=*), intent(in) :: file
+    type(error_t), allocatable, intent(out) :: error
+    type(scene_item_t), allocatable :: items(:)
+    allocate (items(0))
+    call hydro_items(p, items)
+    call check_finite(items, file, error)
+    if (allocated(error)) return
+    if (.not. any(model_names == p%model)) then
+      call refuse(error, file, 'hydro', 'model', quoted(p%model), 'one of '//name_list(model_names)); return
+    end if
+    if (p%model == model_multipole) then
+      if (p%order < 1 .or. p%order > 8) then
+        call refuse(error, file, 'hydro', 'order', to_str(p%order), 'an integer from 1 to 8'); return
+      end if
+      if (p%lubrication .and. p%order > 6) then
+        call refuse(error, file, 'hydro', 'order', to_str(p%order), &
+          'at most 6 with lubrication = .true. (tables exist for L = 1..6)'); return
+      end if
+    end if
+    if (.not. (p%eps_lub < eps_lub_max .and. p%eps_lub /= 0.0_wp)) then
+      call refuse(error, file, 'hydro', 'eps_lub', to_str_exact(p%eps_lub), &
+        'a number in (0, 0.5), or negative for the integration tolerance'); return
+    end if
+    if (.not. any(update_names == p%update)) then
+      call refuse(error, file, 'hydro', 'update', quoted(p%update), 'one of '//name_list(update_names)); return
+    end if
+    if (.not. any(overlap_names == p%overlap)) then
+      call refuse(error, file, 'hydro', 'overlap', quoted(p%overlap), 'one of '//name_list(overlap_names)); return
+    end if
+    if (p%overlap /= overlap_pair .and. p%model /= model_multipole) then
+      call refuse(error, file, 'hydro', 'overlap', quoted(p%overlap), &
+        quoted(overlap_pair)//' with model = '//quoted(p%model)//' (the rule is for the multipole model)'); return
+    end if
+  end subroutine check_hydro
+
+  !> The eps_lub a model uses: the given one, or the integration tolerance when not given (< 0).
+  pure real(wp) function effective_eps_lub(p, tolerance) result(eps)
+    type(hydro_params_t), intent(in) :: p
+    real(wp), intent(in) :: tolerance
+    eps = p%eps_lub
+    if (eps < 0.0_wp) eps = tolerance
+  end function effective_eps_lub
+
+  !> Set eps_lub to its effective value (the integration tolerance when not given); a tolerance
+  !> outside the range of eps_lub is refused, naming both.
+  subroutine resolve_hydro(p, tolerance, file, error)
+    type(hydro_params_t), intent(inout) :: p
+    real(wp), intent(in) :: tolerance
+    character(len=*), intent(in) :: file
+    type(error_t), allocatable, intent(out) :: error
+    if (p%eps_lub >= 0.0_wp) return
+    if (.not. (tolerance > 0.0_wp .and. tolerance < eps_lub_max)) then
+      call refuse(error, file, 'hydro', 'eps_lub', 'the &integrator tolerance = '//to_str_exact(tolerance), &
+        'a number in (0, 0.5): give eps_lub, or a smaller tolerance'); return
+    end if
+    p%eps_lub = effective_eps_lub(p, tolerance)
+  end subroutine resolve_hydro
+
+end module kf_scene_hydro

@@ -1,0 +1,97 @@
+!> The &integrator group: time stepping. Owns the parameter type with its defaults, the reading
+!> of the group, its part of the item catalogue, its validation and the names of the steppers
+!> (kf_stepper_factory builds from them).
+module kf_scene_integrator
+  use kf_kinds, only: wp, i8
+  use kf_strings, only: to_str, to_str_exact
+  use kf_error, only: error_t
+  use kf_scene_item, only: scene_item_t, add_s, add_i, add_r, name_len
+  use kf_scene_check, only: refuse, name_list, quoted, check_finite
+  implicit none
+  private
+
+  character(len=*), parameter, public :: method_dopri45 = 'dopri45', method_rk4 = 'rk4'
+  !> The valid values of &integrator method.
+  character(len=*), parameter, public :: method_names(2) = [character(len=7) :: method_dopri45, method_rk4]
+
+  !> &integrator: time stepping.
+  type, public :: integrator_params_t
+    character(len=name_len) :: method = method_dopri45 !< dopri45 (adaptive) | rk4 (fixed step)
+    real(wp) :: t_end = 1000.0_wp
+    real(wp) :: tolerance = 1.0e-4_wp               !< error per step on positions, units of d
+    real(wp) :: dt_initial = 1.0e-3_wp
+    real(wp) :: dt_min = 1.0e-9_wp                  !< below this the case fails (step underflow)
+    real(wp) :: dt_max = 0.5_wp
+    integer(i8) :: max_steps = 100000000_i8
+  end type integrator_params_t
+
+  public :: read_integrator_group, integrator_items, check_integrator
+
+contains
+
+  !> Read the namelist text of &integrator into `p` (the values `p` holds are the defaults).
+  subroutine read_integrator_group(p, text, ios, msg)
+    type(integrator_params_t), intent(inout) :: p
+    character(len=*), intent(in) :: text
+    integer, intent(out) :: ios
+    character(len=*), intent(inout) :: msg
+    character(len=name_len) :: method
+    real(wp) :: t_end, tolerance, dt_initial, dt_min, dt_max
+    integer(i8) :: max_steps
+    namelist /integrator/ method, t_end, tolerance, dt_initial, dt_min, dt_max, max_steps
+    method = p%method; t_end = p%t_end; tolerance = p%tolerance; dt_initial = p%dt_initial
+    dt_min = p%dt_min; dt_max = p%dt_max; max_steps = p%max_steps
+    read (text, nml=integrator, iostat=ios, iomsg=msg)
+    p%method = method; p%t_end = t_end; p%tolerance = tolerance; p%dt_initial = dt_initial
+    p%dt_min = dt_min; p%dt_max = dt_max; p%max_steps = max_steps
+  end subroutine read_integrator_group
+
+  !> The variables of &integrator, in namelist order, appended to `items`.
+  subroutine integrator_items(p, items)
+    type(integrator_params_t), intent(in) :: p
+    type(scene_item_t), allocatable, intent(inout) :: items(:)
+    call add_s(items, 'integrator.method', p%method)
+    call add_r(items, 'integrator.t_end', p%t_end)
+    call add_r(items, 'integrator.tolerance', p%tolerance)
+    call add_r(items, 'integrator.dt_initial', p%dt_initial)
+    call add_r(items, 'integrator.dt_min', p%dt_min)
+    call add_r(items, 'integrator.dt_max', p%dt_max)
+    call add_i(items, 'integrator.max_steps', p%max_steps)
+  end subroutine integrator_items
+
+  !> Check &integrator (`file`: the scene file named in the messages, '' from code).
+  subroutine check_integrator(p, file, error)
+    type(integrator_params_t), intent(in) :: p
+    character(len=*), intent(in) :: file
+    type(error_t), allocatable, intent(out) :: error
+    type(scene_item_t), allocatable :: items(:)
+    allocate (items(0))
+    call integrator_items(p, items)
+    call check_finite(items, file, error)
+    if (allocated(error)) return
+    if (.not. any(method_names == p%method)) then
+      call refuse(error, file, 'integrator', 'method', quoted(p%method), 'one of '//name_list(method_names)); return
+    end if
+    if (.not. (p%t_end > 0.0_wp .and. p%t_end < 1.0e12_wp)) then
+      call refuse(error, file, 'integrator', 't_end', to_str_exact(p%t_end), 'a number > 0'); return
+    end if
+    if (.not. (p%tolerance > 0.0_wp .and. p%tolerance < 1.0_wp)) then
+      call refuse(error, file, 'integrator', 'tolerance', to_str_exact(p%tolerance), 'a number in (0, 1)'); return
+    end if
+    if (.not. (p%dt_min > 0.0_wp)) then
+      call refuse(error, file, 'integrator', 'dt_min', to_str_exact(p%dt_min), 'a number > 0'); return
+    end if
+    if (.not. (p%dt_max > p%dt_min)) then
+      call refuse(error, file, 'integrator', 'dt_max', to_str_exact(p%dt_max), 'a number > dt_min = '// &
+        to_str_exact(p%dt_min)); return
+    end if
+    if (.not. (p%dt_initial >= p%dt_min .and. p%dt_initial <= p%dt_max)) then
+      call refuse(error, file, 'integrator', 'dt_initial', to_str_exact(p%dt_initial), &
+        'a number in [dt_min, dt_max] = ['//to_str_exact(p%dt_min)//', '//to_str_exact(p%dt_max)//']'); return
+    end if
+    if (p%max_steps < 1) then
+      call refuse(error, file, 'integrator', 'max_steps', to_str(p%max_steps), 'an integer >= 1'); return
+    end if
+  end subroutine check_integrator
+
+end module kf_scene_integrator

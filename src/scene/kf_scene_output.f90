@@ -1,0 +1,82 @@
+!> The &output group: files and progress. Owns the parameter type with its defaults, the
+!> reading of the group, its part of the item catalogue and its validation.
+module kf_scene_output
+  use kf_kinds, only: wp
+  use kf_strings, only: to_str_exact
+  use kf_error, only: error_t
+  use kf_scene_item, only: scene_item_t, add_s, add_r, add_l, path_len
+  use kf_scene_check, only: refuse, quoted, check_finite
+  implicit none
+  private
+
+  !> &output: files and progress.
+  type, public :: output_params_t
+    character(len=path_len) :: directory = 'results'
+    character(len=path_len) :: case_name = ''       !< default: derived from the parameters
+    real(wp) :: frame_interval = 1.0_wp             !< simulated time between frames
+    real(wp) :: progress_interval = 10.0_wp         !< wall seconds between progress lines
+    logical :: diagnostics = .true.                 !< strand passages, overlaps, bond strain per step
+    logical :: stresslet = .false.                  !< the fibre's stresslet and rheology per frame
+  end type output_params_t
+
+  public :: read_output_group, output_items, check_output
+
+contains
+
+  !> Read the namelist text of &output into `p` (the values `p` holds are the defaults).
+  subroutine read_output_group(p, text, ios, msg)
+    type(output_params_t), intent(inout) :: p
+    character(len=*), intent(in) :: text
+    integer, intent(out) :: ios
+    character(len=*), intent(inout) :: msg
+    character(len=path_len) :: directory, case_name
+    real(wp) :: frame_interval, progress_interval
+    logical :: diagnostics, stresslet
+    namelist /output/ directory, case_name, frame_interval, progress_interval, diagnostics, stresslet
+    directory = p%directory; case_name = p%case_name; frame_interval = p%frame_interval
+    progress_interval = p%progress_interval; diagnostics = p%diagnostics; stresslet = p%stresslet
+    read (text, nml=output, iostat=ios, iomsg=msg)
+    p%directory = directory; p%case_name = case_name; p%frame_interval = frame_interval
+    p%progress_interval = progress_interval; p%diagnostics = diagnostics; p%stresslet = stresslet
+  end subroutine read_output_group
+
+  !> The variables of &output, in namelist order, appended to `items`.
+  subroutine output_items(p, items)
+    type(output_params_t), intent(in) :: p
+    type(scene_item_t), allocatable, intent(inout) :: items(:)
+    call add_s(items, 'output.directory', p%directory)
+    call add_s(items, 'output.case_name', p%case_name)
+    call add_r(items, 'output.frame_interval', p%frame_interval)
+    call add_r(items, 'output.progress_interval', p%progress_interval)
+    call add_l(items, 'output.diagnostics', p%diagnostics)
+    call add_l(items, 'output.stresslet', p%stresslet)
+  end subroutine output_items
+
+  !> Check &output on its own (`file`: the scene file named in the messages, '' from code); what
+  !> depends on other groups (the stresslet) is checked by validate_scene.
+  subroutine check_output(p, file, error)
+    type(output_params_t), intent(in) :: p
+    character(len=*), intent(in) :: file
+    type(error_t), allocatable, intent(out) :: error
+    type(scene_item_t), allocatable :: items(:)
+    allocate (items(0))
+    call output_items(p, items)
+    call check_finite(items, file, error)
+    if (allocated(error)) return
+    if (len_trim(p%directory) == 0) then
+      call refuse(error, file, 'output', 'directory', "''", 'a directory name'); return
+    end if
+    if (.not. (p%frame_interval > 0.0_wp)) then
+      call refuse(error, file, 'output', 'frame_interval', to_str_exact(p%frame_interval), 'a number > 0'); return
+    end if
+    if (.not. (p%progress_interval >= 0.0_wp)) then
+      call refuse(error, file, 'output', 'progress_interval', to_str_exact(p%progress_interval), &
+        'a number >= 0 (seconds; 0 = every frame)'); return
+    end if
+    if (verify(trim(p%case_name), 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.-+') /= 0) then
+      call refuse(error, file, 'output', 'case_name', quoted(p%case_name), &
+        'letters, digits and _ . - + only'); return
+    end if
+  end subroutine check_output
+
+end module kf_scene_output
