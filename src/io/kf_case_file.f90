@@ -74,7 +74,7 @@ module kf_case_file
   implicit none
   private
 
-  public :: case_file_status, read_frames, verify_case_file, has_checkpoint
+  public :: case_file_status, read_frames, read_open_frames, verify_case_file, has_checkpoint
 
   !> Version of the case file layout written by `create`. 1: files without the attribute
   !> (before it existed); 2: the attribute itself; 3: two checkpoint slots written alternately
@@ -1305,10 +1305,22 @@ contains
     real(wp), allocatable, intent(out) :: r(:, :, :)
     type(error_t), allocatable, intent(out) :: error
     type(h5_file_t) :: file
-    integer(i8) :: counted
-    integer :: n, k
     call h5_open_file(file, path, .false., error)
     if (allocated(error)) return
+    call read_open_frames(file, t, r, error)
+    call h5_close_file(file)
+  end subroutine read_frames
+
+  !> `read_frames` of a case file that is already open.
+  subroutine read_open_frames(file, t, r, error)
+    type(h5_file_t), intent(in) :: file
+    real(wp), allocatable, intent(out) :: t(:)
+    real(wp), allocatable, intent(out) :: r(:, :, :)
+    type(error_t), allocatable, intent(out) :: error
+    character(len=:), allocatable :: path
+    integer(i8) :: counted
+    integer :: n, k
+    path = file%name()
     if (.not. h5_exists(file, '/frames')) then
       call fatal_error(error, "case file '"//path//"': no /frames group (not a knotflow case file)")
     else
@@ -1316,7 +1328,6 @@ contains
       if (.not. allocated(error)) call h5_read(file, '/frames/positions', r, error)
       if (.not. allocated(error)) call checkpoint_frames(file, counted, error)
     end if
-    call h5_close_file(file)
     if (allocated(error)) return
     if (size(r, 1) /= 3) then
       call fatal_error(error, "case file '"//path//"': /frames/positions has shape ("//to_str(size(r, 3))//', '// &
@@ -1352,7 +1363,7 @@ contains
         return
       end if
     end do
-  end subroutine read_frames
+  end subroutine read_open_frames
 
   !> Does the case file `path` hold a checkpoint (of at least one frame)? A file killed while it
   !> was created has none (and may lack its scene attributes): nothing in it can be reused.

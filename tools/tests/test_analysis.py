@@ -1,5 +1,6 @@
 """Whole-case analysis: stored versus computed results, modes, spectra."""
 
+import analysis_fixture as fixture
 import h5py
 import numpy as np
 import pytest
@@ -43,7 +44,7 @@ def test_stored_analysis_is_used(tmp_path):
     spec = np.zeros((5, len(KNOT_TYPES)))
     spec[:, 0] = 1 - kf
     spec[:, 1] = kf
-    io.write_knots(path, np.arange(5), np.arange(5.0), kf, spec, ["3_1"] * 3 + ["0_1"] * 2,
+    fixture.write_knots(path, np.arange(5), np.arange(5.0), kf, spec, ["3_1"] * 3 + ["0_1"] * 2,
                    1000, 3)
     ana = analyze_case(io.read_case(path))
     assert ana.kf_source == "stored" and np.array_equal(ana.kf, kf)
