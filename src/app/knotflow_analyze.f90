@@ -8,7 +8,7 @@
 program knotflow_analyze
   use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
   use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
-  use kf_kinds, only: wp, i4, i8
+  use kf_kinds, only: wp, i8
   use kf_exit, only: exit_program
   use kf_build_info, only: knotflow_version, knotflow_git_hash
   use kf_strings, only: to_str
@@ -23,11 +23,11 @@ program knotflow_analyze
     farm_share
   use kf_fs, only: lock_directory
   use kf_h5, only: h5_initialize, h5_finalize
-  use kf_analysis_store, only: analysis_store_t, knots_record_t, events_record_t, matrix_record_t, &
-    shape_record_t
+  use kf_analysis_store, only: analysis_store_t, knots_record_t, matrix_record_t
+  use kf_analysis_records, only: knots_record, events_record, shape_record
   use kf_knot_case, only: frame_knots_t, shape_analysis_t, select_frames, analyse_frame_knots, analyse_shapes, &
     stored_positions, merge_frame_knots
-  use kf_transitions, only: detect_transitions, default_low, default_high, event_names
+  use kf_transitions, only: detect_transitions, default_low, default_high
   implicit none
 
   integer, parameter :: max_files = 4096
@@ -438,9 +438,7 @@ contains
     integer(i8), allocatable :: todo(:), need(:), mframes(:), compute(:)
     integer, allocatable :: ev_kind(:), ev_pos(:), pos_of(:)
     type(frame_knots_t) :: fresh, all
-    type(knots_record_t) :: prev, knots
-    type(events_record_t) :: events
-    type(shape_record_t) :: shape_rec
+    type(knots_record_t) :: prev
     type(shape_analysis_t) :: shapes
     type(matrix_record_t), allocatable :: mats(:)
     logical :: found
@@ -498,46 +496,11 @@ contains
     call merge_frame_knots(todo, t, pos_of, prev%kf, prev%spectrum, fresh, all)
     call detect_transitions(all%kf, default_low, default_high, ev_kind, ev_pos)
     call analyse_shapes(r, t, shapes, error)
-    if (allocated(error)) return
-    call knots_of(all, opt, knots)
-    call events_of(all, ev_kind, ev_pos, events)
-    shape_rec = shape_record_t(mode=int(shapes%mode, i4), case_mode=shapes%case_mode, frequency=shapes%frequency, &
-                               power_rg=shapes%power_rg, power_phi=shapes%power_phi, &
-                               power_end_to_end=shapes%power_end_to_end, period_rg=shapes%period_rg, &
-                               period_phi=shapes%period_phi)
-    call store%write(knots, events, mats, shape_rec, error)
+    if (.not. allocated(error)) call store%write(knots_record(all, opt%closures, opt%seed), &
+                                                 events_record(all, ev_kind, ev_pos), mats, shape_record(shapes), error)
     if (.not. allocated(error)) write (output_unit, '(a,i0,a,i0,a,i0,a)') trim(path)//': ', size(todo), &
       ' frames (', size(need), ' new), ', size(ev_kind), ' events written to /analysis'
   end subroutine analyse_frames
-
-  !> The record of the frame knots `all` for /analysis/knots.
-  subroutine knots_of(all, opt, rec)
-    type(frame_knots_t), intent(in) :: all
-    type(options_t), intent(in) :: opt
-    type(knots_record_t), intent(out) :: rec
-    rec%closures = opt%closures
-    rec%seed = opt%seed
-    rec%frame_index = all%frame_index
-    rec%time = all%time
-    rec%kf = all%kf
-    rec%spectrum = all%spectrum
-    allocate (character(len=len(knot_type_names)) :: rec%type_names(n_knot_types), rec%dominant(size(all%dominant)))
-    rec%type_names = knot_type_names
-    rec%dominant = knot_type_names(all%dominant)
-  end subroutine knots_of
-
-  !> The record of the transitions (kinds ev_kind at positions ev_pos of `all`) for /analysis/events.
-  subroutine events_of(all, ev_kind, ev_pos, rec)
-    type(frame_knots_t), intent(in) :: all
-    integer, intent(in) :: ev_kind(:), ev_pos(:)
-    type(events_record_t), intent(out) :: rec
-    allocate (character(len=len(event_names)) :: rec%kind(size(ev_kind)))
-    rec%kind = event_names(ev_kind)
-    rec%frame_index = all%frame_index(ev_pos)
-    rec%time = all%time(ev_pos)
-    rec%low = default_low
-    rec%high = default_high
-  end subroutine events_of
 
   !> Merge the partial knot matrices of the ranks (NaN where a rank computed nothing).
   subroutine merge_matrix(farm, k)

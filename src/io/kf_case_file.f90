@@ -26,7 +26,7 @@
 !>   configuration); root attributes diagnostics.{strand_passages, first_passage_time,
 !>   overlap_episodes, overlap_mean_duration, overlap_max_duration, max_overlapping_pairs,
 !>   min_distance, max_bond_strain} (run totals, rewritten with every frame); and the monitor
-!>   state in the checkpoint (`restore_diagnostics`).
+!>   state in the checkpoint (`resumed_diagnostics`).
 !>   Files without /frames/diagnostics are valid: diagnostics are optional.
 !> - With the fibre's stresslet (a `stresslet_record_t` per frame; `enable_stresslet` after `create`):
 !>   /frames/stresslet/{hydrodynamic, elastic} (nframes, 3, 3) float64 (symmetric traceless,
