@@ -547,5 +547,4 @@ contains
     end do
   end subroutine matrix_frame_list
 
-
 end program knotflow_analyze
