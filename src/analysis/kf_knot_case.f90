@@ -31,7 +31,8 @@ module kf_knot_case
     real(wp) :: period_rg = 0.0_wp, period_phi = 0.0_wp
   end type shape_analysis_t
 
-  public :: select_frames, analyse_frame_knots, analyse_shapes, frame_stream
+  public :: select_frames, analyse_frame_knots, analyse_shapes, frame_stream, stored_positions, &
+    merge_frame_knots
 
 contains
 
@@ -109,7 +110,7 @@ contains
       e2e(:, k) = r(:, size(r, 2), k) - r(:, 1, k)
     end do
     res%mode = frame_mode(s)
-    res%case_mode = case_mode(res%mode)
+    res%case_mode = case_mode(res%mode, phi)
     if (nf < 4) then
       allocate (res%frequency(0), res%power_rg(0), res%power_phi(0), res%power_end_to_end(0))
       return
@@ -128,5 +129,47 @@ contains
     res%period_rg = dominant_period(res%frequency, res%power_rg)
     res%period_phi = dominant_period(res%frequency, res%power_phi)
   end subroutine analyse_shapes
+
+  !> pos_of(k): the position of frame todo(k) among the frames `stored` (0 when it is not there).
+  pure function stored_positions(todo, stored) result(pos_of)
+    integer(i8), intent(in) :: todo(:), stored(:)
+    integer :: pos_of(size(todo))
+    integer :: k, m
+    pos_of = 0
+    do k = 1, size(todo)
+      do m = 1, size(stored)
+        if (stored(m) == todo(k)) pos_of(k) = m
+      end do
+    end do
+  end function stored_positions
+
+  !> The knots of the frames `todo` (0-based) of a trajectory with frame times t: frame todo(k)
+  !> from the stored results (kf, spectrum(:, m) at m = pos_of(k) > 0) or, where pos_of(k) = 0,
+  !> from `fresh` (which holds exactly those frames, in the order of todo); the dominant type of
+  !> each frame from its spectrum (first in table order on a tie).
+  pure subroutine merge_frame_knots(todo, t, pos_of, stored_kf, stored_spectrum, fresh, merged)
+    integer(i8), intent(in) :: todo(:)
+    real(wp), intent(in) :: t(:)
+    integer, intent(in) :: pos_of(:)
+    real(wp), intent(in) :: stored_kf(:), stored_spectrum(:, :)
+    type(frame_knots_t), intent(in) :: fresh
+    type(frame_knots_t), intent(out) :: merged
+    integer :: k, m
+    allocate (merged%kf(size(todo)), merged%spectrum(n_knot_types, size(todo)), merged%dominant(size(todo)))
+    merged%frame_index = todo
+    merged%time = t(todo + 1)
+    m = 0
+    do k = 1, size(todo)
+      if (pos_of(k) > 0) then
+        merged%kf(k) = stored_kf(pos_of(k))
+        merged%spectrum(:, k) = stored_spectrum(:, pos_of(k))
+      else
+        m = m + 1
+        merged%kf(k) = fresh%kf(m)
+        merged%spectrum(:, k) = fresh%spectrum(:, m)
+      end if
+      merged%dominant(k) = maxloc(merged%spectrum(:, k), 1)
+    end do
+  end subroutine merge_frame_knots
 
 end module kf_knot_case

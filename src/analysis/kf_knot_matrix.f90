@@ -17,7 +17,10 @@ module kf_knot_matrix
   integer, parameter, public :: default_min_length = 10
   integer, parameter, public :: default_matrix_closures = 100
 
-  public :: knot_matrix, knot_core, is_slipknot, subchain_stream, n_subchains
+  public :: knot_matrix, knot_core, is_slipknot, subchain_stream, n_subchains, for_max_merge, after_max_merge
+
+  !> Stands for NaN (not computed here, or shorter than min_length) in a merge by maximum.
+  real(wp), parameter :: not_computed = -huge(1.0_wp)
 
 contains
 
@@ -107,5 +110,20 @@ contains
     call knot_core(kmat, core, found)
     is_slipknot = found .and. kf_whole < slipknot_whole_max
   end function is_slipknot
+
+  !> Partial knot matrices (each with NaN where its part did not compute) merge by an element-wise
+  !> maximum of their `for_max_merge` values (e.g. an MPI maximum over ranks) followed by
+  !> `after_max_merge`: NaN becomes -huge, below every k_f, and back.
+  elemental real(wp) function for_max_merge(k)
+    real(wp), intent(in) :: k
+    for_max_merge = merge(not_computed, k, ieee_is_nan(k))
+  end function for_max_merge
+
+  !> The inverse of `for_max_merge` after the maximum.
+  elemental real(wp) function after_max_merge(k)
+    real(wp), intent(in) :: k
+    after_max_merge = k
+    if (k == not_computed) after_max_merge = ieee_value(0.0_wp, ieee_quiet_nan)
+  end function after_max_merge
 
 end module kf_knot_matrix

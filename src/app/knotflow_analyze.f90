@@ -17,15 +17,16 @@ program knotflow_analyze
   use kf_knot_invariants, only: n_knot_types, knot_type_names
   use kf_knot_closure, only: knot_stats_t, analyse_closures, default_closures, default_knot_seed
   use kf_knot_matrix, only: knot_matrix, knot_core, is_slipknot, default_min_length, &
-    default_matrix_closures
+    default_matrix_closures, for_max_merge, after_max_merge
   use kf_text_coords, only: read_coordinates
   use kf_analysis_farm, only: analysis_farm_t, farm_start, farm_stop, farm_max, farm_sum, farm_any, &
     farm_share
   use kf_fs, only: lock_directory
   use kf_h5, only: h5_initialize, h5_finalize
-  use kf_case_file, only: read_frames
-  use kf_knot_case, only: frame_knots_t, shape_analysis_t, select_frames, analyse_frame_knots, analyse_shapes
-  use kf_knot_store, only: stored_matrix_t, read_previous_knots, read_previous_matrix, write_analysis
+  use kf_analysis_store, only: analysis_store_t, knots_record_t, matrix_record_t
+  use kf_analysis_records, only: knots_record, events_record, shape_record
+  use kf_knot_case, only: frame_knots_t, shape_analysis_t, select_frames, analyse_frame_knots, analyse_shapes, &
+    stored_positions, merge_frame_knots
   use kf_transitions, only: detect_transitions, default_low, default_high
   implicit none
 
@@ -229,7 +230,7 @@ contains
     type(options_t), intent(in) :: opt
     type(analysis_farm_t), intent(in) :: farm
     type(error_t), allocatable, intent(out) :: error
-    real(wp), allocatable :: r(:, :), pts(:, :), kmat(:, :), flat(:)
+    real(wp), allocatable :: r(:, :), pts(:, :), kmat(:, :)
     type(knot_stats_t) :: st
     integer :: core(2), n
     logical :: found, slip
@@ -251,11 +252,7 @@ contains
       call knot_matrix(r, opt%matrix_closures, opt%seed, opt%min_length, kmat, error, &
                        part=farm%rank, nparts=farm%size)
       if (failed(farm, error, trim(opt%files(1)))) return
-      flat = reshape(kmat, [n*n])
-      where (ieee_is_nan(flat)) flat = -huge(1.0_wp)
-      call farm_max(farm, flat)
-      kmat = reshape(flat, [n, n])
-      where (kmat < -1.0_wp) kmat = ieee_nan()
+      call merge_matrix(farm, kmat)
       call knot_core(kmat, core, found)
       slip = is_slipknot(kmat, st%kf)
     end if
@@ -411,24 +408,43 @@ contains
 
   !> Analyse one case file. Every rank reads the frames; rank 0 alone reads what a previous run
   !> stored and decides what is left to compute (shared with the others), and writes /analysis.
+  !> Rank 0 opens the file once to read and once to write; the others open it once to read.
   subroutine analyse_case(path, opt, farm, error)
     character(len=*), intent(in) :: path
     type(options_t), intent(in) :: opt
     type(analysis_farm_t), intent(in) :: farm
     type(error_t), allocatable, intent(out) :: error
-    real(wp), allocatable :: t(:), r(:, :, :), flat(:), ev_time(:)
-    integer(i8), allocatable :: todo(:), need(:), mframes(:), ev_frame(:), compute(:)
+    type(analysis_store_t) :: store
+    type(error_t), allocatable :: close_error
+    real(wp), allocatable :: t(:), r(:, :, :)
+    call store%open(path, error)
+    if (.not. allocated(error)) call store%read_frames(t, r, error)
+    if (farm%rank /= 0) call store%close()
+    if (.not. failed(farm, error, 'case file '//path)) call analyse_frames(path, t, r, store, opt, farm, error)
+    if (farm%rank /= 0) return
+    call store%close(close_error)
+    if (.not. allocated(error) .and. allocated(close_error)) call move_alloc(close_error, error)
+  end subroutine analyse_case
+
+  !> The analysis of the frames t, r of the case file `path` (`store`, open on rank 0).
+  subroutine analyse_frames(path, t, r, store, opt, farm, error)
+    character(len=*), intent(in) :: path
+    real(wp), intent(in) :: t(:), r(:, :, :)
+    type(analysis_store_t), intent(inout) :: store
+    type(options_t), intent(in) :: opt
+    type(analysis_farm_t), intent(in) :: farm
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: flat(:)
+    integer(i8), allocatable :: todo(:), need(:), mframes(:), compute(:)
     integer, allocatable :: ev_kind(:), ev_pos(:), pos_of(:)
-    type(frame_knots_t) :: prev, fresh, all
+    type(frame_knots_t) :: fresh, all
+    type(knots_record_t) :: prev
     type(shape_analysis_t) :: shapes
-    type(stored_matrix_t), allocatable :: mats(:)
+    type(matrix_record_t), allocatable :: mats(:)
     logical :: found
-    integer :: nframes, n, k, m
-    call read_frames(path, t, r, error)
-    if (.not. allocated(error)) then
-      nframes = size(t)
-      if (nframes < 1) call fatal_error(error, 'case file '//path//': /frames is empty (nothing to analyse)')
-    end if
+    integer :: nframes, n, k
+    nframes = size(t)
+    if (nframes < 1) call fatal_error(error, 'case file '//path//': /frames is empty (nothing to analyse)')
     if (.not. allocated(error)) call matrix_frame_list(opt%matrix_frames, nframes, path, mframes, error)
     if (failed(farm, error, 'case file '//path)) return
     n = size(r, 2)
@@ -439,22 +455,18 @@ contains
     compute = 1
     if (farm%rank == 0) then
       if (opt%force) then
-        allocate (prev%frame_index(0))
+        allocate (prev%frame_index(0), prev%kf(0), prev%spectrum(0, 0))
       else
-        call read_previous_knots(path, opt%closures, opt%seed, prev, error)
+        call store%read_knots(int(opt%closures, i8), opt%seed, prev, found, error)
       end if
       if (.not. allocated(error)) then
-        do k = 1, size(todo)
-          pos_of(k) = 0
-          do m = 1, size(prev%frame_index)
-            if (prev%frame_index(m) == todo(k)) pos_of(k) = m
-          end do
-        end do
+        pos_of = stored_positions(todo, prev%frame_index)
         need = pack(todo, pos_of == 0)
       end if
       do k = 1, size(mframes)
         if (opt%force .or. allocated(error)) exit
-        call read_previous_matrix(path, mframes(k), opt%matrix_closures, opt%min_length, mats(k), found, error)
+        call store%read_matrix(mframes(k), int(opt%matrix_closures, i8), int(opt%min_length, i8), mats(k), &
+                               found, error)
         if (.not. allocated(error) .and. found) compute(k) = 0
       end do
     end if
@@ -470,46 +482,35 @@ contains
     ! knot matrices not stored yet: computed by all ranks
     do k = 1, size(mframes)
       if (compute(k) == 0) cycle
-      mats(k)%frame = mframes(k)
-      mats(k)%time = t(mframes(k) + 1)
+      mats(k) = matrix_record_t(frame=mframes(k), closures=int(opt%matrix_closures, i8), &
+                                min_length=int(opt%min_length, i8), &
+                                time=t(mframes(k) + 1))
       allocate (mats(k)%k(n, n))
       call knot_matrix(r(:, :, mframes(k) + 1), opt%matrix_closures, opt%seed, opt%min_length, mats(k)%k, &
                        error, part=farm%rank, nparts=farm%size)
       if (failed(farm, error, 'case file '//path)) return
-      flat = reshape(mats(k)%k, [n*n])
-      where (ieee_is_nan(flat)) flat = -huge(1.0_wp)
-      call farm_max(farm, flat)
-      where (flat < -1.0_wp) flat = ieee_nan()
-      mats(k)%k = reshape(flat, [n, n])
+      call merge_matrix(farm, mats(k)%k)
     end do
     if (farm%rank /= 0) return
     ! rank 0: merge previous and fresh results in the order of todo, and write
-    allocate (all%frame_index(size(todo)), all%time(size(todo)), all%kf(size(todo)), &
-              all%spectrum(n_knot_types, size(todo)), all%dominant(size(todo)))
-    m = 0
-    do k = 1, size(todo)
-      all%frame_index(k) = todo(k)
-      all%time(k) = t(todo(k) + 1)
-      if (pos_of(k) > 0) then
-        all%kf(k) = prev%kf(pos_of(k))
-        all%spectrum(:, k) = prev%spectrum(:, pos_of(k))
-      else
-        m = m + 1
-        all%kf(k) = fresh%kf(m)
-        all%spectrum(:, k) = fresh%spectrum(:, m)
-      end if
-      all%dominant(k) = maxloc(all%spectrum(:, k), 1)
-    end do
+    call merge_frame_knots(todo, t, pos_of, prev%kf, prev%spectrum, fresh, all)
     call detect_transitions(all%kf, default_low, default_high, ev_kind, ev_pos)
-    ev_frame = all%frame_index(ev_pos)
-    ev_time = all%time(ev_pos)
     call analyse_shapes(r, t, shapes, error)
-    if (.not. allocated(error)) &
-      call write_analysis(path, all, opt%closures, opt%seed, ev_kind, ev_frame, ev_time, default_low, &
-                          default_high, mats, opt%matrix_closures, opt%min_length, shapes, error)
+    if (.not. allocated(error)) call store%write(knots_record(all, opt%closures, opt%seed), &
+                                                 events_record(all, ev_kind, ev_pos), mats, shape_record(shapes), error)
     if (.not. allocated(error)) write (output_unit, '(a,i0,a,i0,a,i0,a)') trim(path)//': ', size(todo), &
       ' frames (', size(need), ' new), ', size(ev_kind), ' events written to /analysis'
-  end subroutine analyse_case
+  end subroutine analyse_frames
+
+  !> Merge the partial knot matrices of the ranks (NaN where a rank computed nothing).
+  subroutine merge_matrix(farm, k)
+    type(analysis_farm_t), intent(in) :: farm
+    real(wp), intent(inout) :: k(:, :)
+    real(wp) :: flat(size(k))
+    flat = for_max_merge(reshape(k, [size(k)]))
+    call farm_max(farm, flat)
+    k = reshape(after_max_merge(flat), shape(k))
+  end subroutine merge_matrix
 
   !> The frames of --matrix-frames ('' none, 'last', or a comma-separated list), checked.
   subroutine matrix_frame_list(spec, nframes, path, frames, error)
@@ -545,10 +546,5 @@ contains
       i = k + 2
     end do
   end subroutine matrix_frame_list
-
-  real(wp) function ieee_nan()
-    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
-    ieee_nan = ieee_value(0.0_wp, ieee_quiet_nan)
-  end function ieee_nan
 
 end program knotflow_analyze

@@ -20,19 +20,22 @@
 !>   `nframes`. Files of schema 1 and 2 have one checkpoint with the same parts directly in
 !>   /checkpoint (without digest before it existed, without stepper state before that); they
 !>   still resume.
-!> - With run diagnostics (kf_run_diagnostics; `enable_diagnostics` after `create`):
+!> - With run diagnostics (a `diagnostics_record_t` per frame; `enable_diagnostics` after `create`):
 !>   /frames/diagnostics/{strand_passages, overlap_episodes} int64 (cumulative since t = 0),
 !>   overlapping_pairs int32, min_distance and max_bond_strain float64 (of the frame's
 !>   configuration); root attributes diagnostics.{strand_passages, first_passage_time,
 !>   overlap_episodes, overlap_mean_duration, overlap_max_duration, max_overlapping_pairs,
 !>   min_distance, max_bond_strain} (run totals, rewritten with every frame); and the monitor
-!>   state in the checkpoint (`restore_diagnostics`).
+!>   state in the checkpoint (`resumed_diagnostics`).
 !>   Files without /frames/diagnostics are valid: diagnostics are optional.
-!> - With the fibre's stresslet (kf_rheology; `enable_stresslet` after `create`):
+!> - With the fibre's stresslet (a `stresslet_record_t` per frame; `enable_stresslet` after `create`):
 !>   /frames/stresslet/{hydrodynamic, elastic} (nframes, 3, 3) float64 (symmetric traceless,
 !>   units pi eta d^3 gamma_dot, Batchelor's sign) and /frames/stresslet/{viscosity, psi1, psi2}
-!>   (nframes,) float64 (intrinsic-viscosity form, kf_rheology), one entry per frame, truncated
+!>   (nframes,) float64 (intrinsic-viscosity form), one entry per frame, truncated
 !>   with the frames on resume. Files without /frames/stresslet are valid: it is optional.
+!>
+!> The file takes plain records (observables, run diagnostics, stresslet of a frame) and writes
+!> them as given: it computes nothing (the run layer fills the records, kf_frame_records).
 !>
 !> Choices made here:
 !> - The file is created under its final name (no '<path>.tmp' and rename): the very first
@@ -63,9 +66,6 @@ module kf_case_file
   use kf_kinds, only: wp, i4, i8
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
-  use kf_shape, only: shape_t
-  use kf_rheology, only: fibre_stresslet_t
-  use kf_run_diagnostics, only: run_diagnostics_t, configuration_diagnostics
   use kf_build_info, only: knotflow_version, knotflow_git_hash, knotflow_compiler, knotflow_flags
   use kf_h5, only: h5_file_t, h5_create_file, h5_open_file, h5_close_file, h5_flush, &
     h5_create_group, h5_exists, h5_attr_exists, h5_write_attr, h5_read_attr, h5_write, h5_read, &
@@ -74,7 +74,7 @@ module kf_case_file
   implicit none
   private
 
-  public :: case_file_status, read_frames, verify_case_file, has_checkpoint
+  public :: case_file_status, read_frames, read_open_frames, verify_case_file, has_checkpoint
 
   !> Version of the case file layout written by `create`. 1: files without the attribute
   !> (before it existed); 2: the attribute itself; 3: two checkpoint slots written alternately
@@ -123,6 +123,32 @@ module kf_case_file
     procedure, private :: push
   end type attribute_list_t
 
+  !> The shape observables of one frame (/frames/observables).
+  type, public :: observables_record_t
+    real(wp) :: rg = 0.0_wp, a = 0.0_wp, b = 0.0_wp, c = 0.0_wp, theta = 0.0_wp, phi = 0.0_wp
+    integer :: close_pairs = 0
+  end type observables_record_t
+
+  !> The run diagnostics after a frame: its values (/frames/diagnostics), the run totals (root
+  !> attributes diagnostics.*) and the monitor's state (checkpoint).
+  type, public :: diagnostics_record_t
+    integer(i8) :: strand_passages = 0, overlap_episodes = 0   !< cumulative since t = 0
+    integer :: overlapping_pairs = 0                           !< of the frame's configuration
+    real(wp) :: min_distance = 0.0_wp, max_bond_strain = 0.0_wp !< of the frame's configuration
+    real(wp) :: first_passage_time = -1.0_wp                    !< run totals from here on
+    real(wp) :: overlap_mean_duration = 0.0_wp, overlap_max_duration = 0.0_wp
+    integer :: max_overlapping_pairs = 0
+    real(wp) :: run_min_distance = 0.0_wp, run_max_bond_strain = 0.0_wp
+    integer(i8), allocatable :: state_counters(:)               !< the monitor's state
+    real(wp), allocatable :: state_values(:), state_ongoing(:, :)
+  end type diagnostics_record_t
+
+  !> The fibre's stresslet at one frame (/frames/stresslet).
+  type, public :: stresslet_record_t
+    real(wp) :: hydrodynamic(3, 3) = 0.0_wp, elastic(3, 3) = 0.0_wp
+    real(wp) :: viscosity = 0.0_wp, psi1 = 0.0_wp, psi2 = 0.0_wp
+  end type stresslet_record_t
+
   !> The state of the time stepper in the checkpoint: the plain arrays of its `get_state` and
   !> the name of its method. Unallocated components: no stepper state.
   type, public :: stepper_checkpoint_t
@@ -169,7 +195,7 @@ module kf_case_file
     procedure :: checkpoint_time
     procedure :: enable_diagnostics
     procedure :: has_diagnostics
-    procedure :: restore_diagnostics
+    procedure :: resumed_diagnostics
     procedure :: enable_stresslet
     procedure :: has_stresslet
     procedure :: read_counter
@@ -437,23 +463,25 @@ contains
     has_diagnostics = this%diagnostics
   end function has_diagnostics
 
-  !> Restore the run diagnostics from the checkpoint (its `diagnostics` group) that
-  !> `open_resume` continued from (`diag` initialised for the file's number of beads).
-  subroutine restore_diagnostics(this, diag, error)
-    class(case_file_t), intent(inout) :: this
-    type(run_diagnostics_t), intent(inout) :: diag
+  !> The run diagnostics' state in the checkpoint (its `diagnostics` group) that `open_resume`
+  !> continued from, as the monitor's `get_state` gave it.
+  subroutine resumed_diagnostics(this, counters, values, ongoing, error)
+    class(case_file_t), intent(in) :: this
+    integer(i8), allocatable, intent(out) :: counters(:)
+    real(wp), allocatable, intent(out) :: values(:), ongoing(:, :)
     type(error_t), allocatable, intent(out) :: error
     if (.not. (this%diagnostics .and. allocated(this%resumed%diag_counters))) then
       call fatal_error(error, "case file '"//this%file%name()//"' has no diagnostics checkpoint")
       return
     end if
-    call diag%set_state(this%resumed%diag_counters, this%resumed%diag_values, this%resumed%diag_ongoing, error)
-    if (allocated(error)) error%message = "case file '"//this%file%name()//"': "//error%message
-  end subroutine restore_diagnostics
+    counters = this%resumed%diag_counters
+    values = this%resumed%diag_values
+    ongoing = this%resumed%diag_ongoing
+  end subroutine resumed_diagnostics
 
   !> Append frame (t, r(3, N)) with its shape observables and cumulative integrator counts,
   !> rewrite /checkpoint with this state and flush the file. A file with diagnostics
-  !> (`enable_diagnostics`) needs `diagnostics`, the run's monitor after the frame's last step:
+  !> (`enable_diagnostics`) needs `diagnostics`, the run diagnostics after the frame's last step:
   !> its per-frame values, run totals (root attributes) and state (checkpoint) are written too.
   !> `stepper`, the time stepper's state after the frame's last step, goes to the checkpoint's
   !> `stepper` group; `counters`, any run counters of the caller (e.g. the hydrodynamic model's
@@ -466,14 +494,14 @@ contains
     class(case_file_t), intent(inout) :: this
     real(wp), intent(in) :: t
     real(wp), intent(in) :: r(:, :)
-    type(shape_t), intent(in) :: shape
+    type(observables_record_t), intent(in) :: shape
     integer(i8), intent(in) :: steps, rejected
     real(wp), intent(in) :: dt
     type(error_t), allocatable, intent(out) :: error
-    type(run_diagnostics_t), intent(in), optional :: diagnostics
+    type(diagnostics_record_t), intent(in), optional :: diagnostics
     type(stepper_checkpoint_t), intent(in), optional :: stepper
     integer(i8), intent(in), optional :: counters(:)
-    type(fibre_stresslet_t), intent(in), optional :: stresslet
+    type(stresslet_record_t), intent(in), optional :: stresslet
     real(wp), allocatable :: rc(:, :)
     type(checkpoint_t) :: ck
     if (.not. this%file%is_open()) then
@@ -504,6 +532,14 @@ contains
       call fatal_error(error, "case file '"//this%file%name()//"': frame time does not increase")
       return
     end if
+    if (present(diagnostics)) then
+      if (.not. (allocated(diagnostics%state_counters) .and. allocated(diagnostics%state_values) .and. &
+                 allocated(diagnostics%state_ongoing))) then
+        call fatal_error(error, "case file '"//this%file%name()//"': append_frame got run diagnostics without "// &
+          'their state')
+        return
+      end if
+    end if
     if (present(stepper)) then
       if (.not. (allocated(stepper%name) .and. allocated(stepper%reals) .and. allocated(stepper%ints))) then
         call fatal_error(error, "case file '"//this%file%name()//"': append_frame got an incomplete stepper state")
@@ -526,7 +562,7 @@ contains
     if (.not. allocated(error)) call h5_append(this%file, '/frames/integrator/dt', dt, error)
     if (allocated(error)) return
     if (present(diagnostics)) then
-      call write_diagnostics_frame(this%file, r, diagnostics, error)
+      call write_diagnostics_frame(this%file, diagnostics, error)
       if (allocated(error)) return
     end if
     if (present(stresslet)) then
@@ -542,8 +578,9 @@ contains
     if (present(diagnostics)) then
       call write_diagnostics_totals(this%file, diagnostics, error)
       if (allocated(error)) return
-      allocate (ck%diag_counters(5), ck%diag_values(5))
-      call diagnostics%get_state(ck%diag_counters, ck%diag_values, ck%diag_ongoing)
+      ck%diag_counters = diagnostics%state_counters
+      ck%diag_values = diagnostics%state_values
+      ck%diag_ongoing = diagnostics%state_ongoing
       call pad_columns(ck%diag_ongoing)
     end if
     ck%nframes = this%nframes
@@ -564,25 +601,22 @@ contains
   end subroutine append_frame
 
   !> Per-frame values of the run diagnostics.
-  subroutine write_diagnostics_frame(file, r, diag, error)
+  subroutine write_diagnostics_frame(file, diag, error)
     type(h5_file_t), intent(in) :: file
-    real(wp), intent(in) :: r(:, :)
-    type(run_diagnostics_t), intent(in) :: diag
+    type(diagnostics_record_t), intent(in) :: diag
     type(error_t), allocatable, intent(out) :: error
-    integer :: pairs
-    real(wp) :: dmin, strain
-    call configuration_diagnostics(r, diag%bond_length, pairs, dmin, strain)
     call h5_append(file, '/frames/diagnostics/strand_passages', diag%strand_passages, error)
-    if (.not. allocated(error)) call h5_append(file, '/frames/diagnostics/overlapping_pairs', int(pairs, i4), error)
+    if (.not. allocated(error)) call h5_append(file, '/frames/diagnostics/overlapping_pairs', &
+      int(diag%overlapping_pairs, i4), error)
     if (.not. allocated(error)) call h5_append(file, '/frames/diagnostics/overlap_episodes', diag%overlap_episodes, error)
-    if (.not. allocated(error)) call h5_append(file, '/frames/diagnostics/min_distance', dmin, error)
-    if (.not. allocated(error)) call h5_append(file, '/frames/diagnostics/max_bond_strain', strain, error)
+    if (.not. allocated(error)) call h5_append(file, '/frames/diagnostics/min_distance', diag%min_distance, error)
+    if (.not. allocated(error)) call h5_append(file, '/frames/diagnostics/max_bond_strain', diag%max_bond_strain, error)
   end subroutine write_diagnostics_frame
 
   !> Per-frame values of the fibre's stresslet.
   subroutine write_stresslet_frame(file, st, error)
     type(h5_file_t), intent(in) :: file
-    type(fibre_stresslet_t), intent(in) :: st
+    type(stresslet_record_t), intent(in) :: st
     type(error_t), allocatable, intent(out) :: error
     real(wp) :: a(3, 3)
     a = st%hydrodynamic
@@ -597,7 +631,7 @@ contains
   !> Run totals of the run diagnostics (root attributes).
   subroutine write_diagnostics_totals(file, diag, error)
     type(h5_file_t), intent(in) :: file
-    type(run_diagnostics_t), intent(in) :: diag
+    type(diagnostics_record_t), intent(in) :: diag
     type(error_t), allocatable, intent(out) :: error
     call h5_write_attr(file, '/', 'diagnostics.strand_passages', diag%strand_passages, error)
     if (.not. allocated(error)) &
@@ -605,15 +639,15 @@ contains
     if (.not. allocated(error)) &
       call h5_write_attr(file, '/', 'diagnostics.overlap_episodes', diag%overlap_episodes, error)
     if (.not. allocated(error)) &
-      call h5_write_attr(file, '/', 'diagnostics.overlap_mean_duration', diag%mean_duration(), error)
+      call h5_write_attr(file, '/', 'diagnostics.overlap_mean_duration', diag%overlap_mean_duration, error)
     if (.not. allocated(error)) &
-      call h5_write_attr(file, '/', 'diagnostics.overlap_max_duration', diag%duration_max, error)
+      call h5_write_attr(file, '/', 'diagnostics.overlap_max_duration', diag%overlap_max_duration, error)
     if (.not. allocated(error)) &
       call h5_write_attr(file, '/', 'diagnostics.max_overlapping_pairs', int(diag%max_overlapping_pairs, i4), error)
     if (.not. allocated(error)) &
-      call h5_write_attr(file, '/', 'diagnostics.min_distance', diag%min_distance(), error)
+      call h5_write_attr(file, '/', 'diagnostics.min_distance', diag%run_min_distance, error)
     if (.not. allocated(error)) &
-      call h5_write_attr(file, '/', 'diagnostics.max_bond_strain', diag%max_bond_strain, error)
+      call h5_write_attr(file, '/', 'diagnostics.max_bond_strain', diag%run_max_bond_strain, error)
   end subroutine write_diagnostics_totals
 
   !> Pad the columns of `a` with zero columns to the next power of two (at least 1), so that
@@ -1305,10 +1339,22 @@ contains
     real(wp), allocatable, intent(out) :: r(:, :, :)
     type(error_t), allocatable, intent(out) :: error
     type(h5_file_t) :: file
-    integer(i8) :: counted
-    integer :: n, k
     call h5_open_file(file, path, .false., error)
     if (allocated(error)) return
+    call read_open_frames(file, t, r, error)
+    call h5_close_file(file)
+  end subroutine read_frames
+
+  !> `read_frames` of a case file that is already open.
+  subroutine read_open_frames(file, t, r, error)
+    type(h5_file_t), intent(in) :: file
+    real(wp), allocatable, intent(out) :: t(:)
+    real(wp), allocatable, intent(out) :: r(:, :, :)
+    type(error_t), allocatable, intent(out) :: error
+    character(len=:), allocatable :: path
+    integer(i8) :: counted
+    integer :: n, k
+    path = file%name()
     if (.not. h5_exists(file, '/frames')) then
       call fatal_error(error, "case file '"//path//"': no /frames group (not a knotflow case file)")
     else
@@ -1316,7 +1362,6 @@ contains
       if (.not. allocated(error)) call h5_read(file, '/frames/positions', r, error)
       if (.not. allocated(error)) call checkpoint_frames(file, counted, error)
     end if
-    call h5_close_file(file)
     if (allocated(error)) return
     if (size(r, 1) /= 3) then
       call fatal_error(error, "case file '"//path//"': /frames/positions has shape ("//to_str(size(r, 3))//', '// &
@@ -1352,7 +1397,7 @@ contains
         return
       end if
     end do
-  end subroutine read_frames
+  end subroutine read_open_frames
 
   !> Does the case file `path` hold a checkpoint (of at least one frame)? A file killed while it
   !> was created has none (and may lack its scene attributes): nothing in it can be reused.

@@ -15,7 +15,9 @@ module kf_case_runner
   use kf_stepper, only: stepper_t
   use kf_stepper_factory, only: make_stepper
   use kf_shape, only: shape_t, compute_shape
-  use kf_case_file, only: case_file_t, case_file_status, stepper_checkpoint_t, verify_case_file
+  use kf_case_file, only: case_file_t, case_file_status, stepper_checkpoint_t, verify_case_file, &
+    diagnostics_record_t, stresslet_record_t
+  use kf_frame_records, only: observables_record, diagnostics_record, stresslet_record
   use kf_run_diagnostics, only: run_diagnostics_t, diag_pair_cutoff
   use kf_rheology, only: fibre_stresslet_t
   use kf_fs, only: remove_file, move_aside
@@ -74,6 +76,8 @@ contains
     type(shape_t) :: obs
     type(run_diagnostics_t), allocatable :: diag   !< allocated only with diagnostics: else absent
     type(fibre_stresslet_t), allocatable :: st     !< allocated only with the stresslet: else absent
+    type(diagnostics_record_t), allocatable :: diag_rec   !< the frame's records (allocated: as above)
+    type(stresslet_record_t), allocatable :: st_rec
     real(wp), allocatable :: r(:, :)
     real(wp) :: rotation(3, 3), t, t_next, dt
     integer(i8) :: steps, rejected, nframes
@@ -201,7 +205,7 @@ contains
     end if
     if (with_stresslet) allocate (st)
     if (resumed) then
-      if (with_diag) call file%restore_diagnostics(diag, error)
+      if (with_diag) call restore_diagnostics(error)
       if (.not. allocated(error)) call read_hydro_counters(error)
       if (allocated(error)) then
         call file%close()
@@ -234,7 +238,9 @@ contains
       if (.not. allocated(error)) then
         if (with_diag) call diag%start(t, r)
         call integ%get_state(saved%reals, saved%ints)
-        call file%append_frame(t, r, obs, 0_i8, 0_i8, integ%dt(), error, diag, saved, hydro_counts(), st)
+        call frame_records()
+        call file%append_frame(t, r, observables_record(obs), 0_i8, 0_i8, integ%dt(), error, diag_rec, saved, &
+                               hydro_counts(), st_rec)
         if (allocated(error)) then
           call write_failed(error%message)
           return
@@ -265,8 +271,9 @@ contains
         return
       end if
       call integ%get_state(saved%reals, saved%ints)
-      call file%append_frame(t, r, obs, integ%steps(), integ%rejected(), integ%dt(), error, diag, saved, &
-                             hydro_counts(), st)
+      call frame_records()
+      call file%append_frame(t, r, observables_record(obs), integ%steps(), integ%rejected(), integ%dt(), error, &
+                             diag_rec, saved, hydro_counts(), st_rec)
       if (.not. allocated(error)) call write_hydro_counters(error)
       if (allocated(error)) then
         call write_failed(error%message)
@@ -343,6 +350,24 @@ contains
         if (allocated(err)) return
       end do
     end subroutine read_hydro_counters
+
+    !> The run diagnostics' state from the checkpoint the file resumed from.
+    subroutine restore_diagnostics(err)
+      type(error_t), allocatable, intent(out) :: err
+      integer(i8), allocatable :: counters(:)
+      real(wp), allocatable :: values(:), ongoing(:, :)
+      call file%resumed_diagnostics(counters, values, ongoing, err)
+      if (allocated(err)) return
+      call diag%set_state(counters, values, ongoing, err)
+      if (allocated(err)) err%message = "case file '"//path//"': "//err%message
+    end subroutine restore_diagnostics
+
+    !> The case file's records of the frame just computed that are not built in place: run
+    !> diagnostics and stresslet (each left unallocated, so absent, when the run has none).
+    subroutine frame_records()
+      if (allocated(diag)) diag_rec = diagnostics_record(diag, r)
+      if (allocated(st)) st_rec = stresslet_record(st)
+    end subroutine frame_records
 
     !> The stepper's state from the checkpoint: the whole state when the file has it, else
     !> (files written before) the step size and step counts.

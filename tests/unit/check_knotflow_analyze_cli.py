@@ -102,10 +102,57 @@ def check_case_file(exe, work):
     assert p.returncode != 0 and '--matrix-frames' in p.stderr and len(p.stderr.strip().splitlines()) == 1
     with h5py.File(path) as f:
         assert 'analysis/knots/kf' in f and 'analysis/knot_matrix/frame_5' in f
+    check_python_reads(path)
+    check_mode_two(exe, work)
     check_bad_frames(exe, work, pos)
     for opt in ('--help', '--version'):
         p = run(exe, opt)
         assert p.returncode == 0 and 'knotflow-analyze' in p.stdout and 'Backtrace' not in p.stderr, (opt, p)
+
+
+def check_python_reads(path):
+    """The Python tools read /analysis as knotflow-analyze wrote it (and write nothing)."""
+    import h5py
+    import numpy as np
+    from knotflow_tools import analysis, io
+    with open(path, 'rb') as fh:
+        before = fh.read()
+    case = io.read_case(path)
+    ana = analysis.analyze_case(case)
+    with h5py.File(path, 'r') as f:
+        g = f['analysis']
+        assert ana.kf_source == 'stored'
+        assert np.array_equal(ana.kf, g['knots/kf'][:]) and np.array_equal(ana.frame_index, g['knots/frame_index'][:])
+        assert ana.dominant == [x.decode() for x in g['knots/dominant'][:]]
+        assert [(e.kind, e.index, e.time) for e in ana.events] == \
+            [(k.decode(), int(i), float(t)) for k, i, t in zip(g['events/kind'][:], g['events/frame_index'][:],
+                                                            g['events/time'][:])]
+        assert np.array_equal(ana.modes, g['shape/mode'][:]) and ana.case_mode == g['shape'].attrs['case_mode']
+        assert np.array_equal(ana.knot_matrices[5], g['knot_matrix/frame_5'][:], equal_nan=True)
+    with open(path, 'rb') as fh:
+        assert fh.read() == before, 'the Python tools changed the case file'
+
+
+def check_mode_two(exe, work):
+    """A flat arc 40 long along the flow x and 2 high along the gradient z (beads about 1.03
+    apart), drifting in z: mode II in every frame and as a case, as knotflow-analyze writes it
+    and the Python tools read it."""
+    import h5py
+    import numpy as np
+    from knotflow_tools import analysis, io
+    path = os.path.join(work, 'arc.h5')
+    x = np.linspace(-20.0, 20.0, 40)
+    pos = np.array([np.stack([x, 0 * x, 2 * (1 - (x / 20) ** 2) + 0.1 * k], axis=1) for k in range(8)])
+    with h5py.File(path, 'w') as f:
+        f.attrs['status'] = 'finished'
+        f.create_dataset('frames/time', data=np.arange(8.0))
+        f.create_dataset('frames/positions', data=pos)
+    p = run(exe, path, '--closures', '20')
+    assert p.returncode == 0, p.stderr
+    with h5py.File(path, 'r') as f:
+        assert list(f['analysis/shape/mode'][:]) == [2] * 8 and f['analysis/shape'].attrs['case_mode'] == 2
+    ana = analysis.analyze_case(io.read_case(path))
+    assert list(ana.modes) == [2] * 8 and ana.case_mode == 2
 
 
 def check_bad_frames(exe, work, pos):

@@ -1,5 +1,6 @@
 """Reading synthetic case files and text coordinate files; writing /analysis."""
 
+import analysis_fixture as fixture
 import h5py
 import numpy as np
 import pytest
@@ -57,11 +58,11 @@ def test_write_and_read_analysis(tmp_path):
     spec = np.zeros((3, len(KNOT_TYPES)))
     spec[:, 1] = [1.0, 0.5, 0.0]
     spec[:, 0] = 1 - spec[:, 1]
-    io.write_knots(path, [0, 1, 2], [0.0, 1.0, 2.0], spec[:, 1], spec, ["3_1", "0_1", "0_1"],
+    fixture.write_knots(path, [0, 1, 2], [0.0, 1.0, 2.0], spec[:, 1], spec, ["3_1", "0_1", "0_1"],
                    100, 7)
-    io.write_events(path, [Event("unknot", 2, 2.0)], 0.1, 0.9)
-    io.write_knot_matrix(path, 2, np.full((99, 99), np.nan), 20, 10, 2.0)
-    io.write_modes(path, [0, 1, 1], 1)
+    fixture.write_events(path, [Event("unknot", 2, 2.0)], 0.1, 0.9)
+    fixture.write_knot_matrix(path, 2, np.full((99, 99), np.nan), 20, 10, 2.0)
+    fixture.write_modes(path, [0, 1, 1], 1)
     case = io.read_case(path)
     assert list(case.knots["kf"]) == [1.0, 0.5, 0.0]
     assert case.knots["dominant"] == ["3_1", "0_1", "0_1"]

@@ -6,6 +6,7 @@ import os
 import shutil
 import subprocess
 
+import analysis_fixture as fixture
 import numpy as np
 import pytest
 
@@ -73,7 +74,7 @@ def test_gif_when_ffmpeg_is_missing(tmp_path, monkeypatch):
 
 def test_movie_command(tmp_path, capsys):
     path = write_case(tmp_path / "c.h5", unknotting_trefoil_frames(8))
-    io.write_knots(path, [0, 7], [0.0, 7.0], [0.9, 0.0], np.zeros((2, 10)), ["3_1", "0_1"],
+    fixture.write_knots(path, [0, 7], [0.0, 7.0], [0.9, 0.0], np.zeros((2, 10)), ["3_1", "0_1"],
                    10, 1)
     args = [str(path), "--first", "1", "--last", "5", "--stride", "2", "--fps", "3",
             "--width", "240", "--height", "160", "--elev", "30", "--azim", "10"]
@@ -98,7 +99,7 @@ def test_knot_core_highlight(tmp_path):
     mat[0, n - 1] = 1.0
     mat[5, 40] = 0.9                              # the shortest knotted subchain
     mat[6, 20] = 0.2
-    io.write_knot_matrix(path, 2, mat, 10, 10, 2.0)
+    fixture.write_knot_matrix(path, 2, mat, 10, 10, 2.0)
     case = io.read_case(path)
     assert movie.knot_cores(case) == {2: (5, 40)}
     mf = movie.MovieFigure(case, range(6), cores=movie.knot_cores(case), width=320, height=200)

@@ -4,11 +4,12 @@ sign-flip test, on small synthetic case files whose answers are known exactly.""
 import json
 import math
 
+import analysis_fixture as fixture
 import h5py
 import numpy as np
 import pytest
 
-from knotflow_tools import io, rheology
+from knotflow_tools import rheology
 from knotflow_tools.rheology import KNOTTED, MODE_I, MODE_II, UNKNOTTED
 
 from conftest import unknotting_trefoil_frames, write_case
@@ -74,9 +75,9 @@ def make_case(path, a, kf, modes, shift):
         g["viscosity"] = 2.0 + shift * knotted
         g["psi1"] = -np.arange(n, dtype=float)
         g["psi2"] = np.ones(n)
-    io.write_knots(path, np.arange(n), np.arange(n, dtype=float), kf, np.zeros((n, 10)),
+    fixture.write_knots(path, np.arange(n), np.arange(n, dtype=float), kf, np.zeros((n, 10)),
                    ["0_1"] * n, closures=10, seed=1)
-    io.write_modes(path, modes, case_mode=0)
+    fixture.write_modes(path, modes, case_mode=0)
     return path
 
 

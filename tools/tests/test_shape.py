@@ -57,20 +57,6 @@ def test_gyration_tensor_is_pair_formula():
     assert np.allclose(S.gyration_tensor(r), t, atol=1e-14)
 
 
-def test_mode_classification():
-    assert S.classify_frame(10, 1.0, 0.8, 0.1, 0.3, 6) == 1
-    assert S.classify_frame(10, 2.0, 0.5, np.pi / 2, np.pi / 2, 0) == 2
-    assert S.classify_frame(10, 2.0, 0.5, np.pi / 2, -np.pi / 2, 1) == 2
-    assert S.classify_frame(2, 1.0, 0.5, np.pi / 2, np.pi / 2, 0) == 0      # not elongated
-    assert S.classify_frame(10, 2.0, 0.5, np.pi / 2, 0.0, 0) == 0           # phi along z
-    modes = np.array([0, 0, 2, 2, 2, 2, 2, 0])
-    assert S.case_mode(modes) == 2
-    assert S.case_mode(np.zeros(8, dtype=int)) == 0
-    phi_up = np.linspace(0, 8 * np.pi, 40)     # rolling: phi increases (wrapped to (-pi, pi])
-    assert S.case_mode(np.ones(40, dtype=int), phi=np.angle(np.exp(1j * phi_up))) == 1
-    assert S.case_mode(np.ones(40, dtype=int), phi=np.angle(np.exp(-1j * phi_up))) == 0
-
-
 def test_dominant_period_of_sines():
     t = np.linspace(0.0, 200.0, 2001)
     f, p, per = S.dominant_period(t, 3 + np.sin(2 * np.pi * t / 25.0))

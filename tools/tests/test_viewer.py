@@ -3,6 +3,7 @@
 import os
 import re
 
+import analysis_fixture as fixture
 import numpy as np
 import pytest
 
@@ -18,7 +19,7 @@ def _case(tmp_path, nframes=6, analysed=True):
     path = write_case(tmp_path / "v_A1_b.h5", unknotting_trefoil_frames(nframes),
                       time=np.linspace(0.0, 10.0, nframes))
     if analysed:
-        io.write_knots(path, [0, nframes - 1], [0.0, 10.0], [0.9, 0.05],
+        fixture.write_knots(path, [0, nframes - 1], [0.0, 10.0], [0.9, 0.05],
                        np.zeros((2, 10)), ["3_1", "0_1"], 10, 1)
     return path
 

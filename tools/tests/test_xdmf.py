@@ -3,11 +3,12 @@
 import os
 import xml.etree.ElementTree as ET
 
+import analysis_fixture as fixture
 import h5py
 import numpy as np
 import pytest
 
-from knotflow_tools import io, xdmf
+from knotflow_tools import xdmf
 
 from conftest import unknotting_trefoil_frames, write_case
 
@@ -39,7 +40,7 @@ def _resolve(item, root, base):
 def test_xdmf_points_into_the_case_file(tmp_path):
     frames = unknotting_trefoil_frames(5)
     path = write_case(tmp_path / "c1.h5", frames, time=np.linspace(0, 8, 5))
-    io.write_knots(path, [0, 2, 4], [0.0, 4.0, 8.0], [0.9, 0.5, 0.0],
+    fixture.write_knots(path, [0, 2, 4], [0.0, 4.0, 8.0], [0.9, 0.5, 0.0],
                    np.zeros((3, 10)), ["3_1", "3_1", "0_1"], 10, 1)
     out = xdmf.write_xdmf(path)
     assert out == str(tmp_path / "c1.xdmf2")
@@ -102,7 +103,7 @@ def test_xdmf_read_by_vtk(tmp_path):
     frames = unknotting_trefoil_frames(6)
     times = np.linspace(0.0, 5.0, 6)
     path = write_case(tmp_path / "v.h5", frames, time=times)
-    io.write_knots(path, [0, 5], [0.0, 5.0], [0.8, 0.1], np.zeros((2, 10)), ["3_1", "0_1"],
+    fixture.write_knots(path, [0, 5], [0.0, 5.0], [0.8, 0.1], np.zeros((2, 10)), ["3_1", "0_1"],
                    10, 1)
     reader = vtk_xdmf.vtkXdmfReader()
     reader.SetFileName(xdmf.write_xdmf(path))
@@ -166,7 +167,7 @@ def test_xdmf_opened_by_paraview(tmp_path):
                     "XDMF not opened by ParaView")
     frames = unknotting_trefoil_frames(3)
     path = write_case(tmp_path / "p.h5", frames, time=[0.0, 0.5, 1.0])
-    io.write_knots(path, [0, 2], [0.0, 1.0], [0.75, 0.25], np.zeros((2, 10)), ["3_1", "0_1"],
+    fixture.write_knots(path, [0, 2], [0.0, 1.0], [0.75, 0.25], np.zeros((2, 10)), ["3_1", "0_1"],
                    10, 1)
     script = tmp_path / "pv.py"
     script.write_text(_PARAVIEW_SCRIPT)

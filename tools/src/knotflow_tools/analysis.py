@@ -1,4 +1,8 @@
-"""Whole-case analysis: k_f(t), events, shape observables, modes and spectra."""
+"""Whole-case analysis: k_f(t), events, shape observables, modes and spectra.
+
+The modes are those knotflow-analyze stored in /analysis/shape (the one mode rule, kf_modes,
+docs/analysis.md); without them a case has no modes here.
+"""
 
 from __future__ import annotations
 
@@ -24,8 +28,8 @@ class CaseAnalysis:
     low: float
     high: float
     observables: dict
-    modes: np.ndarray
-    case_mode: int
+    modes: np.ndarray            #: per frame (empty without /analysis/shape)
+    case_mode: int | None        #: None without /analysis/shape
     spectra: dict
     knot_matrices: dict = field(default_factory=dict)
     kf_source: str = "computed"
@@ -65,7 +69,10 @@ def observables_of(case: Case) -> dict:
 def analyze_case(case: Case, closures: int = 200, stride: int = 0, seed: int = 1,
                  matrix_frames=(), matrix_closures: int = 50, matrix_stride: int = 4,
                  min_length: int = 10, use_stored: bool = True) -> CaseAnalysis:
-    """Analyse a case; stored /analysis results are used when present (unless use_stored)."""
+    """Analyse a case; stored /analysis results are used when present (unless use_stored).
+
+    The modes always come from /analysis/shape (knotflow-analyze), also without use_stored.
+    """
     low, high = transitions.LOW, transitions.HIGH
     if use_stored and case.knots is not None:
         frames = case.knots["frame_index"]
@@ -95,13 +102,10 @@ def analyze_case(case: Case, closures: int = 200, stride: int = 0, seed: int = 1
         # index into the frame list -> frame index
         events = [transitions.Event(e.kind, int(frames[e.index]), e.time) for e in events]
     obs = observables_of(case)
-    if use_stored and case.modes is not None and len(case.modes) == case.nframes:
-        modes = case.modes
-        cmode = case.case_mode if case.case_mode is not None else shape.case_mode(modes,
-                                                                                  obs["phi"])
+    if case.modes is not None and len(case.modes) == case.nframes:
+        modes, cmode = np.asarray(case.modes), case.case_mode
     else:
-        modes = shape.classify_modes(obs)
-        cmode = shape.case_mode(modes, obs["phi"])
+        modes, cmode = np.zeros(0, dtype=np.int32), None
     spec = shape.spectra(case.time, case.positions, obs)
     mats = dict(case.knot_matrices) if use_stored else {}
     for fi in matrix_frames:
@@ -112,5 +116,5 @@ def analyze_case(case: Case, closures: int = 200, stride: int = 0, seed: int = 1
                                          stride=matrix_stride)
     return CaseAnalysis(frame_index=np.asarray(frames), time=np.asarray(tk), kf=np.asarray(kf),
                         dominant=list(dom), events=events, low=low, high=high,
-                        observables=obs, modes=modes, case_mode=int(cmode), spectra=spec,
+                        observables=obs, modes=modes, case_mode=cmode, spectra=spec,
                         knot_matrices=mats, kf_source=source)

@@ -114,9 +114,9 @@ def main_plot(argv=None) -> int:
     p.add_argument("--matrix-closures", type=int, default=50)
     p.add_argument("--matrix-stride", type=int, default=4)
     p.add_argument("--min-length", type=int, default=10)
-    p.add_argument("--recompute", action="store_true", help="ignore stored /analysis")
-    p.add_argument("--save-analysis", action="store_true",
-                   help="write the computed k_f, events, modes and spectra into /analysis")
+    p.add_argument("--recompute", action="store_true",
+                   help="ignore the stored k_f, events and knot matrices (modes always come "
+                        "from /analysis)")
     p.add_argument("--movie", action="store_true", help="also write an animation")
     p.add_argument("--movie-stride", type=int, default=1)
     args = p.parse_args(argv)
@@ -137,28 +137,9 @@ def main_plot(argv=None) -> int:
                        use_stored=not args.recompute)
     out = args.out or (args.case.rsplit(".", 1)[0] + "_plots")
     files = plot_case(case, ana, out, movie=args.movie, movie_stride=args.movie_stride)
-    if args.save_analysis:
-        _save_analysis(args, case, ana)
     for f in files:
         print(f)
     return 0
-
-
-def _save_analysis(args, case, ana):
-    from . import io
-    if ana.kf_source == "computed":
-        kf, spec, dom = [], [], []
-        from .analysis import knot_series
-        kf, spec, dom = knot_series(case.positions, ana.frame_index, args.closures, args.seed)
-        io.write_knots(case.path, ana.frame_index, ana.time, kf, spec, dom, args.closures,
-                       args.seed)
-        io.write_events(case.path, ana.events, ana.low, ana.high)
-    io.write_modes(case.path, ana.modes, ana.case_mode)
-    io.write_spectra(case.path, ana.spectra)
-    for fi, mat in ana.knot_matrices.items():
-        if fi not in case.knot_matrices:
-            io.write_knot_matrix(case.path, fi, mat, args.matrix_closures, args.min_length,
-                                 case.time[fi])
 
 
 def main_report(argv=None) -> int:

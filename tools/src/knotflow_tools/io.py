@@ -1,4 +1,7 @@
-"""Reading knotflow case files (HDF5) and text coordinate files; writing /analysis groups."""
+"""Reading knotflow case files (HDF5) and text coordinate files.
+
+/analysis is read here and written only by the Fortran tool knotflow-analyze (docs/analysis.md).
+"""
 
 from __future__ import annotations
 
@@ -282,65 +285,3 @@ def write_xyz(path, r, comment: str | None = None) -> None:
                 fh.write(f"# {line}\n")
         for p in np.asarray(r, dtype=float):
             fh.write(f"{p[0]:.17g} {p[1]:.17g} {p[2]:.17g}\n")
-
-
-def _replace(group, name, data, **kw):
-    if name in group:
-        del group[name]
-    return group.create_dataset(name, data=data, **kw)
-
-
-def write_knots(path, frame_index, time, kf, spectrum, dominant, closures, seed,
-                tool="knotflow_tools (python)") -> None:
-    """Write /analysis/knots (replacing an existing one)."""
-    with h5py.File(path, "a") as f:
-        g = f.require_group("analysis").require_group("knots")
-        _replace(g, "frame_index", np.asarray(frame_index, dtype=np.int64))
-        _replace(g, "time", np.asarray(time, dtype=float))
-        _replace(g, "kf", np.asarray(kf, dtype=float))
-        ds = _replace(g, "spectrum", np.asarray(spectrum, dtype=float).reshape(len(kf), -1))
-        ds.attrs["types"] = np.array(KNOT_TYPES, dtype=h5py.string_dtype())
-        _replace(g, "dominant", np.array(dominant, dtype=h5py.string_dtype()))
-        g.attrs["closures"] = int(closures)
-        g.attrs["seed"] = int(seed)
-        g.attrs["tool"] = tool
-
-
-def write_events(path, events, low, high) -> None:
-    """Write /analysis/events from a list of transitions.Event."""
-    with h5py.File(path, "a") as f:
-        g = f.require_group("analysis").require_group("events")
-        _replace(g, "kind", np.array([e.kind for e in events], dtype=h5py.string_dtype()))
-        _replace(g, "time", np.array([e.time for e in events], dtype=float))
-        _replace(g, "frame_index", np.array([e.index for e in events], dtype=np.int64))
-        g.attrs["low"] = float(low)
-        g.attrs["high"] = float(high)
-
-
-def write_knot_matrix(path, frame, mat, closures, min_length, time) -> None:
-    """Write /analysis/knot_matrix/frame_<frame>."""
-    with h5py.File(path, "a") as f:
-        g = f.require_group("analysis").require_group("knot_matrix")
-        ds = _replace(g, f"frame_{int(frame)}", np.asarray(mat, dtype=float))
-        ds.attrs["closures"] = int(closures)
-        ds.attrs["min_length"] = int(min_length)
-        ds.attrs["time"] = float(time)
-
-
-def write_modes(path, modes, case_mode) -> None:
-    """Write /analysis/shape/mode and its case_mode attribute."""
-    with h5py.File(path, "a") as f:
-        g = f.require_group("analysis").require_group("shape")
-        ds = _replace(g, "mode", np.asarray(modes, dtype=np.int32))
-        ds.attrs["case_mode"] = int(case_mode)
-        g.attrs["case_mode"] = int(case_mode)
-
-
-def write_spectra(path, spec: dict) -> None:
-    """Write /analysis/spectra."""
-    with h5py.File(path, "a") as f:
-        g = f.require_group("analysis").require_group("spectra")
-        for k in ("frequency", "power_rg", "power_phi", "power_end_to_end"):
-            _replace(g, k, np.asarray(spec[k], dtype=float))
-        g.attrs["dominant_period_rg"] = float(spec["dominant_period_rg"])
-        g.attrs["dominant_period_phi"] = float(spec["dominant_period_phi"])

@@ -17,6 +17,11 @@ from .io import Case  # noqa: E402
 from .rheology import running_mean  # noqa: E402
 
 MODE_NAMES = {0: "-", 1: "I", 2: "II"}
+
+
+def mode_name(mode: int | None) -> str:
+    """'I', 'II', '-' (neither) or '?' (no /analysis/shape: knotflow-analyze not run)."""
+    return "?" if mode is None else MODE_NAMES.get(mode, "?")
 _COL_FIRST = "tab:blue"
 _COL_SECOND = "tab:orange"
 
@@ -81,7 +86,7 @@ def plot_shape(case: Case, ana: CaseAnalysis, path) -> str:
     for ev in ana.events:
         for ax in axes:
             ax.axvline(ev.time, color="0.6", ls=":", lw=1)
-    axes[0].set_title(f"{_title(case)}   case mode: {MODE_NAMES.get(ana.case_mode, '?')}",
+    axes[0].set_title(f"{_title(case)}   case mode: {mode_name(ana.case_mode)}",
                       fontsize=10)
     fig.savefig(path, dpi=110)
     plt.close(fig)

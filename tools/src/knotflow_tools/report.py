@@ -11,7 +11,7 @@ import sys
 
 from .analysis import analyze_case
 from .io import read_case
-from .plot import MODE_NAMES, plot_case
+from .plot import mode_name, plot_case
 from .rheology import rheology_summary
 from .xdmf import write_xdmf, xdmf_path
 
@@ -86,7 +86,7 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
             "final_state": _state_name(ana.final_state) if ana else "-",
             "transitions": ("yes" if ana.has_transitions else "no") if ana else "-",
             "events": len(ana.events) if ana else 0, "unknot_then_knot": utk,
-            "mode": MODE_NAMES.get(ana.case_mode, "?") if ana else "-",
+            "mode": mode_name(ana.case_mode) if ana else "-",
             "strand_passages": _total(case, "strand_passages"),
             "overlap_episodes": _total(case, "overlap_episodes"),
             "figures": [os.path.relpath(f, outdir) for f in figs],

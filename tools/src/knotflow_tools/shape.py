@@ -1,16 +1,7 @@
-"""Shape observables, mode classification and spectra (PHYSICS.md section 6).
+"""Shape observables and spectra (PHYSICS.md section 6).
 
-Mode thresholds (documented choices, see README):
-- elongated: a / b >= ``ELONGATION`` (3.0);
-- mode I (rolling about vorticity): elongated, |cos theta| >= ``COS_THETA_ALIGNED`` (0.7, i.e.
-  theta within about 45 degrees of 0 or pi), and close_pairs >= ``MANY_CLOSE_PAIRS`` (3);
-- mode II (tumbling in the shear plane): elongated, b / c >= ``FLATNESS`` (2.0),
-  |cos theta| <= ``COS_THETA_PLANAR`` (0.5, theta within 30 degrees of pi/2),
-  |sin phi| >= 0.7 (phi within 45 degrees of +-pi/2, the flow direction), and
-  close_pairs < ``MANY_CLOSE_PAIRS``;
-- otherwise 0 (unclassified).  The case mode is the majority of the classified frames of the
-  second half of the run (a class must cover at least half of them), else 0.  In addition a
-  case is mode I only if phi, unwrapped, increases over the second half (rolling).
+The modes I and II are classified by the Fortran tool only (kf_modes, the rule in
+docs/analysis.md) and read from /analysis/shape; this module computes no mode.
 """
 
 from __future__ import annotations
@@ -20,12 +11,6 @@ from dataclasses import dataclass
 import numpy as np
 
 CLOSE_PAIR_DISTANCE = 1.05
-ELONGATION = 3.0
-FLATNESS = 2.0
-COS_THETA_ALIGNED = 0.7
-COS_THETA_PLANAR = 0.5
-SIN_PHI_FLOW = 0.7
-MANY_CLOSE_PAIRS = 3
 
 
 @dataclass
@@ -84,45 +69,6 @@ def shape_series(positions: np.ndarray) -> dict:
            ("rg", "a", "b", "c", "theta", "phi")}
     out["close_pairs"] = np.array([s.close_pairs for s in shapes], dtype=np.int32)
     return out
-
-
-def classify_frame(a, b, c, theta, phi, close_pairs) -> int:
-    """1 = mode I, 2 = mode II, 0 = unclassified (thresholds in the module docstring)."""
-    if a <= 0.0 or a < ELONGATION * b:
-        return 0
-    ct = abs(np.cos(theta))
-    if ct >= COS_THETA_ALIGNED and close_pairs >= MANY_CLOSE_PAIRS:
-        return 1
-    flat = b >= FLATNESS * c
-    if (flat and ct <= COS_THETA_PLANAR and abs(np.sin(phi)) >= SIN_PHI_FLOW
-            and close_pairs < MANY_CLOSE_PAIRS):
-        return 2
-    return 0
-
-
-def classify_modes(obs: dict) -> np.ndarray:
-    """Per-frame modes (int32) from an observables dict (rg, a, b, c, theta, phi, close_pairs)."""
-    return np.array([classify_frame(obs["a"][k], obs["b"][k], obs["c"][k], obs["theta"][k],
-                                    obs["phi"][k], obs["close_pairs"][k])
-                     for k in range(len(obs["a"]))], dtype=np.int32)
-
-
-def case_mode(modes: np.ndarray, phi: np.ndarray | None = None) -> int:
-    """Mode of a whole case: majority over the classified frames of the second half."""
-    modes = np.asarray(modes)
-    half = modes[len(modes) // 2:]
-    classified = half[half > 0]
-    if len(half) == 0 or len(classified) < max(1, len(half) // 2):
-        return 0
-    counts = np.bincount(classified, minlength=3)
-    mode = int(np.argmax(counts))
-    if counts[mode] * 2 < len(classified):
-        return 0
-    if mode == 1 and phi is not None and len(phi) >= 4:
-        ph = np.unwrap(np.asarray(phi)[len(phi) // 2:])
-        if ph[-1] <= ph[0]:
-            return 0
-    return mode
 
 
 def dominant_period(time: np.ndarray, signal: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:

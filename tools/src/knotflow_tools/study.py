@@ -23,7 +23,7 @@ import numpy as np  # noqa: E402
 from . import add_version_option, run_reporting_errors  # noqa: E402
 from .analysis import analyze_case  # noqa: E402
 from .io import read_case, write_xyz  # noqa: E402
-from .plot import MODE_NAMES, _draw_chain  # noqa: E402
+from .plot import _draw_chain, mode_name  # noqa: E402
 from .report import find_case_files  # noqa: E402
 from .transitions import states  # noqa: E402
 
@@ -98,7 +98,7 @@ def trefoil_rows(files, closures=200):
             "final_state": ana.final_state or "undecided",
             "events": [[k, t] for k, t in events],
             "unknot_then_knot": utk, "t_unknot": t_unknot, "t_reknot": t_reknot,
-            "study_transition": _in_study(a, o), "mode": MODE_NAMES.get(ana.case_mode, "?"),
+            "study_transition": _in_study(a, o), "mode": mode_name(ana.case_mode),
             "time": ana.time.tolist(), "kf": ana.kf.tolist(), "kf_source": ana.kf_source,
         })
     rows.sort(key=lambda r: (r["A"], r["orientation"]))
@@ -182,7 +182,7 @@ def candycane_rows(files, closures=200, confirm_dir=None):
             "abs_cos_theta_late": float(np.mean(np.abs(np.cos(o["theta"][late])))),
             "mode_I_late": float(np.mean(modes[late] == 1)) if len(modes) == len(t) else None,
             "mode_II_late": float(np.mean(modes[late] == 2)) if len(modes) == len(t) else None,
-            "case_mode": MODE_NAMES.get(ana.case_mode, "?"),
+            "case_mode": mode_name(ana.case_mode),
             "max_kf": float(np.max(ana.kf)), "mean_kf": float(np.mean(ana.kf)),
             "matrices": slipknot_scan(case, ana.time, ana.kf, confirm_dir),
             "_case": case, "_ana": ana,

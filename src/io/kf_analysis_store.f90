@@ -1,0 +1,255 @@
+!> The analysis store of one case file: the file opened once for all of a case's analysis reads
+!> (the frames, what a previous run left in /analysis for resuming) and reopened once for
+!> writing the new /analysis group (the schema of docs/analysis.md) after them. It takes and
+!> returns plain records and computes nothing; /frames, /checkpoint and the root attributes are
+!> read-only here.
+module kf_analysis_store
+  use kf_kinds, only: wp, i4, i8
+  use kf_strings, only: to_str
+  use kf_error, only: error_t, fatal_error
+  use kf_h5, only: h5_file_t, h5_open_file, h5_close_file, h5_flush, h5_create_group, h5_exists, &
+    h5_attr_exists, h5_write_attr, h5_read_attr, h5_write, h5_read, h5_delete
+  use kf_case_file, only: read_open_frames
+  implicit none
+  private
+
+  !> Value of the `tool` attribute of /analysis/knots: the one writer of /analysis.
+  character(len=*), parameter, public :: analysis_tool = 'knotflow-analyze'
+
+  !> k_f and knot spectrum of the analysed frames (/analysis/knots).
+  type, public :: knots_record_t
+    integer(i8) :: closures = 0, seed = 0
+    integer(i8), allocatable :: frame_index(:)      !< 0-based frames
+    real(wp), allocatable :: time(:), kf(:)
+    real(wp), allocatable :: spectrum(:, :)          !< (size(type_names), frames)
+    character(len=:), allocatable :: type_names(:)  !< names of the rows of `spectrum`
+    character(len=:), allocatable :: dominant(:)    !< type name of each frame
+  end type knots_record_t
+
+  !> Knot transitions (/analysis/events).
+  type, public :: events_record_t
+    character(len=:), allocatable :: kind(:)
+    integer(i8), allocatable :: frame_index(:)
+    real(wp), allocatable :: time(:)
+    real(wp) :: low = 0.0_wp, high = 0.0_wp          !< hysteresis thresholds
+  end type events_record_t
+
+  !> One knot matrix (/analysis/knot_matrix/frame_<frame>).
+  type, public :: matrix_record_t
+    integer(i8) :: frame = 0, closures = 0, min_length = 0
+    real(wp) :: time = 0.0_wp
+    real(wp), allocatable :: k(:, :)                 !< K(i+1, j+1) for the 0-based subchain i..j
+  end type matrix_record_t
+
+  !> Modes and spectra of the shape series (/analysis/shape, /analysis/spectra).
+  type, public :: shape_record_t
+    integer(i4), allocatable :: mode(:)              !< per frame
+    integer :: case_mode = 0
+    real(wp), allocatable :: frequency(:), power_rg(:), power_phi(:), power_end_to_end(:)
+    real(wp) :: period_rg = 0.0_wp, period_phi = 0.0_wp
+  end type shape_record_t
+
+  !> One case file, open for its analysis.
+  type, public :: analysis_store_t
+    private
+    type(h5_file_t) :: file
+    logical :: writable = .false.
+  contains
+    procedure :: open => store_open
+    procedure :: close => store_close
+    procedure :: read_frames => store_read_frames
+    procedure :: read_knots
+    procedure :: read_matrix
+    procedure :: write => store_write
+  end type analysis_store_t
+
+contains
+
+  !> Open the case file `path` for the reads (read-only: a file that turns out not to be a case
+  !> file is left exactly as it was; HDF5 would write a superblock into an empty file opened for
+  !> writing). `write` reopens it for writing, once, after every read.
+  subroutine store_open(this, path, error)
+    class(analysis_store_t), intent(inout) :: this
+    character(len=*), intent(in) :: path
+    type(error_t), allocatable, intent(out) :: error
+    call h5_open_file(this%file, path, .false., error)
+    this%writable = .false.
+  end subroutine store_open
+
+  !> Close the file (a store that is not open is left alone).
+  subroutine store_close(this, error)
+    class(analysis_store_t), intent(inout) :: this
+    type(error_t), allocatable, intent(out), optional :: error
+    call h5_close_file(this%file, error)
+  end subroutine store_close
+
+  !> The complete frames: times t(nframes) and positions r(3, N, nframes).
+  subroutine store_read_frames(this, t, r, error)
+    class(analysis_store_t), intent(in) :: this
+    real(wp), allocatable, intent(out) :: t(:), r(:, :, :)
+    type(error_t), allocatable, intent(out) :: error
+    call read_open_frames(this%file, t, r, error)
+  end subroutine store_read_frames
+
+  !> The stored frame knots if they were computed with the same closures and seed (`found`);
+  !> otherwise `rec` holds no frame.
+  subroutine read_knots(this, closures, seed, rec, found, error)
+    class(analysis_store_t), intent(in) :: this
+    integer(i8), intent(in) :: closures, seed
+    type(knots_record_t), intent(out) :: rec
+    logical, intent(out) :: found
+    type(error_t), allocatable, intent(out) :: error
+    character(len=*), parameter :: group = '/analysis/knots'
+    allocate (rec%frame_index(0), rec%time(0), rec%kf(0), rec%spectrum(0, 0))
+    rec%closures = closures
+    rec%seed = seed
+    ! one query after the other (in one expression, the compiler may skip evaluating one)
+    found = h5_exists(this%file, group//'/kf')
+    if (found) found = h5_attr_exists(this%file, group, 'closures')
+    if (found) found = h5_attr_exists(this%file, group, 'seed')
+    if (found) call h5_read_attr(this%file, group, 'closures', rec%closures, error)
+    if (found .and. .not. allocated(error)) call h5_read_attr(this%file, group, 'seed', rec%seed, error)
+    if (allocated(error)) found = .false.
+    if (found) found = rec%closures == closures .and. rec%seed == seed
+    if (.not. found) return
+    call h5_read(this%file, group//'/frame_index', rec%frame_index, error)
+    if (.not. allocated(error)) call h5_read(this%file, group//'/time', rec%time, error)
+    if (.not. allocated(error)) call h5_read(this%file, group//'/kf', rec%kf, error)
+    if (.not. allocated(error)) call h5_read(this%file, group//'/spectrum', rec%spectrum, error)
+    if (allocated(error)) found = .false.
+  end subroutine read_knots
+
+  !> The stored knot matrix of `frame` if it was computed with the same closures and min_length.
+  subroutine read_matrix(this, frame, closures, min_length, rec, found, error)
+    class(analysis_store_t), intent(in) :: this
+    integer(i8), intent(in) :: frame, closures, min_length
+    type(matrix_record_t), intent(out) :: rec
+    logical, intent(out) :: found
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: kt(:, :)
+    character(len=:), allocatable :: name
+    name = matrix_name(frame)
+    rec%frame = frame
+    found = h5_exists(this%file, name)
+    if (.not. found) return
+    call h5_read_attr(this%file, name, 'closures', rec%closures, error)
+    if (.not. allocated(error)) call h5_read_attr(this%file, name, 'min_length', rec%min_length, error)
+    found = .not. allocated(error)
+    if (found) found = rec%closures == closures .and. rec%min_length == min_length
+    if (.not. found) return
+    call h5_read(this%file, name, kt, error)
+    if (.not. allocated(error)) call h5_read_attr(this%file, name, 'time', rec%time, error)
+    found = .not. allocated(error)
+    if (found) rec%k = transpose(kt)
+  end subroutine read_matrix
+
+  pure function matrix_name(frame) result(name)
+    integer(i8), intent(in) :: frame
+    character(len=:), allocatable :: name
+    name = '/analysis/knot_matrix/frame_'//to_str(frame)
+  end function matrix_name
+
+  !> Replace /analysis by the given results and flush. On failure /analysis is removed again,
+  !> so that no partial group is left behind.
+  subroutine store_write(this, knots, events, mats, shapes, error)
+    class(analysis_store_t), intent(inout) :: this
+    type(knots_record_t), intent(in) :: knots
+    type(events_record_t), intent(in) :: events
+    type(matrix_record_t), intent(in) :: mats(:)
+    type(shape_record_t), intent(in) :: shapes
+    type(error_t), allocatable, intent(out) :: error
+    type(error_t), allocatable :: cleanup
+    character(len=:), allocatable :: path
+    if (.not. this%writable) then
+      path = this%file%name()
+      call h5_close_file(this%file)
+      call h5_open_file(this%file, path, .true., error)
+      if (allocated(error)) then
+        error%message = "case file '"//path//"': cannot open for writing: "//error%message
+        return
+      end if
+      this%writable = .true.
+    end if
+    call h5_delete(this%file, '/analysis', error)
+    if (allocated(error)) then
+      error%message = "case file '"//this%file%name()//"': cannot remove /analysis: "//error%message
+      return
+    end if
+    call write_knots(this%file, knots, error)
+    if (.not. allocated(error)) call write_events(this%file, events, error)
+    if (.not. allocated(error)) call write_matrices(this%file, mats, error)
+    if (.not. allocated(error)) call write_shapes(this%file, shapes, error)
+    if (.not. allocated(error)) call h5_flush(this%file, error)
+    if (allocated(error)) then
+      call h5_delete(this%file, '/analysis', cleanup)
+      if (.not. allocated(cleanup)) call h5_flush(this%file, cleanup)
+    end if
+  end subroutine store_write
+
+  subroutine write_knots(file, rec, error)
+    type(h5_file_t), intent(in) :: file
+    type(knots_record_t), intent(in) :: rec
+    type(error_t), allocatable, intent(out) :: error
+    character(len=*), parameter :: group = '/analysis/knots'
+    call h5_create_group(file, group, error)
+    if (.not. allocated(error)) call h5_write_attr(file, group, 'closures', rec%closures, error)
+    if (.not. allocated(error)) call h5_write_attr(file, group, 'seed', rec%seed, error)
+    if (.not. allocated(error)) call h5_write_attr(file, group, 'tool', analysis_tool, error)
+    if (.not. allocated(error)) call h5_write(file, group//'/frame_index', rec%frame_index, error)
+    if (.not. allocated(error)) call h5_write(file, group//'/time', rec%time, error)
+    if (.not. allocated(error)) call h5_write(file, group//'/kf', rec%kf, error)
+    if (.not. allocated(error)) call h5_write(file, group//'/spectrum', rec%spectrum, error)
+    if (.not. allocated(error)) call h5_write_attr(file, group//'/spectrum', 'types', rec%type_names, error)
+    if (.not. allocated(error)) call h5_write(file, group//'/dominant', rec%dominant, error)
+  end subroutine write_knots
+
+  subroutine write_events(file, rec, error)
+    type(h5_file_t), intent(in) :: file
+    type(events_record_t), intent(in) :: rec
+    type(error_t), allocatable, intent(out) :: error
+    character(len=*), parameter :: group = '/analysis/events'
+    call h5_create_group(file, group, error)
+    if (.not. allocated(error)) call h5_write_attr(file, group, 'low', rec%low, error)
+    if (.not. allocated(error)) call h5_write_attr(file, group, 'high', rec%high, error)
+    if (.not. allocated(error)) call h5_write(file, group//'/kind', rec%kind, error)
+    if (.not. allocated(error)) call h5_write(file, group//'/time', rec%time, error)
+    if (.not. allocated(error)) call h5_write(file, group//'/frame_index', rec%frame_index, error)
+  end subroutine write_events
+
+  !> Knot matrices, transposed so that h5py sees K[i, j].
+  subroutine write_matrices(file, mats, error)
+    type(h5_file_t), intent(in) :: file
+    type(matrix_record_t), intent(in) :: mats(:)
+    type(error_t), allocatable, intent(out) :: error
+    character(len=:), allocatable :: name
+    integer :: k
+    if (size(mats) > 0) call h5_create_group(file, '/analysis/knot_matrix', error)
+    do k = 1, size(mats)
+      if (allocated(error)) return
+      name = matrix_name(mats(k)%frame)
+      call h5_write(file, name, transpose(mats(k)%k), error)
+      if (.not. allocated(error)) call h5_write_attr(file, name, 'closures', mats(k)%closures, error)
+      if (.not. allocated(error)) call h5_write_attr(file, name, 'min_length', mats(k)%min_length, error)
+      if (.not. allocated(error)) call h5_write_attr(file, name, 'time', mats(k)%time, error)
+    end do
+  end subroutine write_matrices
+
+  subroutine write_shapes(file, rec, error)
+    type(h5_file_t), intent(in) :: file
+    type(shape_record_t), intent(in) :: rec
+    type(error_t), allocatable, intent(out) :: error
+    call h5_create_group(file, '/analysis/shape', error)
+    if (.not. allocated(error)) call h5_write(file, '/analysis/shape/mode', rec%mode, error)
+    if (.not. allocated(error)) call h5_write_attr(file, '/analysis/shape', 'case_mode', int(rec%case_mode, i8), error)
+    if (.not. allocated(error)) call h5_create_group(file, '/analysis/spectra', error)
+    if (.not. allocated(error)) call h5_write(file, '/analysis/spectra/frequency', rec%frequency, error)
+    if (.not. allocated(error)) call h5_write(file, '/analysis/spectra/power_rg', rec%power_rg, error)
+    if (.not. allocated(error)) call h5_write(file, '/analysis/spectra/power_phi', rec%power_phi, error)
+    if (.not. allocated(error)) call h5_write(file, '/analysis/spectra/power_end_to_end', rec%power_end_to_end, error)
+    if (.not. allocated(error)) &
+      call h5_write_attr(file, '/analysis/spectra', 'dominant_period_rg', rec%period_rg, error)
+    if (.not. allocated(error)) &
+      call h5_write_attr(file, '/analysis/spectra', 'dominant_period_phi', rec%period_phi, error)
+  end subroutine write_shapes
+
+end module kf_analysis_store
