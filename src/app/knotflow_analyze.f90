@@ -1,4 +1,4 @@
-!> knotflow-analyze: knot analysis of a coordinate file (text + --json), or of HDF5 case files
+!> Program knotflow-analyze: knot analysis of a coordinate file (text + --json), or of HDF5 case files
 !> (the /analysis group). A thin program: parse and validate options, run the library, report.
 !> Errors become one line on stderr and a non-zero exit: 2 for a usage error or a refused directory
 !> (nothing written), 1 for a failure while analysing.
