@@ -30,5 +30,5 @@ kf_log "load after the run: $(cat /proc/loadavg 2>/dev/null || echo unknown)"
 readme_args=(--readme "$KF_ROOT/README.md")
 [ "${KNOTFLOW_ACCURACY_README:-1}" = 0 ] && readme_args=()
 kf_log "knotflow-accuracy-report $out"
-"$KF_PY" -m knotflow_tools.accuracy "$out" --markdown "$KF_ROOT/docs/accuracy.md" \
+knotflow-accuracy-report "$out" --markdown "$KF_ROOT/docs/accuracy.md" \
   --figures "$KF_ROOT/docs/figures" "${readme_args[@]}"

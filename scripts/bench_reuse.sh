@@ -77,4 +77,4 @@ NML
 done
 
 kf_log "knotflow-accuracy-report --reuse $out --markdown docs/accuracy.md"
-"$KF_PY" -m knotflow_tools.accuracy --reuse "$out" --markdown "$KF_ROOT/docs/accuracy.md"
+knotflow-accuracy-report --reuse "$out" --markdown "$KF_ROOT/docs/accuracy.md"

@@ -95,7 +95,8 @@ kf_ensure_system_packages() {
   kf_ensure_optional_packages
 }
 
-# Python: the tools package (tools/pyproject.toml, editable, with its [test] extra) or, before
+# Python: the tools package (tools/pyproject.toml, editable, with its [test] extra and its
+# [fortran] extra: fypp, which the build needs, findent and FORD) or, before
 # it exists, numpy h5py matplotlib pytest.  Installs go into a virtual environment of this
 # checkout, build/venv, created with --system-site-packages so that packages the base Python
 # already has are reused: nothing is installed into the base Python (which may be shared with
@@ -145,10 +146,10 @@ kf_ensure_python() {
       kf_log "python: $name already installed (editable) from tools/, constraints up to date"
     else
       [ "${KNOTFLOW_NO_INSTALL:-0}" = 1 ] && kf_die "python package in tools/ not installed (or outdated)"
-      kf_log "python: pip install ${constraints[*]} -e tools[test]"
+      kf_log "python: pip install ${constraints[*]} -e tools[test,fortran]"
       "$KF_PY" -m pip install -q --disable-pip-version-check "${constraints[@]}" \
-               -e "$KF_ROOT/tools[test]" </dev/null \
-        || kf_die "pip install -e tools[test] failed"
+               -e "$KF_ROOT/tools[test,fortran]" </dev/null \
+        || kf_die "pip install -e tools[test,fortran] failed"
       printf '%s pyproject.toml+constraints.txt\n' "$digest" >"$stamp" \
         || kf_log "WARNING: cannot write $stamp"
     fi

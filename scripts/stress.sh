@@ -54,8 +54,8 @@ kf_ensure_python
 kf_build "$KF_ROOT/build" Release knotflow
 exe="$KF_ROOT/build/bin/knotflow"
 [ -x "$exe" ] || kf_die "the knotflow executable was not built"
-"$KF_PY" -c "import knotflow_tools.stress" 2>/dev/null \
-  || kf_die "the tools package (knotflow_tools.stress) is not importable: pip install -e tools"
+command -v knotflow-stress-summary >/dev/null 2>&1 \
+  || kf_die "knotflow-stress-summary not found (the tools package: pip install -e tools)"
 
 mkdir -p "$outdir/scenes"
 wall_file="$outdir/wall_times.txt"
@@ -107,6 +107,6 @@ EOF
 done
 
 title="knotflow stress runs (scale $scale of t_end; $(date -u '+%Y-%m-%d %H:%M UTC'))"
-"$KF_PY" -m knotflow_tools.stress "$outdir" --wall-times "$wall_file" --output "$outdir/summary.md" --title "$title"
+knotflow-stress-summary "$outdir" --wall-times "$wall_file" --output "$outdir/summary.md" --title "$title"
 kf_log "summary: $outdir/summary.md"
 [ "$failed_runs" -eq 0 ] || kf_die "$failed_runs stress case(s) ended with an unexpected exit status"

@@ -1,4 +1,4 @@
-!> knotflow: run a scene or a sweep of scenes over MPI ranks.
+!> Program knotflow: run a scene or a sweep of scenes over MPI ranks.
 !>   mpirun -n P knotflow SCENE.nml [--dry-run]
 !> Every rank computes; cases are handed out dynamically. Finished cases are skipped and
 !> interrupted ones resume from their checkpoint when the same command is run again.

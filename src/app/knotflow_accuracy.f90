@@ -1,4 +1,4 @@
-!> knotflow-accuracy: accuracy versus cost of the hydrodynamic models, measured by the code
+!> Program knotflow-accuracy: accuracy versus cost of the hydrodynamic models, measured by the code
 !> itself (docs/accuracy.md). Parts, selected by flags (default: all):
 !>   --models     velocity error and time per evaluation of none, rpy, multipole L = 1..Lref-1
 !>                without and with lubrication, against multipole L = Lref with lubrication,

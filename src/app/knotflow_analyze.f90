@@ -1,4 +1,4 @@
-!> knotflow-analyze: knot analysis of a coordinate file (text + --json), or of HDF5 case files
+!> Program knotflow-analyze: knot analysis of a coordinate file (text + --json), or of HDF5 case files
 !> (the /analysis group). A thin program: parse and validate options, run the library, report.
 !> Errors become one line on stderr and a non-zero exit: 2 for a usage error or a refused directory
 !> (nothing written), 1 for a failure while analysing.
@@ -270,30 +270,30 @@ contains
     integer, intent(in) :: n, core(2)
     type(knot_stats_t), intent(in) :: st
     logical, intent(in) :: found, slip
-      integer :: k, i
-      write (output_unit, '(a,a)') 'file:      ', trim(opt%files(1))
-      write (output_unit, '(a,i0)') 'beads:     ', n
-      write (output_unit, '(a,i0,a,i0)') 'closures:  ', st%closures, '   seed: ', st%seed
-      write (output_unit, '(a,f8.4)') 'k_f:       ', st%kf
-      write (output_unit, '(a)') 'spectrum:'
-      do k = 1, n_knot_types
-        if (st%spectrum(k) > 0.0_wp) write (output_unit, '(4x,a6,f8.4)') knot_type_names(k), st%spectrum(k)
-      end do
-      write (output_unit, '(a,a)') 'dominant:  ', trim(knot_type_names(st%dominant))
-      if (opt%per_closure) then
-        write (output_unit, '(a)') 'per closure:'
-        write (output_unit, '(10(1x,a5))') (knot_type_names(st%per_closure(i)), i=1, st%closures)
-      end if
-      if (opt%matrix) then
-        write (output_unit, '(a,i0,a,i0)') 'knot matrix: closures per subchain ', opt%matrix_closures, &
+    integer :: k, i
+    write (output_unit, '(a,a)') 'file:      ', trim(opt%files(1))
+    write (output_unit, '(a,i0)') 'beads:     ', n
+    write (output_unit, '(a,i0,a,i0)') 'closures:  ', st%closures, '   seed: ', st%seed
+    write (output_unit, '(a,f8.4)') 'k_f:       ', st%kf
+    write (output_unit, '(a)') 'spectrum:'
+    do k = 1, n_knot_types
+      if (st%spectrum(k) > 0.0_wp) write (output_unit, '(4x,a6,f8.4)') knot_type_names(k), st%spectrum(k)
+    end do
+    write (output_unit, '(a,a)') 'dominant:  ', trim(knot_type_names(st%dominant))
+    if (opt%per_closure) then
+      write (output_unit, '(a)') 'per closure:'
+      write (output_unit, '(10(1x,a5))') (knot_type_names(st%per_closure(i)), i=1, st%closures)
+    end if
+    if (opt%matrix) then
+      write (output_unit, '(a,i0,a,i0)') 'knot matrix: closures per subchain ', opt%matrix_closures, &
           ', min length ', opt%min_length
-        if (found) then
-          write (output_unit, '(a,i0,a,i0,a)') 'knot core: beads ', core(1), '..', core(2), ' (0-based)'
-        else
-          write (output_unit, '(a)') 'knot core: none'
-        end if
-        write (output_unit, '(a,l1)') 'slipknot:  ', slip
+      if (found) then
+        write (output_unit, '(a,i0,a,i0,a)') 'knot core: beads ', core(1), '..', core(2), ' (0-based)'
+      else
+        write (output_unit, '(a)') 'knot core: none'
       end if
+      write (output_unit, '(a,l1)') 'slipknot:  ', slip
+    end if
   end subroutine print_text
 
   !> The JSON object of one chain (the convention shared with knotflow-kf).
@@ -303,48 +303,48 @@ contains
     type(knot_stats_t), intent(in) :: st
     real(wp), allocatable, intent(in) :: kmat(:, :)
     logical, intent(in) :: found, slip
-      character(len=:), allocatable :: s
-      integer :: k, i, j
-      s = '{"n_beads": '//to_str(int(n, i8))//', "closures": '//to_str(int(st%closures, i8))// &
+    character(len=:), allocatable :: s
+    integer :: k, i, j
+    s = '{"n_beads": '//to_str(int(n, i8))//', "closures": '//to_str(int(st%closures, i8))// &
         ', "seed": '//to_str(st%seed)//', "kf": '//to_str(st%kf, '(es23.16e2)')//', "spectrum": {'
-      do k = 1, n_knot_types
-        s = s//'"'//trim(knot_type_names(k))//'": '//to_str(st%spectrum(k), '(es23.16e2)')
-        if (k < n_knot_types) s = s//', '
+    do k = 1, n_knot_types
+      s = s//'"'//trim(knot_type_names(k))//'": '//to_str(st%spectrum(k), '(es23.16e2)')
+      if (k < n_knot_types) s = s//', '
+    end do
+    s = s//'}, "dominant": "'//trim(knot_type_names(st%dominant))//'"'
+    if (opt%per_closure) then
+      s = s//', "per_closure": ['
+      do k = 1, st%closures
+        s = s//'"'//trim(knot_type_names(st%per_closure(k)))//'"'
+        if (k < st%closures) s = s//', '
       end do
-      s = s//'}, "dominant": "'//trim(knot_type_names(st%dominant))//'"'
-      if (opt%per_closure) then
-        s = s//', "per_closure": ['
-        do k = 1, st%closures
-          s = s//'"'//trim(knot_type_names(st%per_closure(k)))//'"'
-          if (k < st%closures) s = s//', '
+      s = s//']'
+    end if
+    if (opt%matrix) then
+      s = s//', "matrix": ['
+      do i = 1, n
+        s = s//'['
+        do j = 1, n
+          if (ieee_is_nan(kmat(i, j))) then
+            s = s//'null'
+          else
+            s = s//to_str(kmat(i, j), '(es23.16e2)')
+          end if
+          if (j < n) s = s//', '
         end do
         s = s//']'
-      end if
-      if (opt%matrix) then
-        s = s//', "matrix": ['
-        do i = 1, n
-          s = s//'['
-          do j = 1, n
-            if (ieee_is_nan(kmat(i, j))) then
-              s = s//'null'
-            else
-              s = s//to_str(kmat(i, j), '(es23.16e2)')
-            end if
-            if (j < n) s = s//', '
-          end do
-          s = s//']'
-          if (i < n) s = s//', '
-        end do
-        s = s//']'
-      end if
-      if (found) then
-        s = s//', "knot_core": ['//to_str(int(core(1), i8))//', '//to_str(int(core(2), i8))//']'
-      else
-        s = s//', "knot_core": null'
-      end if
-      s = s//', "slipknot": '//merge('true ', 'false', slip)
-      s = trim(s)//'}'
-      write (output_unit, '(a)') s
+        if (i < n) s = s//', '
+      end do
+      s = s//']'
+    end if
+    if (found) then
+      s = s//', "knot_core": ['//to_str(int(core(1), i8))//', '//to_str(int(core(2), i8))//']'
+    else
+      s = s//', "knot_core": null'
+    end if
+    s = s//', "slipknot": '//merge('true ', 'false', slip)
+    s = trim(s)//'}'
+    write (output_unit, '(a)') s
   end subroutine print_json
 
   !> Mode 2: HDF5 case files; writes /analysis of each (the trajectory is never touched).

@@ -1,4 +1,4 @@
-!> knotflow-bench: time one velocity evaluation (forces + hydrodynamics + flow) for the trefoil
+!> Program knotflow-bench: time one velocity evaluation (forces + hydrodynamics + flow) for the trefoil
 !> (N = 99) and the candy-cane (N = 152) with the `none` and `rpy` models (median over many
 !> repetitions); with --trefoil-case also integrate the reference trefoil case (A = 2.2,
 !> orientation c, rpy, t_end = 1000, tolerance 1e-4) and report wall time, steps, rejections.

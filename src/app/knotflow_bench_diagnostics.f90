@@ -1,4 +1,4 @@
-!> knotflow-bench-diagnostics: the cost of the run diagnostics (kf_run_diagnostics) per accepted
+!> Program knotflow-bench-diagnostics: the cost of the run diagnostics (kf_run_diagnostics) per accepted
 !> step against one RPY velocity evaluation (a dopri45 step makes 6 of them), for the trefoil
 !> (N = 99) and the candy-cane (N = 152), on a real step of each (taken after t = 5 of the RPY
 !> dynamics with excluded volume); medians over batches. Then the trefoil (A = 2.2, orientation

@@ -1,4 +1,4 @@
-!> knotflow-bench-knots: wall time of (1) k_f with 1000 closures of the N = 99 open trefoil
+!> Program knotflow-bench-knots: wall time of (1) k_f with 1000 closures of the N = 99 open trefoil
 !> (PHYSICS.md 5, orientation a, 100th point removed) and (2) the full knot matrix of an N = 152
 !> candy-cane frame (PHYSICS.md 5, made non-planar by z_i = 0.5 sin(0.37 i) as a simulation frame
 !> would be), parallel over subchains with MPI.

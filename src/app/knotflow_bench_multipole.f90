@@ -1,4 +1,4 @@
-!> knotflow-bench-multipole: wall time of one evaluation of the multipole hydrodynamics
+!> Program knotflow-bench-multipole: wall time of one evaluation of the multipole hydrodynamics
 !> (multipole_model_t%prepare: assembly of the pair blocks, factorisation = p-moment elimination
 !> + Cholesky, solves for mobility and shear disturbance, lubrication corrections and the
 !> friction route) for N = 10, 20 (self-avoiding random chains: bond 1.02, non-bonded centre

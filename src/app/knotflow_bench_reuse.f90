@@ -1,4 +1,4 @@
-!> knotflow-bench-reuse: accuracy and cost of the adaptive reuse of the multipole many-body
+!> Program knotflow-bench-reuse: accuracy and cost of the adaptive reuse of the multipole many-body
 !> part (`&hydro update = 'adaptive'`) against the exact solve at every stage ('stage'), on the
 !> study's model (multipole L = 2 + lubrication, BWE with eps_lub = tolerance, shear flow).
 !>

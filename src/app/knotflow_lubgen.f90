@@ -1,4 +1,4 @@
-!> knotflow-lubgen: writes the generated module kf_lubrication_data (the two-sphere lubrication
+!> Program knotflow-lubgen: writes the generated module kf_lubrication_data (the two-sphere lubrication
 !> correction tables for truncation orders L = 1..6).
 !>
 !> Usage: knotflow-lubgen [output file]   (default: kf_lubrication_data.f90)

@@ -1,4 +1,4 @@
-!> knotflow-mobility: the 3N x 3N mobility or the shear disturbance of beads read from a file.
+!> Program knotflow-mobility: the 3N x 3N mobility or the shear disturbance of beads read from a file.
 !>
 !>   knotflow-mobility FILE [--model none|rpy|multipole] [--order L] [--lubrication on|off]
 !>                          [--eps-lub X] [--output mobility|shear]

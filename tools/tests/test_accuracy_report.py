@@ -5,7 +5,7 @@ import os
 
 import pytest
 
-from knotflow_tools import accuracy
+from knotflow_tools import accuracy, cli
 
 META = ("key,value\nquick,0\nref_order,3\nbending_a_models,1.40\ncoil_file,c.xyz\n"
         "loadavg_start,0.50 0.40 0.30 1/2 3\n")
@@ -65,7 +65,7 @@ def test_report_and_readme(results, tmp_path):
     readme.write_text("# x\nbefore\n%s\nold table\n%s\nafter\n" % (accuracy.BEGIN, accuracy.END))
     md = tmp_path / "docs" / "accuracy.md"
     figs = tmp_path / "docs" / "figures"
-    rc = accuracy.main([str(results), "--markdown", str(md), "--figures", str(figs),
+    rc = cli.main_accuracy_report([str(results), "--markdown", str(md), "--figures", str(figs),
                         "--readme", str(readme)])
     assert rc == 0
     text = md.read_text()
@@ -93,12 +93,12 @@ def test_report_and_readme(results, tmp_path):
 def test_errors(results, tmp_path, capsys):
     readme = tmp_path / "README.md"
     readme.write_text("no markers here\n")
-    rc = accuracy.main([str(results), "--markdown", str(tmp_path / "a.md"), "--figures",
+    rc = cli.main_accuracy_report([str(results), "--markdown", str(tmp_path / "a.md"), "--figures",
                         str(tmp_path / "f"), "--readme", str(readme)])
     assert rc == 2
     assert "markers" in capsys.readouterr().err
     assert readme.read_text() == "no markers here\n"
-    rc = accuracy.main([str(tmp_path / "missing"), "--markdown", str(tmp_path / "b.md")])
+    rc = cli.main_accuracy_report([str(tmp_path / "missing"), "--markdown", str(tmp_path / "b.md")])
     assert rc == 2
     assert "no meta.csv" in capsys.readouterr().err
     assert not os.path.exists(tmp_path / "b.md")

@@ -2,7 +2,7 @@
 knotflow-bench-reuse outputs (key = value lines), placed between its markers (appended the
 first time, replaced afterwards, the rest of the report untouched), and a clear error."""
 
-from knotflow_tools import accuracy
+from knotflow_tools import accuracy, cli
 
 VELOCITY = """part = velocity
 config = trefoil
@@ -66,6 +66,6 @@ def test_section_appended_then_replaced(tmp_path):
 def test_no_outputs_is_an_error(tmp_path, capsys):
     md = tmp_path / "accuracy.md"
     md.write_text("# Report\n")
-    assert accuracy.main(["--reuse", str(tmp_path / "missing"), "--markdown", str(md)]) == 2
+    assert cli.main_accuracy_report(["--reuse", str(tmp_path / "missing"), "--markdown", str(md)]) == 2
     assert "no knotflow-bench-reuse outputs" in capsys.readouterr().err
     assert md.read_text() == "# Report\n"

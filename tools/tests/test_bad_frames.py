@@ -83,9 +83,8 @@ def test_report_lists_the_bad_file_and_reports_the_good(tmp_path):
 
 
 def test_stress_and_study_tools_refuse_a_nan_frame(tmp_path, capsys):
-    from knotflow_tools import stress, study
     path = nan_case(tmp_path / "nan.h5")
-    assert stress.main([path]) == 2
+    assert cli.main_stress_summary([path]) == 2
     assert "nan.h5: frame 2" in capsys.readouterr().err
-    assert study.main(["--write-frame", path, "0", str(tmp_path / "f.xyz")]) == 2
+    assert cli.main_study(["--write-frame", path, "0", str(tmp_path / "f.xyz")]) == 2
     assert "knotflow-study: error: " in capsys.readouterr().err

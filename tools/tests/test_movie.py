@@ -10,7 +10,7 @@ import analysis_fixture as fixture
 import numpy as np
 import pytest
 
-from knotflow_tools import io, movie
+from knotflow_tools import cli, io, movie
 
 from conftest import unknotting_trefoil_frames, write_case
 
@@ -78,16 +78,16 @@ def test_movie_command(tmp_path, capsys):
                    10, 1)
     args = [str(path), "--first", "1", "--last", "5", "--stride", "2", "--fps", "3",
             "--width", "240", "--height", "160", "--elev", "30", "--azim", "10"]
-    assert movie.main(args + ["--gif"]) == 0
+    assert cli.main_movie(args + ["--gif"]) == 0
     captured = capsys.readouterr()
     assert captured.out.strip() == str(tmp_path / "c.gif")
     assert "3/3 frames" in captured.err                           # the progress bar
     if shutil.which("ffprobe") and shutil.which("ffmpeg"):
-        assert movie.main(args + ["--no-progress"]) == 0
+        assert cli.main_movie(args + ["--no-progress"]) == 0
         assert capsys.readouterr().err == ""
         info, duration = _probe(tmp_path / "c.mp4")
         assert int(info["nb_read_frames"]) == 3 and duration == pytest.approx(1.0, abs=0.05)
-    assert movie.main([str(path), "--stride", "0"]) == 2
+    assert cli.main_movie([str(path), "--stride", "0"]) == 2
     assert "stride" in capsys.readouterr().err
 
 

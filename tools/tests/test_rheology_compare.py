@@ -9,7 +9,7 @@ import h5py
 import numpy as np
 import pytest
 
-from knotflow_tools import rheology
+from knotflow_tools import cli, rheology
 from knotflow_tools.rheology import KNOTTED, MODE_I, MODE_II, UNKNOTTED
 
 from conftest import unknotting_trefoil_frames, write_case
@@ -154,21 +154,21 @@ def test_cli_and_errors(tmp_path, capsys):
     sweep.mkdir()
     make_case(sweep / "A1.00.h5", 1.0, [0.9, 0.9, 0.1, 0.1], [1, 1, 2, 2], 0.5)
     out = tmp_path / "out"
-    assert rheology.main(["--knots", str(sweep), "--out", str(out)]) == 0
+    assert cli.main_rheology(["--knots", str(sweep), "--out", str(out)]) == 0
     assert "knotted - unknotted: viscosity difference 0.5 over 1 case(s), p = 1" in \
         capsys.readouterr().out
     bare = tmp_path / "bare"
     bare.mkdir()
     write_case(bare / "plain.h5", unknotting_trefoil_frames(3))
-    assert rheology.main(["--knots", str(bare), "--out", str(out)]) == 2
+    assert cli.main_rheology(["--knots", str(bare), "--out", str(out)]) == 2
     assert "plain.h5: no /frames/stresslet" in capsys.readouterr().err
     with h5py.File(sweep / "A1.00.h5", "a") as f:
         del f["analysis/knots"]
-    assert rheology.main(["--knots", str(sweep), "--out", str(out)]) == 2
+    assert cli.main_rheology(["--knots", str(sweep), "--out", str(out)]) == 2
     assert "A1.00.h5: no /analysis/knots (run knotflow-analyze" in capsys.readouterr().err
     for bad in (["--out", str(out)], ["--knots", str(tmp_path / "missing")],
                 ["--knots", str(sweep), "--threshold", "0"],
                 ["--knots", str(sweep), "--hysteresis", "0.9", "0.1"]):
         with pytest.raises(SystemExit) as exc:
-            rheology.main(bad)
+            cli.main_rheology(bad)
         assert exc.value.code == 2

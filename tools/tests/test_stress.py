@@ -5,7 +5,7 @@ configurations) and the step counters are n/a; wall times, status and the Markdo
 import h5py
 import numpy as np
 
-from knotflow_tools import stress
+from knotflow_tools import cli, stress
 
 from conftest import write_case
 
@@ -74,7 +74,7 @@ def test_main_writes_markdown(tmp_path, capsys):
     wall = tmp_path / "wall.txt"
     wall.write_text("# case seconds\na 1.5\nb 20\n")
     out = tmp_path / "summary.md"
-    assert stress.main([str(tmp_path), "--wall-times", str(wall), "-o", str(out)]) == 0
+    assert cli.main_stress_summary([str(tmp_path), "--wall-times", str(wall), "-o", str(out)]) == 0
     printed = capsys.readouterr().out
     text = out.read_text()
     assert text.startswith("# knotflow stress runs")
@@ -82,4 +82,4 @@ def test_main_writes_markdown(tmp_path, capsys):
     rows = [line for line in printed.splitlines() if line.startswith("| a") or line.startswith("| b")]
     assert [r.split("|")[1].strip() for r in rows] == ["a", "b"]       # sorted by file name
     assert rows[0].split("|")[2].strip() == "1.5" and rows[1].split("|")[2].strip() == "20"
-    assert stress.main([str(tmp_path / "empty_dir_missing")]) == 2
+    assert cli.main_stress_summary([str(tmp_path / "empty_dir_missing")]) == 2

@@ -8,7 +8,7 @@ import h5py
 import numpy as np
 import pytest
 
-from knotflow_tools import xdmf
+from knotflow_tools import cli, xdmf
 
 from conftest import unknotting_trefoil_frames, write_case
 
@@ -84,9 +84,9 @@ def test_xdmf_without_analysis_and_partial_frames(tmp_path):
 
 def test_xdmf_command(tmp_path, capsys):
     path = write_case(tmp_path / "c3.h5", unknotting_trefoil_frames(3))
-    assert xdmf.main([str(path), "--out", str(tmp_path / "sub.xdmf")]) == 0
+    assert cli.main_xdmf([str(path), "--out", str(tmp_path / "sub.xdmf")]) == 0
     assert capsys.readouterr().out.strip() == str(tmp_path / "sub.xdmf")
-    assert xdmf.main([str(tmp_path / "missing.h5")]) == 2
+    assert cli.main_xdmf([str(tmp_path / "missing.h5")]) == 2
     assert "missing.h5" in capsys.readouterr().err
 
 

@@ -4,17 +4,13 @@ docs/accuracy.md (tables), PNG figures and, optionally, the summary block of REA
 
 from __future__ import annotations
 
-import argparse
 import csv
 import os
-import sys
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-
-from . import add_version_option  # noqa: E402
 
 BEGIN = "<!-- accuracy:begin -->"
 END = "<!-- accuracy:end -->"
@@ -526,43 +522,3 @@ def build_report(directory: str, markdown: str, figdir: str, readme: str | None 
     return {"markdown": markdown, "figures": figures, "summary": summary}
 
 
-def main(argv=None) -> int:
-    """knotflow-accuracy-report entry point."""
-    p = argparse.ArgumentParser(
-        prog="knotflow-accuracy-report",
-        description="docs/accuracy.md and figures from the CSV tables of knotflow-accuracy.")
-    add_version_option(p)
-    p.add_argument("results", nargs="?", default=None,
-                   help="directory written by knotflow-accuracy --out")
-    p.add_argument("--reuse", default=None, metavar="DIR",
-                   help="only replace the reuse section of the report by the outputs of "
-                   "knotflow-bench-reuse in DIR (scripts/bench_reuse.sh)")
-    p.add_argument("--markdown", default="docs/accuracy.md", help="report file to write")
-    p.add_argument("--figures", default="docs/figures", help="directory of the PNG figures")
-    p.add_argument("--readme", default=None,
-                   help="README.md whose block between %s and %s is replaced by the summary"
-                   % (BEGIN, END))
-    args = p.parse_args(argv)
-    if args.reuse is not None:
-        try:
-            update_reuse(args.markdown, args.reuse)
-        except (OSError, ValueError) as exc:
-            print("knotflow-accuracy-report: error: %s" % exc, file=sys.stderr)
-            return 2
-        print("wrote the reuse section of %s" % args.markdown)
-        return 0
-    if args.results is None:
-        p.error("the results directory is required (or --reuse DIR)")
-    try:
-        res = build_report(args.results, args.markdown, args.figures, args.readme)
-    except (OSError, ValueError, KeyError) as exc:
-        print("knotflow-accuracy-report: error: %s" % exc, file=sys.stderr)
-        return 2
-    print(res["summary"])
-    print("wrote %s and %d figure(s) in %s" % (res["markdown"], len(res["figures"]),
-                                                args.figures))
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,23 +1,65 @@
-"""Console scripts: knotflow-kf, knotflow-plot, knotflow-report."""
+"""Every console script of knotflow_tools (``[project.scripts]`` in tools/pyproject.toml) and
+what they share: the parser with ``--version``, the error line and the exit status.
+
+The other modules are libraries: functions that take values, return results and raise on bad
+input. A ``main_*`` function here parses its command line, calls them and prints. Every script
+exits with status 0 when done and ``EXIT_USAGE`` (2) on a usage error (argparse's own, or a
+refused option value) and on refused input (a file that cannot be read, damaged or non-finite
+data, a bad value: ``OSError``, ``KeyError``, ``ValueError``), which is one line
+``<prog>: error: <what>`` on standard error and no traceback. Anything else is a failure of the
+tool itself: Python's traceback and exit status 1.
+"""
 
 from __future__ import annotations
 
 import argparse
 import json
 import math
+import os
 import sys
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from . import add_version_option, knots
+from . import __version__, knots
 
+#: Exit status of a usage error or refused input (as argparse's own usage errors).
+EXIT_USAGE = 2
+#: What a tool raises for input it refuses: an unreadable file, damaged data, a bad value.
+INPUT_ERRORS: tuple[type[Exception], ...] = (OSError, KeyError, ValueError)
+
+Argv = Sequence[str] | None
+
+
+def make_parser(prog: str, description: str) -> argparse.ArgumentParser:
+    """An argument parser with ``--version`` ('<prog> <version>' on standard output, exit 0)."""
+    p = argparse.ArgumentParser(prog=prog, description=description)
+    p.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    return p
+
+
+def error_line(prog: str, message: object) -> int:
+    """Print '<prog>: error: <message>' on standard error; return ``EXIT_USAGE``."""
+    print(f"{prog}: error: {message}", file=sys.stderr)
+    return EXIT_USAGE
+
+
+def run_reporting_errors(prog: str, body: Callable[[Argv], int], argv: Argv = None,
+                         errors: tuple[type[Exception], ...] = INPUT_ERRORS) -> int:
+    """``body(argv)`` for a console script: refused input (``errors``) becomes one error line and
+    exit status ``EXIT_USAGE``."""
+    try:
+        return body(argv)
+    except errors as exc:
+        return error_line(prog, exc)
+
+
+# ------------------------------------------------------------------------------ knotflow-kf
 
 def _kf_parser():
-    p = argparse.ArgumentParser(
-        prog="knotflow-kf",
-        description="Knotted fraction, knot spectrum and knot matrix of an open chain "
+    p = make_parser("knotflow-kf",
+                    "Knotted fraction, knot spectrum and knot matrix of an open chain "
                     "(text coordinate file or HDF5 case file).")
-    add_version_option(p)
     p.add_argument("chain", help="text file (x y z per line) or .h5 case file")
     p.add_argument("--frame", type=int, default=-1,
                    help="frame of a .h5 case file (0-based; negative from the end; default last)")
@@ -42,27 +84,25 @@ def _nan_to_none(mat):
             for row in np.asarray(mat, dtype=float).tolist()]
 
 
-def main_kf(argv=None) -> int:
+def main_kf(argv: Argv = None) -> int:
     """knotflow-kf entry point."""
+    return run_reporting_errors("knotflow-kf", _kf, argv, INPUT_ERRORS + (IndexError,))
+
+
+def _kf(argv: Argv) -> int:
     args = _kf_parser().parse_args(argv)
     from .io import read_frame, read_xyz
-    try:
-        if args.chain.endswith((".h5", ".hdf5")):
-            r = read_frame(args.chain, args.frame)
-        else:
-            r = read_xyz(args.chain)
-        points = read_xyz(args.closure_points) if args.closure_points else None
-    except (OSError, ValueError, KeyError, IndexError) as exc:
-        print(f"knotflow-kf: error: {exc}", file=sys.stderr)
-        return 2
+    if args.chain.endswith((".h5", ".hdf5")):
+        r = read_frame(args.chain, args.frame)
+    else:
+        r = read_xyz(args.chain)
+    points = read_xyz(args.closure_points) if args.closure_points else None
     if args.closures < 1 and points is None:
-        print("knotflow-kf: error: --closures must be >= 1", file=sys.stderr)
-        return 2
+        raise ValueError("--closures must be >= 1")
     try:
         res = knots.analyze_chain(r, closures=args.closures, seed=args.seed, points=points)
     except ValueError as exc:
-        print(f"knotflow-kf: error: {args.chain}: {exc}", file=sys.stderr)
-        return 2
+        raise ValueError(f"{args.chain}: {exc}") from exc
     mat = None
     core = None
     slip = False
@@ -97,11 +137,15 @@ def main_kf(argv=None) -> int:
     return 0
 
 
-def main_plot(argv=None) -> int:
+# ---------------------------------------------------------------------------- knotflow-plot
+
+def main_plot(argv: Argv = None) -> int:
     """knotflow-plot entry point."""
-    p = argparse.ArgumentParser(prog="knotflow-plot",
-                                description="Figures of a knotflow case file.")
-    add_version_option(p)
+    return run_reporting_errors("knotflow-plot", _plot, argv)
+
+
+def _plot(argv: Argv) -> int:
+    p = make_parser("knotflow-plot", "Figures of a knotflow case file.")
     p.add_argument("case", help="HDF5 case file")
     p.add_argument("--out", default=None, help="output directory (default: <case>_plots)")
     p.add_argument("--closures", type=int, default=200,
@@ -123,14 +167,9 @@ def main_plot(argv=None) -> int:
     from .analysis import analyze_case
     from .io import read_case
     from .plot import plot_case
-    try:
-        case = read_case(args.case)
-    except (OSError, KeyError, ValueError) as exc:
-        print(f"knotflow-plot: error: {exc}", file=sys.stderr)
-        return 2
+    case = read_case(args.case)
     if case.nframes == 0:
-        print("knotflow-plot: error: the case has no frames", file=sys.stderr)
-        return 2
+        raise ValueError("the case has no frames")
     ana = analyze_case(case, closures=args.closures, stride=args.stride, seed=args.seed,
                        matrix_frames=args.matrix_frames, matrix_closures=args.matrix_closures,
                        matrix_stride=args.matrix_stride, min_length=args.min_length,
@@ -142,11 +181,15 @@ def main_plot(argv=None) -> int:
     return 0
 
 
-def main_report(argv=None) -> int:
+# -------------------------------------------------------------------------- knotflow-report
+
+def main_report(argv: Argv = None) -> int:
     """knotflow-report entry point."""
-    p = argparse.ArgumentParser(prog="knotflow-report",
-                                description="Report (markdown + html) of a sweep directory.")
-    add_version_option(p)
+    return run_reporting_errors("knotflow-report", _report, argv)
+
+
+def _report(argv: Argv) -> int:
+    p = make_parser("knotflow-report", "Report (markdown + html) of a sweep directory.")
     p.add_argument("sweep_dir")
     p.add_argument("--closures", type=int, default=200)
     p.add_argument("--stride", type=int, default=0,
@@ -160,17 +203,251 @@ def main_report(argv=None) -> int:
     p.add_argument("--no-viewer", action="store_true",
                    help="no interactive 3-D viewer in report.html")
     args = p.parse_args(argv)
-    import os
-
     from .report import build_report
     if not os.path.isdir(args.sweep_dir):
-        print(f"knotflow-report: error: not a directory: {args.sweep_dir}", file=sys.stderr)
-        return 2
+        raise ValueError(f"not a directory: {args.sweep_dir}")
     res = build_report(args.sweep_dir, closures=args.closures, stride=args.stride,
                        seed=args.seed, movie=not args.no_movie,
                        movie_max_frames=args.movie_frames, viewer=not args.no_viewer)
     print(res["md"])
     print(res["html"])
+    return 0
+
+
+
+# ------------------------------------------------------------------ knotflow-stress-summary
+
+def main_stress_summary(argv: Argv = None) -> int:
+    """knotflow-stress-summary entry point."""
+    return run_reporting_errors("knotflow-stress-summary", _stress_summary, argv)
+
+
+def _stress_summary(argv: Argv) -> int:
+    p = make_parser("knotflow-stress-summary",
+                    "Table of stress runs: wall time, steps, rejections, strand passages, "
+                    "overlaps, distances, bond strain, status (Markdown).")
+    p.add_argument("inputs", nargs="+", help="case files or directories holding them")
+    p.add_argument("--wall-times", help="file of 'case seconds' lines (scripts/stress.sh)")
+    p.add_argument("--output", "-o", help="write the table (with a header) here as well")
+    p.add_argument("--title", default="knotflow stress runs", help="heading of the output file")
+    args = p.parse_args(argv)
+    from . import stress
+    files = stress.case_files(args.inputs)
+    if not files:
+        raise ValueError("no case files in " + " ".join(args.inputs))
+    wall = stress.read_wall_times(args.wall_times) if args.wall_times else {}
+    rows = []
+    for path in files:
+        try:
+            rows.append(stress.summarise_case(path, wall))
+        except INPUT_ERRORS as exc:
+            raise ValueError(f"{path}: {exc}") from exc
+    table = stress.format_table(rows)
+    print(table, end="")
+    if args.output:
+        stress.write_summary(args.output, args.title, table)
+    return 0
+
+
+# -------------------------------------------------------------------------- knotflow-study
+
+def main_study(argv: Argv = None) -> int:
+    """knotflow-study entry point: a file that cannot be read (damaged, non-finite frames) is an
+    error naming it."""
+    return run_reporting_errors("knotflow-study", _study, argv)
+
+
+def _study(argv: Argv) -> int:
+    from . import study
+    p = make_parser("knotflow-study", (study.__doc__ or "").splitlines()[0])
+    p.add_argument("--trefoil", help="output directory of inputs/trefoil_table2.nml")
+    p.add_argument("--candycane", help="output directory of inputs/candycane.nml")
+    p.add_argument("--ensemble", help="output directory of inputs/candycane_seeds.nml (optional)")
+    p.add_argument("--out", default="docs/reproduction", help="where figures and results.md go")
+    p.add_argument("--closures", type=int, default=200,
+                   help="closures per frame where /analysis/knots is missing")
+    p.add_argument("--select-frames", metavar="CASE",
+                   help="print the frames to give knotflow-analyze --matrix-frames for CASE "
+                   "(every 50th and the 5 with most close pairs) and exit")
+    p.add_argument("--slip-candidates", metavar="CASE",
+                   help="print the frames of CASE whose stored knot matrix looks like a slipknot")
+    p.add_argument("--write-frame", nargs=3, metavar=("CASE", "FRAME", "XYZ"),
+                   help="write frame FRAME of CASE as a coordinate file and exit")
+    args = p.parse_args(argv)
+    if args.slip_candidates:
+        print(" ".join(str(k) for k in study.slip_candidates(args.slip_candidates)))
+        return 0
+    if args.write_frame:
+        path, frame, xyz = args.write_frame
+        study.write_frame(path, int(frame), xyz)
+        return 0
+    if args.select_frames:
+        print(",".join(str(k) for k in study.entangled_frames(args.select_frames)))
+        return 0
+    if not (args.trefoil or args.candycane or args.ensemble):
+        p.error("give --trefoil DIR, --candycane DIR and/or --ensemble DIR")
+    for d in (args.trefoil, args.candycane, args.ensemble):
+        if d and not os.path.isdir(d):
+            p.error(f"directory not found: {d}")
+    res = study.write_study(args.trefoil, args.candycane, args.out, args.closures, args.ensemble)
+    if "trefoil" in res:
+        print(f"trefoils: {res['trefoil']['agree']} of {res['trefoil']['total']} cases agree with "
+              "the study on unknot-then-knot transitions")
+    print(f"wrote {os.path.join(args.out, 'results.md')}")
+    return 0
+
+
+# ---------------------------------------------------------------- knotflow-accuracy-report
+
+def main_accuracy_report(argv: Argv = None) -> int:
+    """knotflow-accuracy-report entry point."""
+    return run_reporting_errors("knotflow-accuracy-report", _accuracy_report, argv)
+
+
+def _accuracy_report(argv: Argv) -> int:
+    from . import accuracy
+    p = make_parser("knotflow-accuracy-report",
+                    "docs/accuracy.md and figures from the CSV tables of knotflow-accuracy.")
+    p.add_argument("results", nargs="?", default=None,
+                   help="directory written by knotflow-accuracy --out")
+    p.add_argument("--reuse", default=None, metavar="DIR",
+                   help="only replace the reuse section of the report by the outputs of "
+                   "knotflow-bench-reuse in DIR (scripts/bench_reuse.sh)")
+    p.add_argument("--markdown", default="docs/accuracy.md", help="report file to write")
+    p.add_argument("--figures", default="docs/figures", help="directory of the PNG figures")
+    p.add_argument("--readme", default=None,
+                   help="README.md whose block between %s and %s is replaced by the summary"
+                   % (accuracy.BEGIN, accuracy.END))
+    args = p.parse_args(argv)
+    if args.reuse is not None:
+        accuracy.update_reuse(args.markdown, args.reuse)
+        print("wrote the reuse section of %s" % args.markdown)
+        return 0
+    if args.results is None:
+        p.error("the results directory is required (or --reuse DIR)")
+    res = accuracy.build_report(args.results, args.markdown, args.figures, args.readme)
+    print(res["summary"])
+    print("wrote %s and %d figure(s) in %s" % (res["markdown"], len(res["figures"]),
+                                                args.figures))
+    return 0
+
+
+# --------------------------------------------------------------------------- knotflow-xdmf
+
+def main_xdmf(argv: Argv = None) -> int:
+    """knotflow-xdmf entry point: every case file is tried; a refused one is an error line."""
+    from .xdmf import write_xdmf
+    p = make_parser("knotflow-xdmf",
+                    "Write an XDMF file <case>.xdmf2 beside each case file for ParaView "
+                    "(File > Open: its 'Xdmf Reader') and VisIt (open as type Xdmf); it points "
+                    "into the case file, copying no data.")
+    p.add_argument("cases", nargs="+", help="HDF5 case files")
+    p.add_argument("--out", default=None,
+                   help="output file (only with one case file; default <case>.xdmf2)")
+    args = p.parse_args(argv)
+    if args.out and len(args.cases) != 1:
+        return error_line("knotflow-xdmf", "--out needs exactly one case file")
+    status = 0
+    for path in args.cases:
+        try:
+            print(write_xdmf(path, args.out))
+        except INPUT_ERRORS as exc:
+            status = error_line("knotflow-xdmf", f"{path}: {exc}")
+    return status
+
+
+# -------------------------------------------------------------------------- knotflow-movie
+
+def main_movie(argv: Argv = None) -> int:
+    """knotflow-movie entry point (a failing encoder, RuntimeError, is an error line too)."""
+    return run_reporting_errors("knotflow-movie", _movie, argv, INPUT_ERRORS + (RuntimeError,))
+
+
+def _movie(argv: Argv) -> int:
+    p = make_parser("knotflow-movie",
+                    "Movie of a case file: the chain in 3-D (equal axis scales, halves "
+                    "coloured, flow and vorticity directions marked) beside k_f(t) and the "
+                    "shape panels with a moving time marker. MP4 with ffmpeg, else GIF.")
+    p.add_argument("case", help="HDF5 case file")
+    p.add_argument("--out", default=None,
+                   help="output file, .mp4 or .gif (default <case>.mp4 beside the case)")
+    p.add_argument("--first", type=int, default=0, help="first frame (negative: from the end)")
+    p.add_argument("--last", type=int, default=None, help="last frame (default: the last)")
+    p.add_argument("--stride", type=int, default=1, help="every stride-th frame")
+    p.add_argument("--max-frames", type=int, default=0,
+                   help="raise the stride so that at most this many frames remain (0: no cap)")
+    p.add_argument("--fps", type=int, default=10, help="frames per second")
+    p.add_argument("--elev", type=float, default=20.0, help="view elevation (degrees)")
+    p.add_argument("--azim", type=float, default=-60.0, help="view azimuth (degrees)")
+    p.add_argument("--width", type=int, default=960, help="width in pixels (made even)")
+    p.add_argument("--height", type=int, default=540, help="height in pixels (made even)")
+    p.add_argument("--gif", action="store_true", help="write an animated GIF (Pillow)")
+    p.add_argument("--closures", type=int, default=0,
+                   help="without /analysis: compute k_f on the movie frames with this many "
+                        "closures (default 0: no k_f panel)")
+    p.add_argument("--knot-core", action="store_true",
+                   help="highlight the knot core of the latest stored knot matrix at or before "
+                        "each frame (/analysis/knot_matrix)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    args = p.parse_args(argv)
+    from .io import read_case
+    from .movie import case_kf, movie_frames, render_movie
+    case = read_case(args.case)
+    frames = movie_frames(case.nframes, args.first, args.last, args.stride, args.max_frames)
+    if not frames:
+        raise ValueError("the case has no frames")
+    kf = case_kf(case, args.closures, frames)
+    out = args.out or (os.path.splitext(args.case)[0] + (".gif" if args.gif else ".mp4"))
+    print(render_movie(case, out, frames, kf=kf, fps=args.fps, width=args.width,
+                       height=args.height, elev=args.elev, azim=args.azim,
+                       fmt="gif" if args.gif else None, progress=not args.no_progress,
+                       knot_core=args.knot_core))
+    return 0
+
+
+# ----------------------------------------------------------------------- knotflow-rheology
+
+def main_rheology(argv: Argv = None) -> int:
+    """knotflow-rheology entry point."""
+    return run_reporting_errors("knotflow-rheology", _rheology, argv)
+
+
+def _rheology(argv: Argv) -> int:
+    from . import rheology
+    p = make_parser("knotflow-rheology",
+                    "The fibre's viscosity and normal-stress coefficients in knotted against "
+                    "unknotted intervals and in shape modes I against II (docs/RHEOLOGY.md).")
+    p.add_argument("--knots", nargs="+", default=[], metavar="DIR",
+                   help="sweep directories compared knotted against unknotted")
+    p.add_argument("--modes", nargs="+", default=[], metavar="DIR",
+                   help="sweep directories compared mode I against mode II")
+    p.add_argument("--out", default="rheology", help="where rheology.md, .json and figures go")
+    p.add_argument("--t-from", type=float, default=0.0, help="leave out frames before this time")
+    p.add_argument("--threshold", type=float, default=rheology.KNOT_THRESHOLD,
+                   help="knotted when k_f >= this (default 0.5)")
+    p.add_argument("--hysteresis", type=float, nargs=2, metavar=("LOW", "HIGH"),
+                   help="instead of --threshold: the hysteresis states of k_f (e.g. 0.1 0.9)")
+    p.add_argument("--samples", type=int, default=200000,
+                   help="random sign assignments of the test above 16 cases")
+    p.add_argument("--seed", type=int, default=1)
+    args = p.parse_args(argv)
+    if not (args.knots or args.modes):
+        p.error("give --knots DIR and/or --modes DIR")
+    for d in args.knots + args.modes:
+        if not os.path.isdir(d):
+            p.error(f"directory not found: {d}")
+    if not 0.0 < args.threshold <= 1.0:
+        p.error(f"--threshold {args.threshold:g} is not allowed (a number in (0, 1])")
+    if args.hysteresis and not 0.0 <= args.hysteresis[0] < args.hysteresis[1] <= 1.0:
+        p.error("--hysteresis LOW HIGH needs 0 <= LOW < HIGH <= 1")
+    if args.samples < 1:
+        p.error(f"--samples {args.samples} is not allowed (a positive integer)")
+    res = rheology.write_rheology(args.knots, args.modes, args.out, args.t_from, args.threshold,
+                                  tuple(args.hysteresis) if args.hysteresis else None,
+                                  args.samples, args.seed)
+    for line in rheology.summary_lines(res):
+        print(line)
+    print(f"wrote {os.path.join(args.out, 'rheology.md')}")
     return 0
 
 

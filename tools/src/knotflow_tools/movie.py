@@ -23,7 +23,6 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from . import add_version_option  # noqa: E402
 from .analysis import observables_of  # noqa: E402
 from .io import Case  # noqa: E402
 
@@ -285,57 +284,3 @@ def case_kf(case: Case, closures: int = 0, frames=None, seed: int = 1):
     return case.time[frames], kf
 
 
-def main(argv=None) -> int:
-    """knotflow-movie entry point."""
-    import argparse
-
-    from .io import read_case
-    p = argparse.ArgumentParser(
-        prog="knotflow-movie",
-        description="Movie of a case file: the chain in 3-D (equal axis scales, halves "
-                    "coloured, flow and vorticity directions marked) beside k_f(t) and the "
-                    "shape panels with a moving time marker. MP4 with ffmpeg, else GIF.")
-    add_version_option(p)
-    p.add_argument("case", help="HDF5 case file")
-    p.add_argument("--out", default=None,
-                   help="output file, .mp4 or .gif (default <case>.mp4 beside the case)")
-    p.add_argument("--first", type=int, default=0, help="first frame (negative: from the end)")
-    p.add_argument("--last", type=int, default=None, help="last frame (default: the last)")
-    p.add_argument("--stride", type=int, default=1, help="every stride-th frame")
-    p.add_argument("--max-frames", type=int, default=0,
-                   help="raise the stride so that at most this many frames remain (0: no cap)")
-    p.add_argument("--fps", type=int, default=10, help="frames per second")
-    p.add_argument("--elev", type=float, default=20.0, help="view elevation (degrees)")
-    p.add_argument("--azim", type=float, default=-60.0, help="view azimuth (degrees)")
-    p.add_argument("--width", type=int, default=960, help="width in pixels (made even)")
-    p.add_argument("--height", type=int, default=540, help="height in pixels (made even)")
-    p.add_argument("--gif", action="store_true", help="write an animated GIF (Pillow)")
-    p.add_argument("--closures", type=int, default=0,
-                   help="without /analysis: compute k_f on the movie frames with this many "
-                        "closures (default 0: no k_f panel)")
-    p.add_argument("--knot-core", action="store_true",
-                   help="highlight the knot core of the latest stored knot matrix at or before "
-                        "each frame (/analysis/knot_matrix)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    args = p.parse_args(argv)
-    try:
-        case = read_case(args.case)
-        frames = movie_frames(case.nframes, args.first, args.last, args.stride,
-                              args.max_frames)
-        if not frames:
-            raise ValueError("the case has no frames")
-        kf = case_kf(case, args.closures, frames)
-        out = args.out or (os.path.splitext(args.case)[0] + (".gif" if args.gif else ".mp4"))
-        path = render_movie(case, out, frames, kf=kf, fps=args.fps, width=args.width,
-                            height=args.height, elev=args.elev, azim=args.azim,
-                            fmt="gif" if args.gif else None, progress=not args.no_progress,
-                            knot_core=args.knot_core)
-    except (OSError, KeyError, ValueError, RuntimeError) as exc:
-        print(f"knotflow-movie: error: {exc}", file=sys.stderr)
-        return 2
-    print(path)
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

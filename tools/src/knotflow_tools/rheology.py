@@ -9,8 +9,6 @@ from typing import Any
 
 import numpy as np
 
-from . import add_version_option, run_reporting_errors
-
 SERIES = ("viscosity", "psi1", "psi2")
 
 
@@ -400,53 +398,14 @@ def write_rheology(knot_dirs, mode_dirs, out, t_from=0.0, threshold=KNOT_THRESHO
     return result
 
 
-def main(argv=None):
-    """knotflow-rheology entry point: bad input or an unreadable file is one error line
-    (exit status 2)."""
-    return run_reporting_errors("knotflow-rheology", _main, argv)
-
-
-def _main(argv=None):
-    import argparse
-    import os
-    p = argparse.ArgumentParser(
-        prog="knotflow-rheology",
-        description="The fibre's viscosity and normal-stress coefficients in knotted against "
-        "unknotted intervals and in shape modes I against II (docs/RHEOLOGY.md).")
-    p.add_argument("--knots", nargs="+", default=[], metavar="DIR",
-                   help="sweep directories compared knotted against unknotted")
-    p.add_argument("--modes", nargs="+", default=[], metavar="DIR",
-                   help="sweep directories compared mode I against mode II")
-    p.add_argument("--out", default="rheology", help="where rheology.md, .json and figures go")
-    p.add_argument("--t-from", type=float, default=0.0, help="leave out frames before this time")
-    p.add_argument("--threshold", type=float, default=KNOT_THRESHOLD,
-                   help="knotted when k_f >= this (default 0.5)")
-    p.add_argument("--hysteresis", type=float, nargs=2, metavar=("LOW", "HIGH"),
-                   help="instead of --threshold: the hysteresis states of k_f (e.g. 0.1 0.9)")
-    p.add_argument("--samples", type=int, default=200000,
-                   help="random sign assignments of the test above 16 cases")
-    p.add_argument("--seed", type=int, default=1)
-    add_version_option(p)
-    args = p.parse_args(argv)
-    if not (args.knots or args.modes):
-        p.error("give --knots DIR and/or --modes DIR")
-    for d in args.knots + args.modes:
-        if not os.path.isdir(d):
-            p.error(f"directory not found: {d}")
-    if not 0.0 < args.threshold <= 1.0:
-        p.error(f"--threshold {args.threshold:g} is not allowed (a number in (0, 1])")
-    if args.hysteresis and not 0.0 <= args.hysteresis[0] < args.hysteresis[1] <= 1.0:
-        p.error("--hysteresis LOW HIGH needs 0 <= LOW < HIGH <= 1")
-    if args.samples < 1:
-        p.error(f"--samples {args.samples} is not allowed (a positive integer)")
-    res = write_rheology(args.knots, args.modes, args.out, args.t_from, args.threshold,
-                         tuple(args.hysteresis) if args.hysteresis else None, args.samples,
-                         args.seed)
+def summary_lines(result) -> list:
+    """One line per comparison of write_rheology's result: the viscosity difference of the
+    paired cases and its p-value."""
+    lines = []
     for by in COMPARISONS:
-        if by in res:
-            x = res[by]["all"]["viscosity"]
+        if by in result:
+            x = result[by]["all"]["viscosity"]
             first, second = COMPARISONS[by]
-            print(f"{first} - {second}: viscosity difference {_g(x['difference_mean'])} over "
-                  f"{x['paired_cases']} case(s), p = {_g(x['p_value'], '.2g')}")
-    print(f"wrote {os.path.join(args.out, 'rheology.md')}")
-    return 0
+            lines.append(f"{first} - {second}: viscosity difference {_g(x['difference_mean'])} "
+                         f"over {x['paired_cases']} case(s), p = {_g(x['p_value'], '.2g')}")
+    return lines

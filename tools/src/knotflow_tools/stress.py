@@ -11,16 +11,14 @@ step-resolved counters.
 
 from __future__ import annotations
 
-import argparse
 import glob
 import os
-import sys
 from typing import Any
 
 import h5py
 import numpy as np
 
-from . import add_version_option, io
+from . import io
 
 COLUMNS = (
     ("case", "case"),
@@ -152,46 +150,10 @@ def case_files(inputs) -> list:
     return files
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(
-        prog="knotflow-stress-summary",
-        description="Table of stress runs: wall time, steps, rejections, strand passages, "
-                    "overlaps, distances, bond strain, status (Markdown).")
-    add_version_option(p)
-    p.add_argument("inputs", nargs="+", help="case files or directories holding them")
-    p.add_argument("--wall-times", help="file of 'case seconds' lines (scripts/stress.sh)")
-    p.add_argument("--output", "-o", help="write the table (with a header) here as well")
-    p.add_argument("--title", default="knotflow stress runs", help="heading of the output file")
-    args = p.parse_args(argv)
-    files = case_files(args.inputs)
-    if not files:
-        print("knotflow-stress-summary: error: no case files in " + " ".join(args.inputs),
-              file=sys.stderr)
-        return 2
-    wall = {}
-    if args.wall_times:
-        try:
-            wall = read_wall_times(args.wall_times)
-        except OSError as exc:
-            print("knotflow-stress-summary: error: %s" % exc, file=sys.stderr)
-            return 2
-    rows = []
-    for path in files:
-        try:
-            rows.append(summarise_case(path, wall))
-        except (OSError, KeyError, ValueError) as exc:
-            print("knotflow-stress-summary: error: %s: %s" % (path, exc), file=sys.stderr)
-            return 2
-    table = format_table(rows)
-    print(table, end="")
-    if args.output:
-        note = ("Values marked f are sampled at frames (the file has no run diagnostics); "
-                "durations in time units 1/shear rate; strain |l - l0|/l0; overlapping pairs: "
-                "any i < j closer than d = 1; min distance over |i - j| > 1.\n")
-        with open(args.output, "w") as f:
-            f.write("# %s\n\n%s\n%s" % (args.title, table, note))
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
+def write_summary(path, title, table) -> None:
+    """The table of format_table with a heading and a note on its columns, into path."""
+    note = ("Values marked f are sampled at frames (the file has no run diagnostics); "
+            "durations in time units 1/shear rate; strain |l - l0|/l0; overlapping pairs: "
+            "any i < j closer than d = 1; min distance over |i - j| > 1.\n")
+    with open(path, "w") as f:
+        f.write("# %s\n\n%s\n%s" % (title, table, note))

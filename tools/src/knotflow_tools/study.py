@@ -9,7 +9,6 @@ for files without /analysis/knots.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import os
@@ -20,7 +19,6 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from . import add_version_option, run_reporting_errors  # noqa: E402
 from .analysis import analyze_case  # noqa: E402
 from .io import read_case, write_xyz  # noqa: E402
 from .plot import _draw_chain, mode_name  # noqa: E402
@@ -437,49 +435,9 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
     return result
 
 
-def main(argv=None):
-    """knotflow-study entry point: a file that cannot be read (damaged, non-finite frames) is an
-    error naming it (exit status 2)."""
-    return run_reporting_errors("knotflow-study", _main, argv)
-
-
-def _main(argv=None):
-    p = argparse.ArgumentParser(prog="knotflow-study", description=__doc__.splitlines()[0])
-    add_version_option(p)
-    p.add_argument("--trefoil", help="output directory of inputs/trefoil_table2.nml")
-    p.add_argument("--candycane", help="output directory of inputs/candycane.nml")
-    p.add_argument("--ensemble", help="output directory of inputs/candycane_seeds.nml (optional)")
-    p.add_argument("--out", default="docs/reproduction", help="where figures and results.md go")
-    p.add_argument("--closures", type=int, default=200,
-                   help="closures per frame where /analysis/knots is missing")
-    p.add_argument("--select-frames", metavar="CASE",
-                   help="print the frames to give knotflow-analyze --matrix-frames for CASE "
-                   "(every 50th and the 5 with most close pairs) and exit")
-    p.add_argument("--slip-candidates", metavar="CASE",
-                   help="print the frames of CASE whose stored knot matrix looks like a slipknot")
-    p.add_argument("--write-frame", nargs=3, metavar=("CASE", "FRAME", "XYZ"),
-                   help="write frame FRAME of CASE as a coordinate file and exit")
-    args = p.parse_args(argv)
-    if args.slip_candidates:
-        print(" ".join(str(k) for k in slip_candidates(args.slip_candidates)))
-        return 0
-    if args.write_frame:
-        path, frame, xyz = args.write_frame
-        case = read_case(path)
-        write_xyz(xyz, case.positions[int(frame)], comment=f"{case.name} frame {frame} "
-                  f"t = {case.time[int(frame)]:g}")
-        return 0
-    if args.select_frames:
-        print(",".join(str(k) for k in entangled_frames(args.select_frames)))
-        return 0
-    if not (args.trefoil or args.candycane or args.ensemble):
-        p.error("give --trefoil DIR, --candycane DIR and/or --ensemble DIR")
-    for d in (args.trefoil, args.candycane, args.ensemble):
-        if d and not os.path.isdir(d):
-            p.error(f"directory not found: {d}")
-    res = write_study(args.trefoil, args.candycane, args.out, args.closures, args.ensemble)
-    if "trefoil" in res:
-        print(f"trefoils: {res['trefoil']['agree']} of {res['trefoil']['total']} cases agree with "
-              "the study on unknot-then-knot transitions")
-    print(f"wrote {os.path.join(args.out, 'results.md')}")
-    return 0
+def write_frame(path, frame, xyz) -> None:
+    """Frame `frame` of case file `path` as a coordinate file `xyz` (knotflow-study
+    --write-frame)."""
+    case = read_case(path)
+    write_xyz(xyz, case.positions[frame], comment=f"{case.name} frame {frame} "
+              f"t = {case.time[frame]:g}")

@@ -28,7 +28,6 @@ import xml.etree.ElementTree as ET
 import h5py
 import numpy as np
 
-from . import add_version_option
 from .io import checkpoint_frames
 
 XDMF_SUFFIX = ".xdmf2"
@@ -201,32 +200,3 @@ def write_xdmf(case_path, out_path=None) -> str:
     return str(out_path)
 
 
-def main(argv=None) -> int:
-    """knotflow-xdmf entry point."""
-    import argparse
-    import sys
-    p = argparse.ArgumentParser(
-        prog="knotflow-xdmf",
-        description="Write an XDMF file <case>.xdmf2 beside each case file for ParaView "
-                    "(File > Open: its 'Xdmf Reader') and VisIt (open as type Xdmf); it points "
-                    "into the case file, copying no data.")
-    add_version_option(p)
-    p.add_argument("cases", nargs="+", help="HDF5 case files")
-    p.add_argument("--out", default=None,
-                   help="output file (only with one case file; default <case>.xdmf2)")
-    args = p.parse_args(argv)
-    if args.out and len(args.cases) != 1:
-        print("knotflow-xdmf: error: --out needs exactly one case file", file=sys.stderr)
-        return 2
-    status = 0
-    for path in args.cases:
-        try:
-            print(write_xdmf(path, args.out))
-        except (OSError, KeyError, ValueError) as exc:
-            print(f"knotflow-xdmf: error: {path}: {exc}", file=sys.stderr)
-            status = 2
-    return status
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
