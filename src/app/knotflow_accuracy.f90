@@ -174,19 +174,20 @@ contains
     scene%hydro%update = 'stage'
   end subroutine apply_model
 
-  !> Open DIR/name for writing and write the header line.
   !> The force-driven part mu(r) F(r) of the bead velocities (exact at r).
   subroutine force_part(dyn, r, uf, error)
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: r(:, :)
     real(wp), intent(out) :: uf(:, :)
     type(error_t), allocatable, intent(out) :: error
-    call dyn%forces%compute(r, dyn%f)
+    real(wp) :: f(3, size(r, 2))
+    call dyn%forces%compute(r, f)
     call dyn%model%prepare(r, error)
     if (allocated(error)) return
-    call dyn%model%apply_mobility(dyn%f, uf)
+    call dyn%model%apply_mobility(f, uf)
   end subroutine force_part
 
+  !> Open DIR/name for writing and write the header line.
   subroutine open_csv(name, header, unit, error)
     character(len=*), intent(in) :: name, header
     integer, intent(out) :: unit

@@ -76,9 +76,7 @@ program knotflow_bench_multipole
           t_tot = real(c1 - c0, wp)/real(crate, wp)
           if (t_tot < best) then
             best = t_tot
-            t_asm = model%sys%t_assembly
-            t_fac = model%sys%t_factor
-            t_lub = model%t_lubrication
+            call model%prepare_seconds(t_asm, t_fac, t_lub)
             t_sol = t_tot - t_asm - t_fac - t_lub
           end if
         end do

@@ -353,12 +353,12 @@ contains
     real(wp), intent(in) :: rr(:, :)
     real(wp), intent(out) :: vv(:, :)
     type(error_t), allocatable :: error
-    real(wp), allocatable :: v0(:, :)
-    allocate (v0(3, size(rr, 2)))
-    call fast%forces%compute(rr, fast%f)
+    real(wp), allocatable :: v0(:, :), f(:, :)
+    allocate (v0(3, size(rr, 2)), f(3, size(rr, 2)))
+    call fast%forces%compute(rr, f)
     select type (m => fast%model)
     type is (multipole_model_t)
-      call m%reused_velocities(rr, fast%f, vv, error, fast%flow%e)
+      call m%reused_velocities(rr, f, vv, error, fast%flow%e)
     end select
     if (allocated(error)) call die(program_name, error%message, 2)
     call fast%flow%velocity(rr, v0)

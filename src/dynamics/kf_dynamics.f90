@@ -27,8 +27,8 @@ module kf_dynamics
     integer(i8) :: evaluations = 0       !< calls of velocity
     real(wp) :: pair_cutoff = 0.0_wp     !< range of the pair list (0: none is built)
     type(pair_geometry_t) :: pairs       !< close pairs of the last evaluation's positions
-    real(wp), allocatable :: f(:, :)     !< work: forces of the last evaluation
-    real(wp), allocatable :: u(:, :)     !< work: mu F + C:E of the last evaluation
+    real(wp), allocatable, private :: f(:, :)     !< work: forces of the last evaluation
+    real(wp), allocatable, private :: u(:, :)     !< work: mu F + C:E of the last evaluation
   contains
     procedure :: init => dynamics_init
     procedure :: velocity => dynamics_velocity
