@@ -6,7 +6,7 @@
 !> shared, so that the ranks always meet in the same collective call. Rank 0 alone reads the
 !> stored analysis and writes /analysis, holding the directory lock knotflow's sweeps take.
 program knotflow_analyze
-  use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
+  use, intrinsic :: iso_fortran_env, only: output_unit
   use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
   use kf_kinds, only: wp, i8
   use kf_cli, only: standard_option, argument, die

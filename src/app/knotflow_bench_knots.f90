@@ -4,10 +4,9 @@
 !> would be), parallel over subchains with MPI.
 !> usage: knotflow-bench-knots [matrix_closures (default 100)] [min_length (default 10)]
 program knotflow_bench_knots
-  use, intrinsic :: iso_fortran_env, only: output_unit, error_unit, int64
+  use, intrinsic :: iso_fortran_env, only: output_unit, int64
   use, intrinsic :: ieee_arithmetic, only: ieee_is_nan, ieee_value, ieee_quiet_nan
   use kf_kinds, only: wp, i8
-  use kf_exit, only: exit_program
   use kf_constants, only: pi
   use kf_error, only: error_t
   use kf_memory, only: keep_freed_heap

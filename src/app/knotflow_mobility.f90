@@ -15,7 +15,6 @@ program knotflow_mobility
   use, intrinsic :: iso_fortran_env, only: output_unit
   use kf_kinds, only: wp
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
-  use kf_exit, only: exit_program
   use kf_strings, only: to_str
   use kf_cli, only: standard_option, argument, die
   use kf_error, only: error_t
