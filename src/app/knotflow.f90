@@ -1,8 +1,9 @@
 !> knotflow: run a scene or a sweep of scenes over MPI ranks.
 !>   mpirun -n P knotflow SCENE.nml [--dry-run]
 !> Every rank computes; cases are handed out dynamically. Built without MPI
-!> (-DKNOTFLOW_WITH_MPI=OFF), `knotflow SCENE.nml` runs every case in one process. Finished cases are skipped and
-!> interrupted ones resume from their checkpoint when the same command is run again.
+!> (-DKNOTFLOW_WITH_MPI=OFF), `knotflow SCENE.nml` runs every case in one process. Finished
+!> cases are skipped and interrupted ones resume from their checkpoint when the same command is
+!> run again.
 !> Exit status: 0 all cases finished, 2 bad input (nothing written), 3 some cases failed.
 program knotflow
   use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
