@@ -7,11 +7,7 @@
 include(CMakePackageConfigHelpers)
 set(KNOTFLOW_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/knotflow)
 
-set(_kf_libraries knotflow_lib)
-if(TARGET knotflow_parallel)
-  list(APPEND _kf_libraries knotflow_parallel)
-endif()
-install(TARGETS ${_kf_libraries} EXPORT knotflowTargets
+install(TARGETS knotflow_lib knotflow_parallel EXPORT knotflowTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
   INCLUDES DESTINATION ${KNOTFLOW_INSTALL_MODDIR})

@@ -1,14 +1,15 @@
 !> Program knotflow: run a scene or a sweep of scenes over MPI ranks.
 !>   mpirun -n P knotflow SCENE.nml [--dry-run]
-!> Every rank computes; cases are handed out dynamically. Finished cases are skipped and
-!> interrupted ones resume from their checkpoint when the same command is run again.
+!> Every rank computes; cases are handed out dynamically. Built without MPI
+!> (-DKNOTFLOW_WITH_MPI=OFF), `knotflow SCENE.nml` runs every case in one process. Finished
+!> cases are skipped and interrupted ones resume from their checkpoint when the same command is
+!> run again.
 !> Exit status: 0 all cases finished, 2 bad input (nothing written), 3 some cases failed.
 program knotflow
   use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
   use kf_strings, only: to_str
   use kf_memory, only: keep_freed_heap
   use kf_error, only: error_t
-  use kf_build_info, only: knotflow_version, knotflow_git_hash
   use kf_scene, only: scene_t
   use kf_sweep, only: sweep_t, read_sweep
   use kf_fs, only: make_directory, check_writable_directory, lock_directory, rename_file, &
@@ -23,9 +24,16 @@ program knotflow
   use kf_comm, only: comm_t, comm_init, comm_finalize
   use kf_task_farm, only: run_task_farm, task_result_t, task_ok, task_failed, task_skipped
   use kf_sweep_tasks, only: sweep_tasks_t, status_word
-  use kf_exit, only: exit_program, exit_program_now
+  use kf_exit, only: exit_program_now
+  use kf_cli, only: standard_option, argument, version_line, die
   use kf_blas_threads, only: allowed_cpus, load_average, blas_threads_for, set_blas_threads
   implicit none
+
+  character(len=*), parameter :: program_name = 'knotflow'
+  character(len=*), parameter :: usage = 'usage: mpirun -n P knotflow SCENE.nml [--dry-run]'// &
+    new_line('a')//'  Runs every case of the scene''s &sweep (or the single scene).'// &
+    new_line('a')//'  --dry-run  validate the input and list the cases without running them'// &
+    new_line('a')//'  --version  print the version'
 
   type(comm_t) :: comm
   type(error_t), allocatable :: error
@@ -35,25 +43,29 @@ program knotflow
   character(len=:), allocatable :: scene_file, directory
   logical :: dry_run
   logical :: summary_failed = .false.
-  integer :: me, nfailed, threads
+  integer :: me = 0, nfailed, threads, k
   logical :: threads_set
 
+  ! --help and --version before MPI start-up (kf_cli).
+  do k = 1, command_argument_count()
+    call standard_option(program_name, argument(k), usage)
+  end do
   call comm_init(comm, error)
-  if (allocated(error)) call die(error%message, 2)
+  if (allocated(error)) call die(program_name, error%message, 2)
   call keep_freed_heap()   ! after MPI start-up, which sets its own allocator options
   call ignore_file_size_signal()   ! a write past `ulimit -f` fails (EFBIG) and is reported
   me = comm%rank()
   call parse_arguments(scene_file, dry_run)
   call h5_initialize(error)
-  if (allocated(error)) call die(error%message, 2)
+  if (allocated(error)) call stop_all(error%message, 2)
 
   ! Every rank reads and validates the same input; errors stop before anything is written.
   call read_sweep(scene_file, sw, error)
-  if (allocated(error)) call die(error%message, 2)
+  if (allocated(error)) call stop_all(error%message, 2)
   ! What a case needs (memory, frames): refuse what cannot fit before anything is written.
   if (me == 0) call check_case_resources(error)
   call agree(error)
-  if (allocated(error)) call die(error%message, 2)
+  if (allocated(error)) call stop_all(error%message, 2)
   directory = trim(sw%base%output%directory)
   if (me == 0) then
     call make_directory(directory, error)
@@ -61,16 +73,16 @@ program knotflow
     if (.not. (allocated(error) .or. dry_run)) call lock_directory(directory, error)
   end if
   call agree(error)
-  if (allocated(error)) call die(trim(scene_file)//': &output: directory = '''//directory// &
+  if (allocated(error)) call stop_all(trim(scene_file)//': &output: directory = '''//directory// &
                                  ''': '//error%message, 2)
   ! Existing case files are reused only when they hold the requested scene: refuse otherwise,
   ! before any case runs.
   if (me == 0) call check_existing_cases(error)
   call agree(error)
-  if (allocated(error)) call die(trim(scene_file)//': '//error%message, 2)
+  if (allocated(error)) call stop_all(trim(scene_file)//': '//error%message, 2)
 
   if (me == 0) then
-    write (output_unit, '(a)') 'knotflow '//knotflow_version//' ('//knotflow_git_hash//'): '// &
+    write (output_unit, '(a)') version_line(program_name)//': '// &
       to_str(sw%n_cases())//' case(s) from '//trim(scene_file)//' on '//to_str(comm%size())// &
       ' rank(s), output in '//directory
     call list_cases()
@@ -93,7 +105,7 @@ program knotflow
   tasks%sweep = sw
   tasks%reporter%rank = me
   call run_task_farm(comm, sw%n_cases(), tasks, results, error)
-  if (allocated(error)) call die(error%message, 1)
+  if (allocated(error)) call stop_all(error%message, 1)
   nfailed = count(results%status /= task_ok .and. results%status /= task_skipped)
   if (me == 0) call write_summary()
   call h5_finalize()
@@ -271,48 +283,33 @@ contains
   subroutine parse_arguments(path, dry)
     character(len=:), allocatable, intent(out) :: path
     logical, intent(out) :: dry
-    integer :: k, n, length
+    integer :: k
     character(len=:), allocatable :: arg
     dry = .false.
     path = ''
-    n = command_argument_count()
-    do k = 1, n
-      call get_command_argument(k, length=length)
-      allocate (character(len=length) :: arg)
-      call get_command_argument(k, arg)
-      select case (arg)
-      case ('-h', '--help')
-        if (me == 0) write (output_unit, '(a)') 'usage: mpirun -n P knotflow SCENE.nml [--dry-run]'// &
-          new_line('a')//'  Runs every case of the scene''s &sweep (or the single scene).'// &
-          new_line('a')//'  --dry-run  validate the input and list the cases without running them'// &
-          new_line('a')//'  --version  print the version'
-        call comm_finalize(error)
-        stop
-      case ('--version')
-        if (me == 0) write (output_unit, '(a)') 'knotflow '//knotflow_version//' ('//knotflow_git_hash//')'
-        call comm_finalize(error)
-        stop
-      case ('--dry-run')
+    do k = 1, command_argument_count()
+      arg = argument(k)
+      if (arg == '--dry-run') then
         dry = .true.
-      case default
-        if (arg(1:1) == '-') call die('unknown option '''//arg//''' (allowed: --dry-run, --help, --version)', 2)
-        if (len(path) > 0) call die('more than one scene file given ('''//path//''' and '''//arg//''')', 2)
+      else if (index(arg, '-') == 1) then
+        call stop_all('unknown option '''//arg//''' (allowed: --dry-run, --help, --version)', 2)
+      else if (len(path) > 0) then
+        call stop_all('more than one scene file given ('''//path//''' and '''//arg//''')', 2)
+      else
         path = arg
-      end select
-      deallocate (arg)
+      end if
     end do
-    if (len(path) == 0) call die('no scene file given (usage: knotflow SCENE.nml [--dry-run])', 2)
+    if (len(path) == 0) call stop_all('no scene file given (usage: knotflow SCENE.nml [--dry-run])', 2)
   end subroutine parse_arguments
 
-  !> One error line on stderr (from rank 0), then a non-zero exit on every rank.
-  subroutine die(message, code)
+  !> MPI finalised on every rank, then one error line on stderr (from rank 0) and a non-zero
+  !> exit on every rank (kf_cli).
+  subroutine stop_all(message, code)
     character(len=*), intent(in) :: message
     integer, intent(in) :: code
     type(error_t), allocatable :: ignored
-    if (me == 0) write (error_unit, '(a)') 'knotflow: error: '//message
-    flush (error_unit)
     call comm_finalize(ignored)
-    call exit_program(code)
-  end subroutine die
+    call die(program_name, message, code, show=me == 0)
+  end subroutine stop_all
 
 end program knotflow

@@ -13,10 +13,10 @@
 !> inputs/configs/coil_candycane_A1.xyz). Results: DIR/{meta,models,tolerance,scaling,
 !> scaling_fit,case_time}.csv and readable tables on stdout. Errors: one line on stderr, exit 2.
 program knotflow_accuracy
-  use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
+  use, intrinsic :: iso_fortran_env, only: output_unit
   use kf_kinds, only: wp, i8
   use kf_exit, only: exit_program
-  use kf_build_info, only: knotflow_version, knotflow_git_hash
+  use kf_cli, only: standard_option, argument, die
   use kf_error, only: error_t, fatal_error
   use kf_strings, only: to_str
   use kf_scene, only: scene_t
@@ -27,6 +27,8 @@ program knotflow_accuracy
                          time_per_evaluation, max_bead_deviation, loglog_slope, &
                          integrate_timed, run_stats_t
   implicit none
+
+  character(len=*), parameter :: program_name = 'knotflow-accuracy'
 
   !> One hydrodynamic model of the comparison.
   type :: model_t
@@ -64,7 +66,7 @@ program knotflow_accuracy
   nargs = command_argument_count()
   i = 1
   do while (i <= nargs)
-    arg = get_arg(i)
+    arg = argument(i)
     i = i + 1
     select case (arg)
     case ('--models')
@@ -83,31 +85,27 @@ program knotflow_accuracy
     case ('--quick')
       cfg%quick = .true.
     case ('--out', '--ref-order', '--coil')
-      if (i > nargs) call die('option '//arg//' needs a value')
+      if (i > nargs) call die(program_name, 'option '//arg//' needs a value', 2)
       select case (arg)
       case ('--out')
-        cfg%out = get_arg(i)
+        cfg%out = argument(i)
       case ('--coil')
-        cfg%coil = get_arg(i)
+        cfg%coil = argument(i)
       case ('--ref-order')
-        value = get_arg(i)
+        value = argument(i)
         read (value, *, iostat=ios) cfg%ref_order
         if (ios /= 0 .or. verify(value, '0123456789') /= 0) &
-          call die('--ref-order '//value//': expected an integer 2..6')
+          call die(program_name, '--ref-order '//value//': expected an integer 2..6', 2)
         if (cfg%ref_order < 2 .or. cfg%ref_order > 6) &
-          call die('--ref-order '//value//': expected an integer 2..6')
+          call die(program_name, '--ref-order '//value//': expected an integer 2..6', 2)
       end select
       i = i + 1
-    case ('-h', '--help')
-      write (output_unit, '(a)') 'usage: knotflow-accuracy [--models] [--tolerance] [--scaling] '// &
-        '[--case-time] [--all] [--quick] [--out DIR] [--ref-order L] [--coil FILE]'
-      call exit_program(0)
-    case ('--version')
-      write (output_unit, '(a)') 'knotflow-accuracy '//knotflow_version//' ('//knotflow_git_hash//')'
-      call exit_program(0)
+    case ('-h', '--help', '--version')
+      call standard_option(program_name, arg, 'usage: knotflow-accuracy [--models] [--tolerance] [--scaling] '// &
+        '[--case-time] [--all] [--quick] [--out DIR] [--ref-order L] [--coil FILE]')
     case default
-      call die("unknown argument '"//arg//"' (allowed: --models --tolerance --scaling "// &
-        "--case-time --all --quick --out DIR --ref-order L --coil FILE --help --version)")
+      call die(program_name, "unknown argument '"//arg//"' (allowed: --models --tolerance --scaling "// &
+        "--case-time --all --quick --out DIR --ref-order L --coil FILE --help --version)", 2)
     end select
   end do
   any_part = do_models .or. do_tolerance .or. do_scaling .or. do_case_time
@@ -127,42 +125,25 @@ program knotflow_accuracy
   end if
 
   call make_directory(cfg%out, error)
-  if (allocated(error)) call die(error%message)
+  if (allocated(error)) call die(program_name, error%message, 2)
   t_start = wall_seconds()
   call write_meta(cfg, error)
-  if (allocated(error)) call die(error%message)
+  if (allocated(error)) call die(program_name, error%message, 2)
   if (do_models) call part_models(cfg, error)
-  if (allocated(error)) call die(error%message)
+  if (allocated(error)) call die(program_name, error%message, 2)
   if (do_tolerance) call part_tolerance(cfg, error)
-  if (allocated(error)) call die(error%message)
+  if (allocated(error)) call die(program_name, error%message, 2)
   if (do_scaling) call part_scaling(cfg, error)
-  if (allocated(error)) call die(error%message)
+  if (allocated(error)) call die(program_name, error%message, 2)
   if (do_case_time) call part_case_time(cfg, error)
-  if (allocated(error)) call die(error%message)
+  if (allocated(error)) call die(program_name, error%message, 2)
   call append_meta('loadavg_end', load_average(), error)
-  if (allocated(error)) call die(error%message)
+  if (allocated(error)) call die(program_name, error%message, 2)
   write (output_unit, '(a)') '# knotflow-accuracy: done in '//to_str(wall_seconds() - t_start, '(f10.1)')// &
     ' s; results in '//cfg%out
   call exit_program(0)
 
 contains
-
-  !> Command-line argument k (any length).
-  function get_arg(k) result(s)
-    integer, intent(in) :: k
-    character(len=:), allocatable :: s
-    integer :: length
-    call get_command_argument(k, length=length)
-    allocate (character(len=length) :: s)
-    if (length > 0) call get_command_argument(k, s)
-  end function get_arg
-
-  !> One error line on stderr and exit status 2.
-  subroutine die(message)
-    character(len=*), intent(in) :: message
-    write (error_unit, '(a)') 'knotflow-accuracy: error: '//message
-    call exit_program(2)
-  end subroutine die
 
   !> A model entry.
   function make_model(name, order, lubrication) result(m)
@@ -193,19 +174,20 @@ contains
     scene%hydro%update = 'stage'
   end subroutine apply_model
 
-  !> Open DIR/name for writing and write the header line.
   !> The force-driven part mu(r) F(r) of the bead velocities (exact at r).
   subroutine force_part(dyn, r, uf, error)
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: r(:, :)
     real(wp), intent(out) :: uf(:, :)
     type(error_t), allocatable, intent(out) :: error
-    call dyn%forces%compute(r, dyn%f)
+    real(wp) :: f(3, size(r, 2))
+    call dyn%forces%compute(r, f)
     call dyn%model%prepare(r, error)
     if (allocated(error)) return
-    call dyn%model%apply_mobility(dyn%f, uf)
+    call dyn%model%apply_mobility(f, uf)
   end subroutine force_part
 
+  !> Open DIR/name for writing and write the header line.
   subroutine open_csv(name, header, unit, error)
     character(len=*), intent(in) :: name, header
     integer, intent(out) :: unit

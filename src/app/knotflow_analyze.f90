@@ -6,11 +6,10 @@
 !> shared, so that the ranks always meet in the same collective call. Rank 0 alone reads the
 !> stored analysis and writes /analysis, holding the directory lock knotflow's sweeps take.
 program knotflow_analyze
-  use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
+  use, intrinsic :: iso_fortran_env, only: output_unit
   use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
   use kf_kinds, only: wp, i8
-  use kf_exit, only: exit_program
-  use kf_build_info, only: knotflow_version, knotflow_git_hash
+  use kf_cli, only: standard_option, argument, die
   use kf_strings, only: to_str
   use kf_memory, only: keep_freed_heap
   use kf_error, only: error_t, fatal_error
@@ -30,6 +29,13 @@ program knotflow_analyze
   use kf_transitions, only: detect_transitions, default_low, default_high
   implicit none
 
+  character(len=*), parameter :: program_name = 'knotflow-analyze'
+  character(len=*), parameter :: usage = &
+    'usage: knotflow-analyze chain.xyz [--closures N] [--seed S] [--matrix] [--matrix-closures N]'//new_line('a')// &
+    '                        [--min-length M] [--closure-points FILE] [--json] [--per-closure]'//new_line('a')// &
+    '       knotflow-analyze CASE.h5 [CASE2.h5 ...] [--closures N] [--seed S] [--stride K]'//new_line('a')// &
+    '                        [--matrix-frames k1,k2|last] [--min-length M] [--force]'//new_line('a')// &
+    '       knotflow-analyze --help | --version'
   integer, parameter :: max_files = 4096
   integer, parameter :: path_len = 1024
 
@@ -58,9 +64,9 @@ program knotflow_analyze
   integer :: status
 
   call parse_options(opt, error)
-  if (allocated(error)) call die(error%message, status_refused)
+  if (allocated(error)) call die(program_name, error%message, status_refused)
   call farm_start(farm, error)
-  if (allocated(error)) call die(error%message, status_failed)
+  if (allocated(error)) call die(program_name, error%message, status_failed)
   call keep_freed_heap()   ! after MPI start-up, which sets its own allocator options
   status = status_failed
   if (is_case_file(opt%files(1))) then
@@ -68,8 +74,9 @@ program knotflow_analyze
   else
     call analyse_coordinates(opt, farm, error)
   end if
-  if (allocated(error)) call die(error%message, status)
-  call farm_stop(farm)
+  if (allocated(error)) call die(program_name, error%message, status)
+  call farm_stop(farm, error)
+  if (allocated(error)) call die(program_name, error%message, status_failed)
 
 contains
 
@@ -82,31 +89,17 @@ contains
     if (n >= 5) is_case_file = is_case_file .or. path(n - 4:n) == '.hdf5'
   end function is_case_file
 
-  subroutine die(message, code)
-    character(len=*), intent(in) :: message
-    integer, intent(in) :: code
-    write (error_unit, '(a)') 'knotflow-analyze: error: '//message
-    call exit_program(code)    ! flushes; one line and a non-zero exit status, no runtime backtrace
-  end subroutine die
-
   !> True on every rank when `error` is set on any rank (a collective call: every rank makes it
   !> at the same point); a rank without an error of its own gets one naming `what`.
   logical function failed(farm, error, what)
     type(analysis_farm_t), intent(in) :: farm
     type(error_t), allocatable, intent(inout) :: error
     character(len=*), intent(in) :: what
-    failed = farm_any(farm, allocated(error))
+    type(error_t), allocatable :: comm_error
+    call farm_any(farm, allocated(error), failed, comm_error)
+    if (allocated(comm_error) .and. .not. allocated(error)) call move_alloc(comm_error, error)
     if (failed .and. .not. allocated(error)) call fatal_error(error, what//': failed on another rank')
   end function failed
-
-  subroutine usage()
-    write (output_unit, '(a)') &
-      'usage: knotflow-analyze chain.xyz [--closures N] [--seed S] [--matrix] [--matrix-closures N]', &
-      '                        [--min-length M] [--closure-points FILE] [--json] [--per-closure]', &
-      '       knotflow-analyze CASE.h5 [CASE2.h5 ...] [--closures N] [--seed S] [--stride K]', &
-      '                        [--matrix-frames k1,k2|last] [--min-length M] [--force]', &
-      '       knotflow-analyze --help | --version'
-  end subroutine usage
 
   !> Read and validate the command line.
   subroutine parse_options(opt, error)
@@ -116,21 +109,17 @@ contains
     character(len=path_len) :: arg, val
     n = command_argument_count()
     if (n == 0) then
-      call usage()
+      write (output_unit, '(a)') usage
       call fatal_error(error, 'no input file given')
       return
     end if
     i = 0
     do while (i < n)
       i = i + 1
-      call get_command_argument(i, arg)
+      arg = argument(i)
       select case (trim(arg))
-      case ('-h', '--help')
-        call usage()
-        stop
-      case ('--version')
-        write (output_unit, '(a)') 'knotflow-analyze '//knotflow_version//' ('//knotflow_git_hash//')'
-        stop
+      case ('-h', '--help', '--version')
+        call standard_option(program_name, trim(arg), usage)
       case ('--matrix')
         opt%matrix = .true.
       case ('--json')
@@ -146,7 +135,7 @@ contains
           return
         end if
         i = i + 1
-        call get_command_argument(i, val)
+        val = argument(i)
         select case (trim(arg))
         case ('--closures')
           read (val, *, iostat=stat) opt%closures
@@ -252,7 +241,8 @@ contains
       call knot_matrix(r, opt%matrix_closures, opt%seed, opt%min_length, kmat, error, &
                        part=farm%rank, nparts=farm%size)
       if (failed(farm, error, trim(opt%files(1)))) return
-      call merge_matrix(farm, kmat)
+      call merge_matrix(farm, kmat, error)
+      if (allocated(error)) return
       call knot_core(kmat, core, found)
       slip = is_slipknot(kmat, st%kf)
     end if
@@ -471,13 +461,16 @@ contains
       end do
     end if
     if (failed(farm, error, 'case file '//path)) return
-    call farm_share(farm, need)
-    call farm_share(farm, compute)
+    call farm_share(farm, need, error)
+    if (.not. allocated(error)) call farm_share(farm, compute, error)
+    if (allocated(error)) return
     call analyse_frame_knots(r, t, need, opt%closures, opt%seed, fresh, error, part=farm%rank, nparts=farm%size)
     if (failed(farm, error, 'case file '//path)) return
-    call farm_sum(farm, fresh%kf)
+    call farm_sum(farm, fresh%kf, error)
+    if (allocated(error)) return
     flat = reshape(fresh%spectrum, [size(fresh%spectrum)])
-    call farm_sum(farm, flat)
+    call farm_sum(farm, flat, error)
+    if (allocated(error)) return
     fresh%spectrum = reshape(flat, shape(fresh%spectrum))
     ! knot matrices not stored yet: computed by all ranks
     do k = 1, size(mframes)
@@ -489,7 +482,8 @@ contains
       call knot_matrix(r(:, :, mframes(k) + 1), opt%matrix_closures, opt%seed, opt%min_length, mats(k)%k, &
                        error, part=farm%rank, nparts=farm%size)
       if (failed(farm, error, 'case file '//path)) return
-      call merge_matrix(farm, mats(k)%k)
+      call merge_matrix(farm, mats(k)%k, error)
+      if (allocated(error)) return
     end do
     if (farm%rank /= 0) return
     ! rank 0: merge previous and fresh results in the order of todo, and write
@@ -503,12 +497,14 @@ contains
   end subroutine analyse_frames
 
   !> Merge the partial knot matrices of the ranks (NaN where a rank computed nothing).
-  subroutine merge_matrix(farm, k)
+  subroutine merge_matrix(farm, k, error)
     type(analysis_farm_t), intent(in) :: farm
     real(wp), intent(inout) :: k(:, :)
+    type(error_t), allocatable, intent(out) :: error
     real(wp) :: flat(size(k))
     flat = for_max_merge(reshape(k, [size(k)]))
-    call farm_max(farm, flat)
+    call farm_max(farm, flat, error)
+    if (allocated(error)) return
     k = reshape(after_max_merge(flat), shape(k))
   end subroutine merge_matrix
 

@@ -5,7 +5,7 @@
 !> It also compares, for RPY, the pair loop (prepare + apply_mobility) with assembling the
 !> 3N x 3N matrix (prepare + mobility_matrix) and applying it with DSYMV.
 program knotflow_bench
-  use, intrinsic :: iso_fortran_env, only: int64, output_unit, error_unit
+  use, intrinsic :: iso_fortran_env, only: int64, output_unit
   use kf_kinds, only: wp
   use kf_blas, only: dsymv
   use kf_error, only: error_t
@@ -16,13 +16,14 @@ program knotflow_bench
   use kf_stepper, only: stepper_t
   use kf_stepper_factory, only: make_stepper
   use kf_hydro_rpy, only: rpy_model_t
-  use kf_cli, only: standard_option
-  use kf_exit, only: exit_program
+  use kf_cli, only: standard_option, argument, die
   implicit none
+
+  character(len=*), parameter :: program_name = 'knotflow-bench'
 
   type(scene_t) :: scene
   type(error_t), allocatable :: error
-  character(len=64) :: arg
+  character(len=:), allocatable :: arg
   logical :: trefoil_case
   integer :: i, ishape, imodel
   character(len=9), parameter :: shapes(2) = ['trefoil  ', 'candycane']
@@ -31,8 +32,8 @@ program knotflow_bench
 
   trefoil_case = .false.
   do i = 1, command_argument_count()
-    call get_command_argument(i, arg)
-    call standard_option('knotflow-bench', arg, 'usage: knotflow-bench [--trefoil-case]'//new_line('a')// &
+    arg = argument(i)
+    call standard_option(program_name, arg, 'usage: knotflow-bench [--trefoil-case]'//new_line('a')// &
       '       knotflow-bench --help | --version'//new_line('a')// &
       'Times one velocity evaluation (none, rpy; trefoil and candy-cane); --trefoil-case also runs'// &
       new_line('a')//'the reference trefoil case (rpy, t_end = 1000).')
@@ -40,9 +41,7 @@ program knotflow_bench
     case ('--trefoil-case')
       trefoil_case = .true.
     case default
-      write (error_unit, '(a)') "knotflow-bench: error: unknown argument '"//trim(arg)// &
-        "' (allowed: --trefoil-case, --help, --version)"
-      call exit_program(2)
+      call die(program_name, "unknown argument '"//arg//"' (allowed: --trefoil-case, --help, --version)", 2)
     end select
   end do
 
@@ -54,7 +53,7 @@ program knotflow_bench
       scene%chain%shape = shapes(ishape)
       scene%hydro%model = models(imodel)
       call time_velocity(scene, t_eval, error)
-      if (allocated(error)) call fail(error)
+      if (allocated(error)) call die(program_name, error%message, 1)
       write (output_unit, '(a10,i6,a6,f16.3)') trim(shapes(ishape)), merge(99, 152, ishape == 1), &
         trim(models(imodel)), 1.0e6_wp*t_eval
     end do
@@ -62,7 +61,7 @@ program knotflow_bench
 
   scene = scene_t()
   call compare_matrix(scene, error)
-  if (allocated(error)) call fail(error)
+  if (allocated(error)) call die(program_name, error%message, 1)
 
   if (trefoil_case) then
     scene = scene_t()
@@ -71,16 +70,10 @@ program knotflow_bench
     scene%hydro%model = 'rpy'
     scene%integrator%t_end = 1000.0_wp
     call run_case(scene, error)
-    if (allocated(error)) call fail(error)
+    if (allocated(error)) call die(program_name, error%message, 1)
   end if
 
 contains
-
-  subroutine fail(error)
-    type(error_t), intent(in) :: error
-    write (error_unit, '(a)') 'ERROR: '//error%message
-    stop 1
-  end subroutine fail
 
   !> Median over 41 batches of the time per evaluation (a batch lasts about 10 ms).
   subroutine time_velocity(scene, t_eval, error)

@@ -4,7 +4,7 @@
 !> dynamics with excluded volume); medians over batches. Then the trefoil (A = 2.2, orientation
 !> c, rpy, excluded volume) integrated to t = 50 with and without the monitor (wall times).
 program knotflow_bench_diagnostics
-  use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
+  use, intrinsic :: iso_fortran_env, only: output_unit
   use kf_kinds, only: wp, i8
   use kf_error, only: error_t
   use kf_accuracy, only: wall_seconds, median
@@ -14,25 +14,24 @@ program knotflow_bench_diagnostics
   use kf_stepper, only: stepper_t
   use kf_stepper_factory, only: make_stepper
   use kf_run_diagnostics, only: run_diagnostics_t
-  use kf_cli, only: standard_option
-  use kf_exit, only: exit_program
+  use kf_cli, only: standard_option, argument, die
   implicit none
+
+  character(len=*), parameter :: program_name = 'knotflow-bench-diagnostics'
 
   type(scene_t) :: scene
   type(error_t), allocatable :: error
   character(len=9), parameter :: shapes(2) = ['trefoil  ', 'candycane']
   integer :: ishape
   real(wp) :: t_eval, t_diag, t_with, t_without
-  character(len=64) :: arg
+  character(len=:), allocatable :: arg
 
   if (command_argument_count() > 0) then
-    call get_command_argument(1, arg)
-    call standard_option('knotflow-bench-diagnostics', arg, 'usage: knotflow-bench-diagnostics'// &
+    arg = argument(1)
+    call standard_option(program_name, arg, 'usage: knotflow-bench-diagnostics'// &
       new_line('a')//'       knotflow-bench-diagnostics --help | --version'//new_line('a')// &
       'Times the run diagnostics of one accepted step against one RPY evaluation (trefoil, candy-cane).')
-    write (error_unit, '(a)') "knotflow-bench-diagnostics: error: unknown argument '"//trim(arg)// &
-      "' (allowed: no arguments, --help, --version)"
-    call exit_program(2)
+    call die(program_name, "unknown argument '"//arg//"' (allowed: no arguments, --help, --version)", 2)
   end if
   write (output_unit, '(a)') '# run diagnostics per accepted step against one RPY evaluation, median'
   write (output_unit, '(a10,a6,a16,a18,a22)') 'shape', 'N', 'rpy eval [us]', 'diagnostics [us]', &
@@ -40,7 +39,7 @@ program knotflow_bench_diagnostics
   do ishape = 1, 2
     scene = bench_scene(shapes(ishape))
     call time_step_costs(scene, t_eval, t_diag, error)
-    if (allocated(error)) call fail(error)
+    if (allocated(error)) call die(program_name, error%message, 1)
     write (output_unit, '(a10,i6,f16.2,f18.2,f22.2)') trim(shapes(ishape)), merge(99, 152, ishape == 1), &
       1.0e6_wp*t_eval, 1.0e6_wp*t_diag, 100.0_wp*t_diag/(6.0_wp*t_eval)
   end do
@@ -48,7 +47,7 @@ program knotflow_bench_diagnostics
   scene = bench_scene('trefoil')
   call time_run(scene, 50.0_wp, .false., t_without, error)
   if (.not. allocated(error)) call time_run(scene, 50.0_wp, .true., t_with, error)
-  if (allocated(error)) call fail(error)
+  if (allocated(error)) call die(program_name, error%message, 1)
   write (output_unit, '(a)') '# trefoil (A = 2.2, orientation c, rpy, excluded volume) to t = 50, wall time'
   write (output_unit, '(a,f10.3)') 'without diagnostics [s]', t_without
   write (output_unit, '(a,f10.3)') 'with diagnostics    [s]', t_with
@@ -64,12 +63,6 @@ contains
     sc%forces%excluded_volume = .true.
     sc%hydro%model = 'rpy'
   end function bench_scene
-
-  subroutine fail(error)
-    type(error_t), intent(in) :: error
-    write (error_unit, '(a)') 'ERROR: '//error%message
-    stop 1
-  end subroutine fail
 
   !> Median times of one velocity evaluation and of one `on_step` of the diagnostics, on the
   !> step of the proposed size that follows t = 5.

@@ -4,18 +4,19 @@
 !> would be), parallel over subchains with MPI.
 !> usage: knotflow-bench-knots [matrix_closures (default 100)] [min_length (default 10)]
 program knotflow_bench_knots
-  use, intrinsic :: iso_fortran_env, only: output_unit, error_unit, int64
+  use, intrinsic :: iso_fortran_env, only: output_unit, int64
   use, intrinsic :: ieee_arithmetic, only: ieee_is_nan, ieee_value, ieee_quiet_nan
   use kf_kinds, only: wp, i8
-  use kf_exit, only: exit_program
   use kf_constants, only: pi
   use kf_error, only: error_t
   use kf_memory, only: keep_freed_heap
   use kf_knot_closure, only: knot_stats_t, analyse_closures
   use kf_knot_matrix, only: knot_matrix, knot_core, n_subchains
   use kf_analysis_farm, only: analysis_farm_t, farm_start, farm_stop, farm_max, farm_barrier
-  use kf_cli, only: standard_option
+  use kf_cli, only: standard_option, argument, die
   implicit none
+
+  character(len=*), parameter :: program_name = 'knotflow-bench-knots'
 
   type(analysis_farm_t) :: farm
   type(error_t), allocatable :: error
@@ -23,46 +24,48 @@ program knotflow_bench_knots
   real(wp) :: trefoil(3, 99), cane(3, 152), kmat(152, 152), flat(152*152), t0, t1
   integer :: mclos, minlen, stat, core(2)
   logical :: found
-  character(len=32) :: arg
+  character(len=:), allocatable :: arg
 
   mclos = 100
   minlen = 10
   if (command_argument_count() >= 1) then
-    call get_command_argument(1, arg)
-    call standard_option('knotflow-bench-knots', arg, 'usage: [mpirun -n P] knotflow-bench-knots '// &
+    arg = argument(1)
+    call standard_option(program_name, arg, 'usage: [mpirun -n P] knotflow-bench-knots '// &
       '[MATRIX_CLOSURES [MIN_LENGTH]]'//new_line('a')//'       knotflow-bench-knots --help | --version'// &
       new_line('a')//'Times k_f of an N = 99 trefoil frame (1000 closures) and the knot matrix of an '// &
       'N = 152'//new_line('a')//'candy-cane frame (MATRIX_CLOSURES per subchain, default 100; subchains of '// &
-      'at least'//new_line('a')//'MIN_LENGTH beads, default 10) over the MPI ranks.')
+      'at least'//new_line('a')//'MIN_LENGTH beads, default 10) over the MPI ranks (one without MPI).')
     read (arg, *, iostat=stat) mclos
-    if (stat /= 0 .or. mclos < 1) call die('matrix_closures: invalid value "'//trim(arg)//'" (allowed: integer >= 1)')
+    if (stat /= 0 .or. mclos < 1) call die(program_name, 'matrix_closures: invalid value "'//trim(arg)//'" (allowed: integer >= 1)', 1)
   end if
   if (command_argument_count() >= 2) then
-    call get_command_argument(2, arg)
+    arg = argument(2)
     read (arg, *, iostat=stat) minlen
-    if (stat /= 0 .or. minlen < 2) call die('min_length: invalid value "'//trim(arg)//'" (allowed: integer >= 2)')
+    if (stat /= 0 .or. minlen < 2) call die(program_name, 'min_length: invalid value "'//trim(arg)//'" (allowed: integer >= 2)', 1)
   end if
   call farm_start(farm, error)
-  if (allocated(error)) call die(error%message)
+  if (allocated(error)) call die(program_name, error%message, 1)
   call keep_freed_heap()
 
   call open_trefoil(trefoil)
   if (farm%rank == 0) then
     t0 = wall()
     call analyse_closures(trefoil, 1000, 1972_i8, st, error)
-    if (allocated(error)) call die(error%message)
+    if (allocated(error)) call die(program_name, error%message, 1)
     t1 = wall()
     write (output_unit, '(a,f8.4,a,f9.4,a)') 'trefoil N=99: k_f = ', st%kf, ' with 1000 closures in ', t1 - t0, ' s'
   end if
 
   call candy_cane(cane)
-  call farm_barrier(farm)
+  call farm_barrier(farm, error)
+  if (allocated(error)) call die(program_name, error%message, 1)
   t0 = wall()
   call knot_matrix(cane, mclos, 1972_i8, minlen, kmat, error, part=farm%rank, nparts=farm%size)
-  if (allocated(error)) call die(error%message)
+  if (allocated(error)) call die(program_name, error%message, 1)
   flat = reshape(kmat, [size(flat)])
   where (ieee_is_nan(flat)) flat = -huge(1.0_wp)
-  call farm_max(farm, flat)
+  call farm_max(farm, flat, error)
+  if (allocated(error)) call die(program_name, error%message, 1)
   kmat = reshape(flat, [152, 152])
   where (kmat < -1.0_wp) kmat = ieee_value(0.0_wp, ieee_quiet_nan)
   t1 = wall()
@@ -74,7 +77,8 @@ program knotflow_bench_knots
     write (output_unit, '(a,f8.4,a,l1)') '  max K = ', maxval(kmat, mask=.not. ieee_is_nan(kmat)), &
       ', knot core found: ', found
   end if
-  call farm_stop(farm)
+  call farm_stop(farm, error)
+  if (allocated(error)) call die(program_name, error%message, 1)
 
 contains
 
@@ -83,12 +87,6 @@ contains
     call system_clock(c, rate)
     wall = real(c, wp)/real(rate, wp)
   end function wall
-
-  subroutine die(message)
-    character(len=*), intent(in) :: message
-    write (error_unit, '(a)') 'knotflow-bench-knots: error: '//message
-    call exit_program(1)       ! flushes; one line and a non-zero exit status, no runtime backtrace
-  end subroutine die
 
   subroutine open_trefoil(r)
     real(wp), intent(out) :: r(3, 99)

@@ -8,14 +8,16 @@
 !> Usage: knotflow-bench-multipole [max_seconds]  (combinations predicted to take longer are
 !> skipped; default 60). Run with OPENBLAS_NUM_THREADS=1 for single-core figures.
 program knotflow_bench_multipole
-  use, intrinsic :: iso_fortran_env, only: output_unit, error_unit, int64
+  use, intrinsic :: iso_fortran_env, only: output_unit, int64
   use kf_kinds, only: wp
   use kf_error, only: error_t
   use kf_hydro_multipole, only: multipole_model_t
   use kf_scene, only: chain_params_t
   use kf_chain_shapes, only: build_initial_chain
-  use kf_cli, only: standard_option
+  use kf_cli, only: standard_option, argument, die
   implicit none
+
+  character(len=*), parameter :: program_name = 'knotflow-bench-multipole'
 
   integer, parameter :: sizes(4) = [10, 20, 99, 152]
   type(multipole_model_t) :: model
@@ -25,21 +27,18 @@ program knotflow_bench_multipole
   integer :: is, order, n, rep, nrep, ios, n_prev, ilub
   integer(int64) :: c0, c1, crate
   logical :: lub
-  character(len=64) :: arg
+  character(len=:), allocatable :: arg
 
   max_seconds = 60.0_wp
   if (command_argument_count() >= 1) then
-    call get_command_argument(1, arg)
-    call standard_option('knotflow-bench-multipole', arg, 'usage: knotflow-bench-multipole [MAX_SECONDS]'// &
+    arg = argument(1)
+    call standard_option(program_name, arg, 'usage: knotflow-bench-multipole [MAX_SECONDS]'// &
       new_line('a')//'       knotflow-bench-multipole --help | --version'//new_line('a')// &
       'Times one multipole evaluation (assembly, factorisation, solves, lubrication) for N = 10-152'// &
       new_line('a')//'and L = 1-4; sizes predicted to take more than MAX_SECONDS (default 60) are skipped.')
     read (arg, *, iostat=ios) max_seconds
-    if (ios /= 0 .or. max_seconds <= 0.0_wp) then
-      write (error_unit, '(a)') 'knotflow-bench-multipole: error: max_seconds '//trim(arg)// &
-        ': expected a positive number'
-      error stop 2
-    end if
+    if (ios /= 0 .or. max_seconds <= 0.0_wp) &
+      call die(program_name, 'max_seconds '//arg//': expected a positive number', 2)
   end if
 
   write (output_unit, '(a)') '#   N  L lub  assembly[s] factor[s]  solve[s]    lub[s]  total[s]'// &
@@ -72,14 +71,12 @@ program knotflow_bench_multipole
         do rep = 1, nrep
           call system_clock(c0, crate)
           call model%prepare(r, error)
-          if (allocated(error)) call fail(error%message)
+          if (allocated(error)) call die(program_name, error%message, 2)
           call system_clock(c1)
           t_tot = real(c1 - c0, wp)/real(crate, wp)
           if (t_tot < best) then
             best = t_tot
-            t_asm = model%sys%t_assembly
-            t_fac = model%sys%t_factor
-            t_lub = model%t_lubrication
+            call model%prepare_seconds(t_asm, t_fac, t_lub)
             t_sol = t_tot - t_asm - t_fac - t_lub
           end if
         end do
@@ -110,15 +107,9 @@ contains
       return
     end select
     call build_initial_chain(params, pos, rotation, error)
-    if (allocated(error)) call fail(error%message)
-    if (size(pos, 2) /= nbeads) call fail('unexpected number of beads in '//trim(params%shape))
+    if (allocated(error)) call die(program_name, error%message, 2)
+    if (size(pos, 2) /= nbeads) call die(program_name, 'unexpected number of beads in '//trim(params%shape), 2)
   end subroutine bench_chain
-
-  subroutine fail(message)
-    character(len=*), intent(in) :: message
-    write (error_unit, '(a)') 'knotflow-bench-multipole: error: '//message
-    error stop 2
-  end subroutine fail
 
   !> Self-avoiding random chain: bond 1.02, non-bonded centres at least 1.05 apart
   !> (xorshift generator with a fixed seed, so every run sees the same chain).

@@ -16,7 +16,7 @@
 !> coil_candycane_A1.xyz, A = 1) or a coordinate file path (A = 1). Output: `key = value` lines
 !> (read by knotflow-accuracy-report --reuse).
 program knotflow_bench_reuse
-  use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
+  use, intrinsic :: iso_fortran_env, only: output_unit
   use kf_kinds, only: wp, i8
   use kf_strings, only: to_str
   use kf_error, only: error_t
@@ -29,10 +29,11 @@ program knotflow_bench_reuse
   use kf_reuse_check, only: checked_dynamics_t
   use kf_hydro_multipole, only: multipole_model_t
   use kf_run_diagnostics, only: run_diagnostics_t
-  use kf_exit, only: exit_program
-  use kf_build_info, only: knotflow_version, knotflow_git_hash
+  use kf_cli, only: standard_option, argument, die
   use kf_accuracy, only: wall_seconds, max_bead_deviation, loglog_slope
   implicit none
+
+  character(len=*), parameter :: program_name = 'knotflow-bench-reuse'
 
   character(len=:), allocatable :: part, config
   real(wp) :: t_end, eps_lub
@@ -53,58 +54,44 @@ program knotflow_bench_reuse
   case ('overlaps')
     call run_overlaps()
   case default
-    call die("unknown part '"//part//"' (allowed: velocity, trajectory, speed, scaling, overlaps, rigid)")
+    call die(program_name, "unknown part '"//part//"' (allowed: velocity, trajectory, speed, scaling, overlaps, rigid)", 2)
   end select
 
 contains
 
-  subroutine die(message)
-    character(len=*), intent(in) :: message
-    write (error_unit, '(a)') 'knotflow-bench-reuse: error: '//message
-    call exit_program(2)
-  end subroutine die
-
   subroutine parse_arguments()
-    character(len=1024) :: arg, val
+    character(len=:), allocatable :: arg, val
     integer :: k, ios
-    if (command_argument_count() < 1) call die('usage: knotflow-bench-reuse velocity|trajectory|speed|scaling [options]')
-    call get_command_argument(1, arg)
-    part = trim(arg)
-    select case (part)
-    case ('-h', '--help')
-      write (output_unit, '(a)') 'usage: knotflow-bench-reuse velocity|trajectory|speed|overlaps|scaling|rigid '// &
-        '[--config trefoil|coil|FILE] [--t-end T] [--every K] [--eps-lub E]'
-      write (output_unit, '(a)') '       knotflow-bench-reuse --help | --version'
-      write (output_unit, '(a)') 'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).'
-      call exit_program(0)
-    case ('--version')
-      write (output_unit, '(a)') 'knotflow-bench-reuse '//knotflow_version//' ('//knotflow_git_hash//')'
-      call exit_program(0)
-    end select
+    if (command_argument_count() < 1) call die(program_name, 'usage: knotflow-bench-reuse velocity|trajectory|speed|scaling [options]', 2)
+    part = argument(1)
+    call standard_option(program_name, part, 'usage: knotflow-bench-reuse velocity|trajectory|speed|overlaps|'// &
+      'scaling|rigid [--config trefoil|coil|FILE] [--t-end T] [--every K] [--eps-lub E]'//new_line('a')// &
+      '       knotflow-bench-reuse --help | --version'//new_line('a')// &
+      'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).')
     config = 'trefoil'
     t_end = 10.0_wp
     every = 1
     eps_lub = -1.0_wp
     k = 2
     do while (k <= command_argument_count())
-      call get_command_argument(k, arg)
-      if (k + 1 > command_argument_count()) call die(trim(arg)//' needs a value')
-      call get_command_argument(k + 1, val)
+      arg = argument(k)
+      if (k + 1 > command_argument_count()) call die(program_name, trim(arg)//' needs a value', 2)
+      val = argument(k + 1)
       select case (trim(arg))
       case ('--config')
         config = trim(val)
       case ('--t-end')
         read (val, *, iostat=ios) t_end
-        if (ios /= 0 .or. .not. t_end > 0.0_wp) call die('--t-end '//trim(val)//': expected a number > 0')
+        if (ios /= 0 .or. .not. t_end > 0.0_wp) call die(program_name, '--t-end '//trim(val)//': expected a number > 0', 2)
       case ('--eps-lub')
         read (val, *, iostat=ios) eps_lub
         if (ios /= 0 .or. .not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) &
-          call die('--eps-lub '//trim(val)//': expected a number in (0, 0.5)')
+          call die(program_name, '--eps-lub '//trim(val)//': expected a number in (0, 0.5)', 2)
       case ('--every')
         read (val, *, iostat=ios) every
-        if (ios /= 0 .or. every < 1) call die('--every '//trim(val)//': expected an integer >= 1')
+        if (ios /= 0 .or. every < 1) call die(program_name, '--every '//trim(val)//': expected an integer >= 1', 2)
       case default
-        call die('unknown option '//trim(arg))
+        call die(program_name, 'unknown option '//trim(arg), 2)
       end select
       k = k + 2
     end do
@@ -139,7 +126,7 @@ contains
       scene%forces%bending_a = 1.0_wp
     end select
     call build_initial_chain(scene%chain, r, rot, error)
-    if (allocated(error)) call die(error%message)
+    if (allocated(error)) call die(program_name, error%message, 2)
   end subroutine study_scene
 
   !> The part, configuration, t_end, the load average and the BLAS threads (environment).
@@ -184,13 +171,13 @@ contains
     call header()
     call study_scene(config, 1.0e-4_wp, 'adaptive', scene, r)
     call sys%init(scene, size(r, 2), error, every)
-    if (allocated(error)) call die(error%message)
+    if (allocated(error)) call die(program_name, error%message, 2)
     call make_stepper(scene%integrator, integ, error)
-    if (allocated(error)) call die(error%message)
+    if (allocated(error)) call die(program_name, error%message, 2)
     t = 0.0_wp
     w0 = wall_seconds()
     call integ%advance(sys, t, r, t_end, error)
-    if (allocated(error)) call die(error%message)
+    if (allocated(error)) call die(program_name, error%message, 2)
     write (output_unit, '(a)') 'steps = '//to_str(integ%steps())
     write (output_unit, '(a)') 'rejected = '//to_str(integ%rejected())
     write (output_unit, '(a)') 'checks = '//to_str(sys%checks)
@@ -214,13 +201,13 @@ contains
     type(error_t), allocatable :: error
     real(wp) :: t, w0
     call dyn%init(scene, size(r, 2), error)
-    if (allocated(error)) call die(error%message)
+    if (allocated(error)) call die(program_name, error%message, 2)
     call make_stepper(scene%integrator, integ, error)
-    if (allocated(error)) call die(error%message)
+    if (allocated(error)) call die(program_name, error%message, 2)
     t = 0.0_wp
     w0 = wall_seconds()
     call integ%advance(dyn, t, r, t_end, error)
-    if (allocated(error)) call die(error%message)
+    if (allocated(error)) call die(program_name, error%message, 2)
     wall = wall_seconds() - w0
     steps = integ%steps()
     stats = dyn%model%statistics()
@@ -338,15 +325,15 @@ contains
       p = trim(paths(k))
       call study_scene(config, 1.0e-4_wp, p, scene, r)
       call dyn%init(scene, size(r, 2), error)
-      if (allocated(error)) call die(error%message)
+      if (allocated(error)) call die(program_name, error%message, 2)
       call make_stepper(scene%integrator, integ, error)
-      if (allocated(error)) call die(error%message)
+      if (allocated(error)) call die(program_name, error%message, 2)
       call diag%init(size(r, 2), scene%chain%bond_length)
       t = 0.0_wp
       call diag%start(t, r)
       w0 = wall_seconds()
       call integ%advance(dyn, t, r, t_end, error, diag)
-      if (allocated(error)) call die(error%message)
+      if (allocated(error)) call die(program_name, error%message, 2)
       write (output_unit, '(a)') p//'.wall_s = '//to_str(wall_seconds() - w0, '(f10.2)')
       write (output_unit, '(a)') p//'.steps = '//to_str(integ%steps())
       write (output_unit, '(a)') p//'.overlap_episodes = '//to_str(diag%overlap_episodes)
@@ -366,14 +353,14 @@ contains
     real(wp), intent(in) :: rr(:, :)
     real(wp), intent(out) :: vv(:, :)
     type(error_t), allocatable :: error
-    real(wp), allocatable :: v0(:, :)
-    allocate (v0(3, size(rr, 2)))
-    call fast%forces%compute(rr, fast%f)
+    real(wp), allocatable :: v0(:, :), f(:, :)
+    allocate (v0(3, size(rr, 2)), f(3, size(rr, 2)))
+    call fast%forces%compute(rr, f)
     select type (m => fast%model)
     type is (multipole_model_t)
-      call m%reused_velocities(rr, fast%f, vv, error, fast%flow%e)
+      call m%reused_velocities(rr, f, vv, error, fast%flow%e)
     end select
-    if (allocated(error)) call die(error%message)
+    if (allocated(error)) call die(program_name, error%message, 2)
     call fast%flow%velocity(rr, v0)
     vv = vv + v0
   end subroutine reused
@@ -393,7 +380,7 @@ contains
       scene%chain%shape = 'random'
       scene%chain%n_beads = sizes(k)
       call build_initial_chain(scene%chain, r, rot, error)
-      if (allocated(error)) call die(error%message)
+      if (allocated(error)) call die(program_name, error%message, 2)
       call integrate(scene, r, walls(k), steps, stats)
       walls(k) = walls(k)/t_end
       write (output_unit, '(a)') 'N'//to_str(sizes(k))//'.wall_s_per_time = '//to_str(walls(k), '(es10.3)')
@@ -402,7 +389,7 @@ contains
       write (output_unit, '(a)') 'N'//to_str(sizes(k))//'.refreshes = '//to_str(stats%refreshes)
     end do
     call loglog_slope(real(sizes, wp), walls, slope, error)
-    if (allocated(error)) call die(error%message)
+    if (allocated(error)) call die(program_name, error%message, 2)
     write (output_unit, '(a)') 'exponent = '//to_str(slope, '(f6.2)')
     write (output_unit, '(a)') 'exponent_n_min = '//to_str(sizes(1))
     write (output_unit, '(a)') 'exponent_n_max = '//to_str(sizes(size(sizes)))

@@ -14,15 +14,15 @@
 !> (L = ceil(25/sqrt(xi)) <= 500); the fit, its residual and the change from MULTIPOLE.md's
 !> constants are printed, and the fitted constants are used for xi < 0.02.
 program knotflow_lubgen
-  use, intrinsic :: iso_fortran_env, only: error_unit
   use kf_kinds, only: wp, i8
-  use kf_exit, only: exit_program
-  use kf_build_info, only: knotflow_version, knotflow_git_hash
+  use kf_cli, only: standard_option, argument, die
   use kf_error, only: error_t
   use kf_two_sphere, only: n_functions, two_sphere_resistance, function_names, has_strain
   use kf_near_contact, only: exact_resistance, singular_part, singular_weight, near_coeff, &
     near_contact_form
   implicit none
+
+  character(len=*), parameter :: program_name = 'knotflow-lubgen'
 
   integer, parameter :: max_order = 6
   !> Cutoff centre distances r_c(L) (units of d) and start of the taper to zero.
@@ -30,7 +30,7 @@ program knotflow_lubgen
   !> Target grid step in u = sqrt(xi).
   real(wp), parameter :: du_target = 0.01_wp
 
-  character(len=1024) :: path
+  character(len=:), allocatable :: path
   integer :: unit, ios, order, n, i, j, k, nf
   integer(i8) :: t0, t1, rate
   real(wp) :: uc, h, u, xi, r, w
@@ -45,30 +45,17 @@ program knotflow_lubgen
   real(wp) :: fitted(4, n_functions), fit_resid, fit_change
 
   path = 'kf_lubrication_data.f90'
-  if (command_argument_count() >= 1) call get_command_argument(1, path)
+  if (command_argument_count() >= 1) path = argument(1)
   ! options, not an output file named '--help' (which would also start the long generation)
-  select case (trim(path))
-  case ('-h', '--help')
-    write (*, '(a)') 'usage: knotflow-lubgen [output file]   (default: kf_lubrication_data.f90)', &
-      '       knotflow-lubgen --help | --version'
-    stop
-  case ('--version')
-    write (*, '(a)') 'knotflow-lubgen '//knotflow_version//' ('//knotflow_git_hash//')'
-    stop
-  end select
-  if (path(1:1) == '-') then
-    write (error_unit, '(a)') 'knotflow-lubgen: error: unknown option '//trim(path)//' (allowed: --help, --version)'
-    call exit_program(2)
-  end if
+  call standard_option(program_name, path, 'usage: knotflow-lubgen [output file]   (default: '// &
+    'kf_lubrication_data.f90)'//new_line('a')//'       knotflow-lubgen --help | --version')
+  if (index(path, '-') == 1) call die(program_name, 'unknown option '//path//' (allowed: --help, --version)', 2)
   do order = 1, max_order
     ngrid(order) = ceiling(sqrt(2.0_wp*(cutoff(order) - 1.0_wp))/du_target) + 1
   end do
 
   open (newunit=unit, file=trim(path), status='replace', action='write', iostat=ios)
-  if (ios /= 0) then
-    write (*, '(a)') 'ERROR: cannot open '//trim(path)
-    error stop 1
-  end if
+  if (ios /= 0) call die(program_name, 'cannot open '//path, 1)
   call system_clock(t0, rate)
   call fit_near_contact()
   call system_clock(t1)
@@ -181,10 +168,7 @@ contains
   end subroutine fit_near_contact
 
   subroutine check()
-    if (allocated(error)) then
-      write (*, '(a)') 'ERROR: '//error%message
-      error stop 1
-    end if
+    if (allocated(error)) call die(program_name, error%message, 1)
   end subroutine check
 
   subroutine header()

@@ -12,12 +12,11 @@
 !> v0 of force-free, torque-free beads in simple shear v0 = (z, 0, 0).
 !> Errors: one line on stderr and exit code 2.
 program knotflow_mobility
-  use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
+  use, intrinsic :: iso_fortran_env, only: output_unit
   use kf_kinds, only: wp
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
-  use kf_exit, only: exit_program
   use kf_strings, only: to_str
-  use kf_build_info, only: knotflow_version, knotflow_git_hash
+  use kf_cli, only: standard_option, argument, die
   use kf_error, only: error_t
   use kf_text_coords, only: read_coordinates
   use kf_hydro_model, only: hydro_model_t
@@ -26,6 +25,8 @@ program knotflow_mobility
   use kf_scene_check, only: name_list
   use kf_scene, only: hydro_params_t
   implicit none
+
+  character(len=*), parameter :: program_name = 'knotflow-mobility'
 
   character(len=:), allocatable :: file, model_name, output, arg, val
   integer :: order, i, j, nargs, ios, n
@@ -45,57 +46,53 @@ program knotflow_mobility
   nargs = command_argument_count()
   i = 1
   do while (i <= nargs)
-    arg = get_arg(i)
+    arg = argument(i)
     select case (arg)
-    case ('-h', '--help')
-      write (output_unit, '(a)') 'usage: knotflow-mobility FILE [--model none|rpy|multipole] [--order L] '// &
-        '[--lubrication on|off] [--eps-lub X] [--output mobility|shear]', &
-        '       knotflow-mobility --help | --version'
-      call exit_program(0)
-    case ('--version')
-      write (output_unit, '(a)') 'knotflow-mobility '//knotflow_version//' ('//knotflow_git_hash//')'
-      call exit_program(0)
+    case ('-h', '--help', '--version')
+      call standard_option(program_name, arg, 'usage: knotflow-mobility FILE [--model none|rpy|multipole] '// &
+        '[--order L] [--lubrication on|off] [--eps-lub X] [--output mobility|shear]'//new_line('a')// &
+        '       knotflow-mobility --help | --version')
     case ('--model', '--order', '--lubrication', '--eps-lub', '--output')
-      if (i == nargs) call die('option '//arg//' needs a value')
-      val = get_arg(i + 1)
+      if (i == nargs) call die(program_name, 'option '//arg//' needs a value', 2)
+      val = argument(i + 1)
       i = i + 2
       select case (arg)
       case ('--model')
         if (.not. any(hydro_model_names == val)) &
-          call die('--model '//val//': allowed values are '//name_list(hydro_model_names))
+          call die(program_name, '--model '//val//': allowed values are '//name_list(hydro_model_names), 2)
         model_name = val
       case ('--order')
         read (val, *, iostat=ios) order
         if (ios /= 0 .or. verify(trim(val), '0123456789') /= 0) &
-          call die('--order '//val//': expected an integer 1..20')
-        if (order < 1 .or. order > 20) call die('--order '//val//': expected an integer 1..20')
+          call die(program_name, '--order '//val//': expected an integer 1..20', 2)
+        if (order < 1 .or. order > 20) call die(program_name, '--order '//val//': expected an integer 1..20', 2)
       case ('--lubrication')
-        if (val /= 'on' .and. val /= 'off') call die('--lubrication '//val//': allowed values are on, off')
+        if (val /= 'on' .and. val /= 'off') call die(program_name, '--lubrication '//val//': allowed values are on, off', 2)
         lubrication = (val == 'on')
       case ('--eps-lub')
         read (val, *, iostat=ios) eps_lub
-        if (ios /= 0) call die('--eps-lub '//val//': expected a number in (0, 0.5)')
+        if (ios /= 0) call die(program_name, '--eps-lub '//val//': expected a number in (0, 0.5)', 2)
         if (.not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) &
-          call die('--eps-lub '//val//': expected a number in (0, 0.5)')
+          call die(program_name, '--eps-lub '//val//': expected a number in (0, 0.5)', 2)
       case ('--output')
         if (val /= 'mobility' .and. val /= 'shear') &
-          call die('--output '//val//': allowed values are mobility, shear')
+          call die(program_name, '--output '//val//': allowed values are mobility, shear', 2)
         output = val
       end select
     case default
-      if (arg(1:min(1, len(arg))) == '-') call die('unknown option '//arg// &
-        ' (allowed: --model, --order, --lubrication, --eps-lub, --output, --help, --version)')
-      if (len(file) > 0) call die('more than one coordinate file given: '//file//' and '//arg)
+      if (arg(1:min(1, len(arg))) == '-') call die(program_name, 'unknown option '//arg// &
+        ' (allowed: --model, --order, --lubrication, --eps-lub, --output, --help, --version)', 2)
+      if (len(file) > 0) call die(program_name, 'more than one coordinate file given: '//file//' and '//arg, 2)
       file = arg
       i = i + 1
     end select
   end do
-  if (len(file) == 0) call die('no coordinate file given (usage: knotflow-mobility FILE [options])')
+  if (len(file) == 0) call die(program_name, 'no coordinate file given (usage: knotflow-mobility FILE [options])', 2)
 
   inquire (file=file, exist=exists)
-  if (.not. exists) call die('cannot open coordinate file '//file//': no such file')
+  if (.not. exists) call die(program_name, 'cannot open coordinate file '//file//': no such file', 2)
   call read_coordinates(file, r, error)
-  if (allocated(error)) call die(error%message)
+  if (allocated(error)) call die(program_name, error%message, 2)
   n = size(r, 2)
 
   select case (model_name)
@@ -104,7 +101,7 @@ program knotflow_mobility
       type(multipole_model_t), allocatable :: mp
       allocate (mp)
       call mp%init(order, lubrication, eps_lub, error)
-      if (allocated(error)) call die(error%message)
+      if (allocated(error)) call die(program_name, error%message, 2)
       call move_alloc(mp, model)
     end block
   case default
@@ -115,20 +112,20 @@ program knotflow_mobility
       params%lubrication = lubrication
       params%eps_lub = eps_lub
       call make_hydro_model(params, eps_lub, model, error)
-      if (allocated(error)) call die(error%message)
+      if (allocated(error)) call die(program_name, error%message, 2)
     end block
   end select
 
   call model%prepare(r, error)
-  if (allocated(error)) call die(error%message)
+  if (allocated(error)) call die(program_name, error%message, 2)
 
   select case (output)
   case ('mobility')
     allocate (mu(3*n, 3*n))
     call model%mobility_matrix(mu)
     ! never print a non-finite matrix with exit status 0
-    if (.not. all(ieee_is_finite(mu))) call die('the '//model_name//' mobility of '//file//' holds '// &
-      to_str(count(.not. ieee_is_finite(mu)))//' non-finite entries; nothing printed')
+    if (.not. all(ieee_is_finite(mu))) call die(program_name, 'the '//model_name//' mobility of '//file//' holds '// &
+      to_str(count(.not. ieee_is_finite(mu)))//' non-finite entries; nothing printed', 2)
     do i = 1, 3*n
       write (output_unit, '(*(1x, es24.16e3))') (mu(i, j), j = 1, 3*n)
     end do
@@ -139,29 +136,13 @@ program knotflow_mobility
     e(3, 1) = 0.5_wp
     u = 0.0_wp
     call model%add_strain_disturbance(e, u)
-    if (.not. all(ieee_is_finite(u))) call die('the '//model_name//' shear disturbance of '//file// &
-      ' holds non-finite values; nothing printed')
+    if (.not. all(ieee_is_finite(u))) call die(program_name, 'the '//model_name//' shear disturbance of '//file// &
+      ' holds non-finite values; nothing printed', 2)
     do i = 1, n
       write (output_unit, '(3(1x, es24.16e3))') u(:, i)
     end do
   end select
 
 contains
-
-  function get_arg(k) result(s)
-    integer, intent(in) :: k
-    character(len=:), allocatable :: s
-    integer :: l
-    call get_command_argument(k, length=l)
-    allocate (character(len=l) :: s)
-    if (l > 0) call get_command_argument(k, s)
-  end function get_arg
-
-  !> One line on stderr, exit code 2.
-  subroutine die(message)
-    character(len=*), intent(in) :: message
-    write (error_unit, '(a)') 'knotflow-mobility: error: '//message
-    call exit_program(2)       ! flushes; one line and a non-zero exit status, no runtime backtrace
-  end subroutine die
 
 end program knotflow_mobility

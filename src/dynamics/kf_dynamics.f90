@@ -32,11 +32,11 @@ module kf_dynamics
     integer(i8) :: evaluations = 0       !< calls of velocity
     real(wp) :: pair_cutoff = 0.0_wp     !< range of the pair list (0: none is built)
     type(pair_geometry_t) :: pairs       !< close pairs of the last evaluation's positions
-    class(overlap_rule_t), allocatable :: overlap !< where the hydrodynamics is evaluated
-    type(pair_geometry_t) :: hydro_pairs !< close pairs of the separated configuration
-    real(wp), allocatable :: f(:, :)     !< work: forces of the last evaluation
-    real(wp), allocatable :: u(:, :)     !< work: mu F + C:E of the last evaluation
-    real(wp), allocatable :: rh(:, :)    !< work: the separated configuration
+    class(overlap_rule_t), allocatable, private :: overlap !< where the hydrodynamics is evaluated
+    type(pair_geometry_t), private :: hydro_pairs !< close pairs of the separated configuration
+    real(wp), allocatable, private :: f(:, :)     !< work: forces of the last evaluation
+    real(wp), allocatable, private :: u(:, :)     !< work: mu F + C:E of the last evaluation
+    real(wp), allocatable, private :: rh(:, :)    !< work: the separated configuration
   contains
     procedure :: init => dynamics_init
     procedure :: velocity => dynamics_velocity

@@ -33,6 +33,7 @@ module kf_hydro_rpy
 
   !> RPY model; holds the bead positions of the last prepare.
   type, extends(hydro_model_t), public :: rpy_model_t
+    private
     real(wp), allocatable :: x(:), y(:), z(:)                 !< positions (structure of arrays)
     real(wp), allocatable :: dx(:), dy(:), dz(:)              !< pair separations r_i - r_j, i < j
     real(wp), allocatable :: a(:), bb(:), c1(:), c2(:)        !< pair coefficients (see prepare)

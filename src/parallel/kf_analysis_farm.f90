@@ -1,105 +1,107 @@
-!> The MPI side of knotflow-analyze: start/stop, the rank and size, and the reductions that merge
+!> The parallel side of knotflow-analyze: the ranks of a communicator, the reductions that merge
 !> per-rank partial results (entries a rank did not compute are zero for sums, -huge for maxima),
 !> and the sharing of what rank 0 decided, so that every rank takes the same branch.
+!>
+!> MPI goes through kf_comm only; the farm works on the communicator it is given (`farm_on`) or
+!> on the world (`farm_start`), and every failed call returns an error.
 module kf_analysis_farm
-  use mpi_f08, only: MPI_Comm, MPI_COMM_WORLD, MPI_Init, MPI_Finalize, MPI_Initialized, &
-    MPI_Comm_rank, MPI_Comm_size, MPI_Allreduce, MPI_IN_PLACE, MPI_DOUBLE_PRECISION, &
-    MPI_INTEGER, MPI_INTEGER8, MPI_SUM, MPI_MAX, MPI_Barrier, MPI_Abort, MPI_Bcast, MPI_SUCCESS
   use kf_kinds, only: wp, i8
   use kf_error, only: error_t, fatal_error
+  use kf_comm, only: comm_t, comm_init, comm_finalize
   implicit none
   private
 
-  !> The communicator of the analysis and this rank's place in it.
+  !> The communicator of the analysis and this rank's place in it (rank and size are read-only
+  !> by convention: set by `farm_on`).
   type, public :: analysis_farm_t
-    type(MPI_Comm) :: comm
-    integer :: rank = 0
-    integer :: size = 1
+    private
+    type(comm_t) :: comm
+    integer, public :: rank = 0
+    integer, public :: size = 1
   end type analysis_farm_t
 
-  public :: farm_start, farm_stop, farm_sum, farm_max, farm_barrier, farm_abort, farm_any, farm_share
+  public :: farm_start, farm_on, farm_stop, farm_sum, farm_max, farm_barrier, farm_abort, farm_any, farm_share
 
 contains
 
-  !> Initialise MPI (if needed) on MPI_COMM_WORLD.
+  !> Start the communication layer (MPI, unless already started) and farm over the world.
   subroutine farm_start(farm, error)
     type(analysis_farm_t), intent(out) :: farm
     type(error_t), allocatable, intent(out) :: error
-    logical :: started
-    integer :: ierr
-    call MPI_Initialized(started, ierr)
-    if (.not. started) call MPI_Init(ierr)
-    if (ierr /= MPI_SUCCESS) then
-      call fatal_error(error, 'MPI_Init failed')
-      return
-    end if
-    farm%comm = MPI_COMM_WORLD
-    call MPI_Comm_rank(farm%comm, farm%rank, ierr)
-    call MPI_Comm_size(farm%comm, farm%size, ierr)
+    type(comm_t) :: world
+    call comm_init(world, error)
+    if (allocated(error)) return
+    call farm_on(farm, world, error)
   end subroutine farm_start
 
-  !> Finalise MPI.
-  subroutine farm_stop(farm)
+  !> The farm on the ranks of `comm`.
+  subroutine farm_on(farm, comm, error)
+    type(analysis_farm_t), intent(out) :: farm
+    type(comm_t), intent(in) :: comm
+    type(error_t), allocatable, intent(out) :: error
+    farm%comm = comm
+    farm%rank = comm%rank()
+    farm%size = comm%size()
+    if (farm%rank < 0 .or. farm%size < 1) call fatal_error(error, 'analysis farm: cannot get the rank and size')
+  end subroutine farm_on
+
+  !> Wait for every rank, then finalise the communication layer (after `farm_start`).
+  subroutine farm_stop(farm, error)
     type(analysis_farm_t), intent(in) :: farm
-    integer :: ierr
-    call MPI_Barrier(farm%comm, ierr)
-    call MPI_Finalize(ierr)
+    type(error_t), allocatable, intent(out) :: error
+    call farm%comm%barrier(error)
+    if (allocated(error)) return
+    call comm_finalize(error)
   end subroutine farm_stop
 
-  subroutine farm_barrier(farm)
+  subroutine farm_barrier(farm, error)
     type(analysis_farm_t), intent(in) :: farm
-    integer :: ierr
-    call MPI_Barrier(farm%comm, ierr)
+    type(error_t), allocatable, intent(out) :: error
+    call farm%comm%barrier(error)
   end subroutine farm_barrier
 
-  !> Abort all ranks with `code` (after a fatal error on one rank).
+  !> Abort all ranks with `code` (after a fatal error on one rank; programs only).
   subroutine farm_abort(farm, code)
     type(analysis_farm_t), intent(in) :: farm
     integer, intent(in) :: code
-    integer :: ierr
-    call MPI_Abort(farm%comm, code, ierr)
+    call farm%comm%abort(code)
   end subroutine farm_abort
 
   !> Element-wise sum over all ranks, in place.
-  subroutine farm_sum(farm, x)
+  subroutine farm_sum(farm, x, error)
     type(analysis_farm_t), intent(in) :: farm
     real(wp), contiguous, intent(inout) :: x(:)
-    integer :: ierr
-    if (farm%size > 1) call MPI_Allreduce(MPI_IN_PLACE, x, size(x), MPI_DOUBLE_PRECISION, MPI_SUM, farm%comm, ierr)
+    type(error_t), allocatable, intent(out) :: error
+    call farm%comm%sum(x, error)
   end subroutine farm_sum
 
   !> Element-wise maximum over all ranks, in place.
-  subroutine farm_max(farm, x)
+  subroutine farm_max(farm, x, error)
     type(analysis_farm_t), intent(in) :: farm
     real(wp), contiguous, intent(inout) :: x(:)
-    integer :: ierr
-    if (farm%size > 1) call MPI_Allreduce(MPI_IN_PLACE, x, size(x), MPI_DOUBLE_PRECISION, MPI_MAX, farm%comm, ierr)
+    type(error_t), allocatable, intent(out) :: error
+    call farm%comm%max(x, error)
   end subroutine farm_max
 
-  !> True on every rank when `flag` is true on any rank.
-  logical function farm_any(farm, flag)
+  !> `any` is true on every rank when `flag` is true on any rank (true as well when the
+  !> reduction itself failed, with `error` set).
+  subroutine farm_any(farm, flag, any, error)
     type(analysis_farm_t), intent(in) :: farm
     logical, intent(in) :: flag
-    integer :: v(1), ierr
+    logical, intent(out) :: any
+    type(error_t), allocatable, intent(out) :: error
+    integer :: v(1)
     v = merge(1, 0, flag)
-    if (farm%size > 1) call MPI_Allreduce(MPI_IN_PLACE, v, 1, MPI_INTEGER, MPI_MAX, farm%comm, ierr)
-    farm_any = v(1) > 0
-  end function farm_any
+    call farm%comm%max(v, error)
+    any = v(1) > 0 .or. allocated(error)
+  end subroutine farm_any
 
   !> Rank 0's list `x` on every rank (its size included): a decision taken once, on rank 0.
-  subroutine farm_share(farm, x)
+  subroutine farm_share(farm, x, error)
     type(analysis_farm_t), intent(in) :: farm
     integer(i8), allocatable, intent(inout) :: x(:)
-    integer :: n(1), ierr
-    if (farm%size == 1) return
-    n = 0
-    if (farm%rank == 0) n = size(x)
-    call MPI_Bcast(n, 1, MPI_INTEGER, 0, farm%comm, ierr)
-    if (farm%rank /= 0) then
-      if (allocated(x)) deallocate (x)
-      allocate (x(n(1)))
-    end if
-    if (n(1) > 0) call MPI_Bcast(x, n(1), MPI_INTEGER8, 0, farm%comm, ierr)
+    type(error_t), allocatable, intent(out) :: error
+    call farm%comm%bcast(x, error)
   end subroutine farm_share
 
 end module kf_analysis_farm

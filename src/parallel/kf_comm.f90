@@ -3,8 +3,13 @@
 !> counter (one-sided MPI_Fetch_and_op on a window owned by rank 0) for dynamic load balancing.
 !>
 !> Every MPI call passes `ierror` and a non-zero value becomes an `error_t` naming the call.
-!> (With MPI's default error handler, MPI_ERRORS_ARE_FATAL, MPI aborts before returning an
-!> error; the checks matter when a caller installs MPI_ERRORS_RETURN.)
+!> Error handler: the programs keep MPI's default, MPI_ERRORS_ARE_FATAL, on MPI_COMM_WORLD (a
+!> failed collective cannot be recovered on one rank while the others wait in it, so MPI aborts
+!> the job with its own message); `return_errors` installs MPI_ERRORS_RETURN on a communicator,
+!> and then every failed call comes back as an error (tests/mpi/test_comm.pf checks that path).
+!>
+!> src/parallel/serial/kf_comm.f90 is the same interface for one rank without MPI
+!> (-DKNOTFLOW_WITH_MPI=OFF); everything else in src/parallel uses MPI only through this module.
 module kf_comm
   use, intrinsic :: iso_c_binding, only: c_ptr, c_f_pointer
   use, intrinsic :: iso_fortran_env, only: int64
@@ -15,7 +20,8 @@ module kf_comm
     MPI_Win_allocate, MPI_Win_free, MPI_Win_lock, MPI_Win_unlock, MPI_Fetch_and_op, &
     MPI_INTEGER, MPI_INTEGER8, MPI_DOUBLE_PRECISION, MPI_LOGICAL, MPI_CHARACTER, MPI_BYTE, &
     MPI_SUM, MPI_MAX, MPI_MIN, MPI_BOR, MPI_INFO_NULL, MPI_LOCK_SHARED, MPI_LOCK_EXCLUSIVE, &
-    MPI_ADDRESS_KIND, MPI_IN_PLACE, MPI_Comm_split_type, MPI_COMM_TYPE_SHARED, MPI_Comm_free
+    MPI_ADDRESS_KIND, MPI_IN_PLACE, MPI_Comm_split_type, MPI_COMM_TYPE_SHARED, MPI_Comm_free, &
+    MPI_Comm_split, MPI_Comm_dup, MPI_Comm_set_errhandler, MPI_ERRORS_RETURN
   implicit none
   private
 
@@ -31,16 +37,20 @@ module kf_comm
     procedure :: barrier => comm_barrier
     procedure :: abort => comm_abort
     procedure :: ranks_on_node => comm_ranks_on_node
+    procedure :: split => comm_split
+    procedure :: dup => comm_dup
+    procedure :: free => comm_free
+    procedure :: return_errors => comm_return_errors
     !> Broadcast from rank `root` (default 0): integer, int64, real(wp), logical, string
-    !> (allocatable; its length travels with it).
-    generic :: bcast => bcast_int, bcast_i8, bcast_real, bcast_logical, bcast_str
+    !> (allocatable; its length travels with it), int64 list (allocatable; its size travels).
+    generic :: bcast => bcast_int, bcast_i8, bcast_real, bcast_logical, bcast_str, bcast_i8_list
     !> Element-wise sum / maximum / minimum over all ranks, result on every rank.
-    generic :: sum => sum_int, sum_int1
-    generic :: max => max_int1, max_real
+    generic :: sum => sum_int, sum_int1, sum_real1
+    generic :: max => max_int1, max_real, max_real1
     generic :: min => min_real
     procedure :: merge_bytes
-    procedure, private :: bcast_int, bcast_i8, bcast_real, bcast_logical, bcast_str
-    procedure, private :: sum_int, sum_int1, max_int1, max_real, min_real
+    procedure, private :: bcast_int, bcast_i8, bcast_real, bcast_logical, bcast_str, bcast_i8_list
+    procedure, private :: sum_int, sum_int1, sum_real1, max_int1, max_real, max_real1, min_real
   end type comm_t
 
   !> Counters (int64) in a window owned by rank 0 of a communicator, incremented atomically
@@ -130,6 +140,46 @@ contains
     call MPI_Comm_free(node, ierr)
   end function comm_ranks_on_node
 
+  !> Collective: the ranks with the same `color` (>= 0) form `new`, ordered by `key`.
+  subroutine comm_split(this, color, key, new, error)
+    class(comm_t), intent(in) :: this
+    integer, intent(in) :: color, key
+    type(comm_t), intent(out) :: new
+    type(error_t), allocatable, intent(out) :: error
+    integer :: ierr
+    call MPI_Comm_split(this%comm, color, key, new%comm, ierr)
+    if (ierr /= 0) call fatal_error(error, 'MPI_Comm_split failed')
+  end subroutine comm_split
+
+  !> Collective: a new communicator with the same ranks (own error handler, own messages).
+  subroutine comm_dup(this, new, error)
+    class(comm_t), intent(in) :: this
+    type(comm_t), intent(out) :: new
+    type(error_t), allocatable, intent(out) :: error
+    integer :: ierr
+    call MPI_Comm_dup(this%comm, new%comm, ierr)
+    if (ierr /= 0) call fatal_error(error, 'MPI_Comm_dup failed')
+  end subroutine comm_dup
+
+  !> Collective: free a communicator made by `split` or `dup`.
+  subroutine comm_free(this, error)
+    class(comm_t), intent(inout) :: this
+    type(error_t), allocatable, intent(out) :: error
+    integer :: ierr
+    call MPI_Comm_free(this%comm, ierr)
+    if (ierr /= 0) call fatal_error(error, 'MPI_Comm_free failed')
+  end subroutine comm_free
+
+  !> Failed MPI calls on this communicator return their error (MPI_ERRORS_RETURN) instead of
+  !> aborting the job.
+  subroutine comm_return_errors(this, error)
+    class(comm_t), intent(in) :: this
+    type(error_t), allocatable, intent(out) :: error
+    integer :: ierr
+    call MPI_Comm_set_errhandler(this%comm, MPI_ERRORS_RETURN, ierr)
+    if (ierr /= 0) call fatal_error(error, 'MPI_Comm_set_errhandler failed')
+  end subroutine comm_return_errors
+
   subroutine comm_barrier(this, error)
     class(comm_t), intent(in) :: this
     type(error_t), allocatable, intent(out) :: error
@@ -213,6 +263,33 @@ contains
     if (ierr /= 0) call fatal_error(error, 'MPI_Bcast (string) failed')
   end subroutine bcast_str
 
+  !> Broadcast an int64 list; on the other ranks `values` is (re)allocated to the root's size.
+  subroutine bcast_i8_list(this, values, error, root)
+    class(comm_t), intent(in) :: this
+    integer(i8), allocatable, intent(inout) :: values(:)
+    type(error_t), allocatable, intent(out) :: error
+    integer, intent(in), optional :: root
+    integer :: n, ierr
+    n = 0
+    if (this%rank() == root_of(root)) then
+      if (allocated(values)) n = size(values)
+    end if
+    call MPI_Bcast(n, 1, MPI_INTEGER, root_of(root), this%comm, ierr)
+    if (ierr /= 0) then
+      call fatal_error(error, 'MPI_Bcast (list size) failed')
+      return
+    end if
+    if (this%rank() /= root_of(root)) then
+      if (allocated(values)) deallocate (values)
+      allocate (values(n))
+    else if (.not. allocated(values)) then
+      allocate (values(0))
+    end if
+    if (n == 0) return
+    call MPI_Bcast(values, n, MPI_INTEGER8, root_of(root), this%comm, ierr)
+    if (ierr /= 0) call fatal_error(error, 'MPI_Bcast (int64 list) failed')
+  end subroutine bcast_i8_list
+
   subroutine sum_int(this, value, error)
     class(comm_t), intent(in) :: this
     integer, intent(inout) :: value
@@ -231,6 +308,26 @@ contains
     call MPI_Allreduce(MPI_IN_PLACE, values, size(values), MPI_INTEGER, MPI_SUM, this%comm, ierr)
     if (ierr /= 0) call fatal_error(error, 'MPI_Allreduce (sum) failed')
   end subroutine sum_int1
+
+  subroutine sum_real1(this, values, error)
+    class(comm_t), intent(in) :: this
+    real(wp), intent(inout) :: values(:)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: ierr
+    if (size(values) == 0) return
+    call MPI_Allreduce(MPI_IN_PLACE, values, size(values), MPI_DOUBLE_PRECISION, MPI_SUM, this%comm, ierr)
+    if (ierr /= 0) call fatal_error(error, 'MPI_Allreduce (sum) failed')
+  end subroutine sum_real1
+
+  subroutine max_real1(this, values, error)
+    class(comm_t), intent(in) :: this
+    real(wp), intent(inout) :: values(:)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: ierr
+    if (size(values) == 0) return
+    call MPI_Allreduce(MPI_IN_PLACE, values, size(values), MPI_DOUBLE_PRECISION, MPI_MAX, this%comm, ierr)
+    if (ierr /= 0) call fatal_error(error, 'MPI_Allreduce (max) failed')
+  end subroutine max_real1
 
   subroutine max_int1(this, values, error)
     class(comm_t), intent(in) :: this

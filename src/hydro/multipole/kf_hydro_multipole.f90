@@ -77,11 +77,11 @@ module kf_hydro_multipole
     logical :: adaptive = .false.         !< update = 'adaptive'
     real(wp) :: eps_lub = 1.0e-4_wp      !< BWE shift: overlapping pairs are evaluated at 1 + eps_lub
     real(wp) :: tolerance = 1.0e-4_wp    !< integration tolerance (units of d), for the budget
-    type(multipole_system_t) :: sys
+    type(multipole_system_t), private :: sys
     type(lubrication_t) :: lub
     integer :: n_lub_pairs = 0           !< pairs corrected at the last prepare
     integer :: n_overlaps = 0            !< overlapping pairs (r <= 1) at the last prepare
-    real(wp) :: t_lubrication = 0.0_wp   !< seconds in the lubrication part of the last prepare
+    real(wp), private :: t_lubrication = 0.0_wp   !< seconds in the lubrication part of the last prepare
     type(pair_blocks_t), private :: pairs
     real(wp), allocatable, private :: mu(:, :)    !< 3N x 3N translational mobility
     real(wp), allocatable, private :: dist(:, :)  !< 3N x 5 disturbance for the basis strains
@@ -118,6 +118,7 @@ module kf_hydro_multipole
     procedure :: statistics => multipole_statistics
     procedure :: reused_velocities => multipole_reused_velocities
     procedure :: stresslet => multipole_stresslet
+    procedure :: prepare_seconds => multipole_prepare_seconds
   end type multipole_model_t
 
 contains
@@ -741,5 +742,14 @@ contains
       m = max(m, norm2(v(6*i - 5:6*i - 3)))
     end do
   end function largest_velocity
+
+  !> Seconds of the last `prepare` spent in the assembly of the pair blocks, the factorisation
+  !> (p-moment elimination and Cholesky) and the lubrication part (knotflow-bench-multipole).
+  subroutine multipole_prepare_seconds(this, assembly, factor, lubrication)
+    class(multipole_model_t), intent(in) :: this
+    real(wp), intent(out) :: assembly, factor, lubrication
+    call this%sys%seconds(assembly, factor)
+    lubrication = this%t_lubrication
+  end subroutine multipole_prepare_seconds
 
 end module kf_hydro_multipole

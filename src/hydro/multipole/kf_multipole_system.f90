@@ -31,7 +31,9 @@ module kf_multipole_system
   private
 
   !> The factorised N-sphere system.
+  !> Work arrays and sizes are private; `n_clamped` and `seconds` report on the last factorise.
   type, public :: multipole_system_t
+    private
     type(multipole_layout_t) :: lay
     type(multipole_index_t) :: idx   !< where the unknowns sit in K, B and P
     real(wp) :: min_distance = 1.0_wp   !< pairs with |d| < min_distance are evaluated there
@@ -39,7 +41,7 @@ module kf_multipole_system
     integer :: nr = 0       !< size of K (phi and chi unknowns), 2 N L(L+2)
     integer :: nqt = 0      !< unknowns of K outside P (they come first)
     integer :: n6 = 0       !< 6N
-    integer :: n_clamped = 0 !< pairs closer than min_distance at the last factorise
+    integer, public :: n_clamped = 0 !< pairs closer than min_distance at the last factorise
     real(wp) :: scal(6) = 0.0_wp !< moment_hat = scal(c) * Cartesian force/torque component c
     real(wp), allocatable :: k(:, :)     !< K, then its Cholesky factor (lower triangle)
     real(wp), allocatable :: bp(:, :)    !< phi <- p couplings (rows phi, columns p)
@@ -60,6 +62,7 @@ module kf_multipole_system
     procedure :: strain_disturbance => system_strain_disturbance
     procedure :: friction_coupling => system_friction_coupling
     procedure :: pindex => system_pindex
+    procedure :: seconds => system_seconds
   end type multipole_system_t
 
 contains
@@ -405,5 +408,13 @@ contains
     call this%strain_disturbance(free)
     call dgemm('N', 'N', n6, 5, n6, 1.0_wp, zeta, n6, free, n6, 0.0_wp, x, n6)
   end subroutine system_friction_coupling
+
+  !> Seconds spent in the last assembly of the pair blocks and in the last factorisation.
+  subroutine system_seconds(this, assembly, factor)
+    class(multipole_system_t), intent(in) :: this
+    real(wp), intent(out) :: assembly, factor
+    assembly = this%t_assembly
+    factor = this%t_factor
+  end subroutine system_seconds
 
 end module kf_multipole_system
