@@ -5,7 +5,8 @@ build the library and `knotflow` only (-j2), and check that
   - its trajectories are the same, frame by frame and bit for bit, as those of the MPI build's
     knotflow on 2 ranks for the same scene (same compiler and flags; one BLAS thread each).
 Usage: check_serial_build.py CMAKE SOURCE_DIR BUILD_TYPE FORTRAN_COMPILER GENERATOR WITH_FFTW
-                             MPIEXEC "MPIEXEC_FLAGS" MPI_KNOTFLOW WORK_DIR
+                             MPIEXEC "MPIEXEC_FLAGS" MPI_KNOTFLOW WORK_DIR FYPP
+(FYPP: the fypp the main build uses to generate kf_h5.f90, passed on as -DKNOTFLOW_FYPP.)
 """
 import json
 import os
@@ -19,7 +20,7 @@ import h5py
 import numpy as np
 
 (cmake, source, build_type, fortran, generator, with_fftw, mpiexec, flags, mpi_exe,
- work) = sys.argv[1:11]
+ work, fypp) = sys.argv[1:12]
 flags = shlex.split(flags)
 shutil.rmtree(work, ignore_errors=True)
 os.makedirs(work)
@@ -36,7 +37,8 @@ def run(cmd, **kw):
 t0 = time.time()
 run([cmake, "-S", source, "-B", build, "-G", generator, "-DKNOTFLOW_WITH_MPI=OFF",
      "-DKNOTFLOW_BUILD_TESTS=OFF", "-DCMAKE_BUILD_TYPE=" + build_type,
-     "-DCMAKE_Fortran_COMPILER=" + fortran, "-DKNOTFLOW_WITH_FFTW=" + with_fftw])
+     "-DCMAKE_Fortran_COMPILER=" + fortran, "-DKNOTFLOW_WITH_FFTW=" + with_fftw,
+     "-DKNOTFLOW_FYPP=" + fypp])
 out = run([cmake, "--build", build, "-j", "2", "--target", "knotflow"])
 log = out.stdout + out.stderr
 assert "Warning" not in log and "warning:" not in log, "compiler warnings in the serial build:\n" + log
