@@ -61,7 +61,6 @@ module kf_overlap_rule
     private
     real(wp) :: target = 1.0_wp          !< 1 + eps_lub
     type(pair_geometry_t) :: work        !< close pairs of the configuration being separated
-    integer, allocatable :: i_(:), j_(:) !< the pairs being separated
   contains
     procedure :: hydro_configuration => separate_configuration
   end type overlap_separate_t
@@ -122,7 +121,7 @@ contains
     real(wp), intent(inout) :: rh(:, :)
     logical, intent(out) :: moved
     type(error_t), allocatable, intent(out) :: error
-    integer :: round, sweep, k, m, i, j
+    integer :: round, sweep, k, i, j
     real(wp) :: d(3), dist, shift, worst, limit
 
     moved = .false.
@@ -136,17 +135,10 @@ contains
       call this%work%build(rh, this%target + margin)
       if (count_overlaps(this%work, limit) == 0) return
       moved = .true.
-      m = this%work%size()
-      if (allocated(this%i_)) deallocate (this%i_, this%j_)
-      allocate (this%i_(m), this%j_(m))
-      do k = 1, m
-        call this%work%pair(k, this%i_(k), this%j_(k))
-      end do
       do sweep = 1, max_sweeps
         worst = 0.0_wp
-        do k = 1, m
-          i = this%i_(k)
-          j = this%j_(k)
+        do k = 1, this%work%size()
+          call this%work%pair(k, i, j)
           d = rh(:, j) - rh(:, i)
           dist = norm2(d)
           if (dist >= limit) cycle
