@@ -260,20 +260,38 @@ def main_study(argv: Argv = None) -> int:
 def _study(argv: Argv) -> int:
     from . import study
     p = make_parser("knotflow-study", (study.__doc__ or "").splitlines()[0])
-    p.add_argument("--trefoil", help="output directory of inputs/trefoil_table2.nml")
-    p.add_argument("--candycane", help="output directory of inputs/candycane.nml")
+    p.add_argument("--trefoil", help="output directory of inputs/trefoil_table2*.nml")
+    p.add_argument("--candycane", help="output directory of inputs/candycane*.nml")
     p.add_argument("--ensemble", help="output directory of inputs/candycane_seeds.nml (optional)")
-    p.add_argument("--out", default="docs/reproduction", help="where figures and results.md go")
+    p.add_argument("--out", default="docs/reproduction",
+                   help="where figures, results.md, results.json, trefoil_kf.csv and "
+                   "candycane_shape.csv go")
     p.add_argument("--closures", type=int, default=200,
                    help="closures per frame where /analysis/knots is missing")
+    p.add_argument("--rpy-trefoil", metavar="RESULTS_JSON",
+                   help="results.json of an earlier knotflow-study run of the RPY + EV trefoils "
+                   "(its \"trefoil\" part): three-column tables (the study, this run, RPY + EV) "
+                   "and a \"comparison\" part in results.json; needs --trefoil")
+    p.add_argument("--rpy-candycane", metavar="RESULTS_JSON",
+                   help="results.json of an earlier knotflow-study run of the RPY + EV "
+                   "candy-canes (its \"candycane\" and \"ensemble\" parts): three-column "
+                   "tables as --rpy-trefoil; needs --candycane")
     p.add_argument("--select-frames", metavar="CASE",
                    help="print the frames to give knotflow-analyze --matrix-frames for CASE "
-                   "(every 50th and the 5 with most close pairs) and exit")
+                   "(every 50th, or those of --every-time, the last and the 5 with most close "
+                   "pairs) and exit")
+    p.add_argument("--every-time", type=float, metavar="T",
+                   help="with --select-frames: the frames at the multiples of T time units of "
+                   "the case's time axis instead of every 50th frame (issue 11: T = 10)")
     p.add_argument("--slip-candidates", metavar="CASE",
                    help="print the frames of CASE whose stored knot matrix looks like a slipknot")
     p.add_argument("--write-frame", nargs=3, metavar=("CASE", "FRAME", "XYZ"),
                    help="write frame FRAME of CASE as a coordinate file and exit")
     args = p.parse_args(argv)
+    if args.every_time is not None and not args.select_frames:
+        p.error("--every-time T needs --select-frames CASE")
+    if args.every_time is not None and not (math.isfinite(args.every_time) and args.every_time > 0):
+        p.error(f"--every-time {args.every_time:g} is not allowed (a positive number)")
     if args.slip_candidates:
         print(" ".join(str(k) for k in study.slip_candidates(args.slip_candidates)))
         return 0
@@ -282,17 +300,29 @@ def _study(argv: Argv) -> int:
         study.write_frame(path, int(frame), xyz)
         return 0
     if args.select_frames:
-        print(",".join(str(k) for k in study.entangled_frames(args.select_frames)))
+        print(",".join(str(k) for k in study.entangled_frames(args.select_frames,
+                                                              every_time=args.every_time)))
         return 0
     if not (args.trefoil or args.candycane or args.ensemble):
         p.error("give --trefoil DIR, --candycane DIR and/or --ensemble DIR")
     for d in (args.trefoil, args.candycane, args.ensemble):
         if d and not os.path.isdir(d):
             p.error(f"directory not found: {d}")
-    res = study.write_study(args.trefoil, args.candycane, args.out, args.closures, args.ensemble)
+    if args.rpy_trefoil and not args.trefoil:
+        p.error("--rpy-trefoil needs --trefoil DIR (the run it is compared with)")
+    if args.rpy_candycane and not args.candycane:
+        p.error("--rpy-candycane needs --candycane DIR (the run it is compared with)")
+    # the earlier results are read before anything is written
+    rpy_trefoil = study.load_rpy(args.rpy_trefoil, ("trefoil",)) if args.rpy_trefoil else None
+    rpy_candycane = (study.load_rpy(args.rpy_candycane, ("candycane", "ensemble"))
+                     if args.rpy_candycane else None)
+    res = study.write_study(args.trefoil, args.candycane, args.out, args.closures, args.ensemble,
+                            rpy_trefoil, rpy_candycane)
     if "trefoil" in res:
-        print(f"trefoils: {res['trefoil']['agree']} of {res['trefoil']['total']} cases agree with "
-              "the study on unknot-then-knot transitions")
+        t, k = res["trefoil"], res["trefoil"]["reknottings"]
+        print(f"trefoils: {t['agree']} of {t['total']} cases agree with the study on "
+              f"unknot-then-knot transitions; {k['events']} re-knottings in {k['simulations']} "
+              f"of {k['cases']} cases; {k['finished']} finished")
     print(f"wrote {os.path.join(args.out, 'results.md')}")
     return 0
 

@@ -24,6 +24,11 @@ STRESSLET = ("hydrodynamic", "elastic", "viscosity", "psi1", "psi2")
 DIAGNOSTIC_TOTALS = ("strand_passages", "first_passage_time", "overlap_episodes",
                      "overlap_mean_duration", "overlap_max_duration", "max_overlapping_pairs",
                      "min_distance", "max_bond_strain")
+# Run records (optional): /runs holds one entry per run segment (a start or a resume) as 1-D
+# datasets of equal length: name -> kind ("s" string, "i" integer, "f" float; NaN = unknown).
+RUN_FIELDS = {"commit": "s", "started": "s", "host": "s", "ranks": "i", "threads": "i",
+              "t_start": "f", "t_end": "f", "steps": "i", "wall_seconds": "f",
+              "load_start": "f", "load_mean": "f"}
 
 
 def _attr(value):
@@ -64,6 +69,8 @@ class Case:
     diagnostics: dict | None = None            # /frames/diagnostics: name -> (nframes,)
     diagnostic_totals: dict | None = None      # diagnostics.* root attributes, without prefix
     stresslet: dict | None = None              # /frames/stresslet: name -> (nframes[, 3, 3])
+    diagnostic_totals_source: str = ""         # "attributes" or "checkpoint" (running case)
+    runs: list = field(default_factory=list)   # /runs: one dict per run segment (RUN_FIELDS)
 
     @property
     def name(self) -> str:
@@ -114,17 +121,82 @@ def check_frames(path, time, positions) -> None:
         raise ValueError(f"{path}: frame {k} (t = {time[k]:g}): {cause}{more}")
 
 
-def checkpoint_frames(f):
-    """Frames the newest checkpoint of the open case file `f` counts (None: no checkpoint).
-    Files of schema 3 have two slots written alternately (/checkpoint/slot0, slot1; a slot's
-    frame count is written last, so the larger one is whole or being finished); older files one
-    /checkpoint. Frames beyond it were being written when the run stopped."""
+def newest_checkpoint(f):
+    """The newest checkpoint group of the open case file `f` (None: no checkpoint). Files of
+    schema 3 have two slots written alternately (/checkpoint/slot0, slot1; a slot's frame count
+    is written last, so the one with the larger count is whole); older files one /checkpoint."""
     if "checkpoint" not in f:
         return None
     groups = [f["checkpoint"][s] for s in ("slot0", "slot1") if s in f["checkpoint"]]
     groups.append(f["checkpoint"])
-    counts = [int(g["nframes"][()]) for g in groups if "nframes" in g]
-    return max(counts) if counts else None
+    counted = [g for g in groups if "nframes" in g]
+    return max(counted, key=lambda g: int(g["nframes"][()])) if counted else None
+
+
+def checkpoint_frames(f):
+    """Frames the newest checkpoint of the open case file `f` counts (None: no checkpoint).
+    Frames beyond it were being written when the run stopped."""
+    g = newest_checkpoint(f)
+    return None if g is None else int(g["nframes"][()])
+
+
+def checkpoint_diagnostic_totals(f):
+    """The run totals of the diagnostics (the names of DIAGNOSTIC_TOTALS) from the state the
+    newest checkpoint of `f` holds (None: no checkpoint with diagnostics): the totals of the
+    frames that checkpoint counts. The root attributes diagnostics.* are rewritten with every
+    frame before the checkpoint, so in a running case they may count one frame more than the
+    frames read. Layout of the state (kf_run_diagnostics, get_state): counters = [strand
+    passages, episodes started, episodes completed, max overlapping pairs, ongoing episodes],
+    values = [first passage time, sum and max of completed durations, smallest squared
+    distance (|i - j| > 1; huge when none), max bond strain]."""
+    g = newest_checkpoint(f)
+    if g is None or "diagnostics" not in g:
+        return None
+    c = np.asarray(g["diagnostics"]["counters"][()], dtype=np.int64)
+    v = np.asarray(g["diagnostics"]["values"][()], dtype=float)
+    if c.shape != (5,) or v.shape != (5,):
+        return None
+    return {"strand_passages": int(c[0]), "first_passage_time": float(v[0]),
+            "overlap_episodes": int(c[1]),
+            "overlap_mean_duration": float(v[1] / c[2]) if c[2] > 0 else 0.0,
+            "overlap_max_duration": float(v[2]), "max_overlapping_pairs": int(c[3]),
+            "min_distance": float(np.sqrt(v[3])) if v[3] < np.finfo(float).max else -1.0,
+            "max_bond_strain": float(v[4])}
+
+
+def read_runs(path, f) -> list:
+    """The run records of the open case file `f` (/runs, RUN_FIELDS): one dict per run segment,
+    [] without /runs. A ValueError names the file and the dataset that is missing, not 1-D, of
+    the wrong kind or of another length than the others."""
+    if "runs" not in f:
+        return []
+    g = f["runs"]
+    if not isinstance(g, h5py.Group):
+        raise ValueError(f"{path}: /runs is not a group")
+    columns = {}
+    for name, kind in RUN_FIELDS.items():
+        if name not in g or not isinstance(g[name], h5py.Dataset):
+            raise ValueError(f"{path}: no dataset /runs/{name} (a run record needs "
+                             + ", ".join(RUN_FIELDS) + ")")
+        ds = g[name]
+        if ds.ndim != 1:
+            raise ValueError(f"{path}: /runs/{name} has {ds.ndim} dimensions, expected 1")
+        is_string = ds.dtype.kind in ("S", "O", "U")
+        if (kind == "s") != is_string or (kind == "i" and ds.dtype.kind not in "iu") \
+                or (kind == "f" and ds.dtype.kind not in "fiu"):
+            want = {"s": "strings", "i": "integers", "f": "numbers"}[kind]
+            raise ValueError(f"{path}: /runs/{name} holds {ds.dtype}, expected {want}")
+        if is_string:
+            columns[name] = _strings(ds)
+        else:
+            data = np.asarray(_read(path, ds))
+            columns[name] = [int(x) for x in data] if kind == "i" else [float(x) for x in data]
+    lengths = {name: len(col) for name, col in columns.items()}
+    if len(set(lengths.values())) > 1:
+        raise ValueError(f"{path}: the /runs datasets have different lengths ("
+                         + ", ".join(f"{k} {n}" for k, n in lengths.items()) + ")")
+    n = next(iter(lengths.values()))
+    return [{name: columns[name][k] for name in RUN_FIELDS} for k in range(n)]
 
 
 def open_case(path):
@@ -209,8 +281,12 @@ def read_case(path) -> Case:
             case.stresslet = {k: np.asarray(_read(path, g[k]))[:n] for k in STRESSLET if k in g}
         totals = {k: attrs["diagnostics." + k] for k in DIAGNOSTIC_TOTALS
                   if "diagnostics." + k in attrs}
-        if totals:
-            case.diagnostic_totals = totals
+        ckpt_totals = checkpoint_diagnostic_totals(f) if case.status != "finished" else None
+        if ckpt_totals is not None:
+            case.diagnostic_totals, case.diagnostic_totals_source = ckpt_totals, "checkpoint"
+        elif totals:
+            case.diagnostic_totals, case.diagnostic_totals_source = totals, "attributes"
+        case.runs = read_runs(path, f)
         an = f.get("analysis")
         if an is not None:
             if "knots" in an:

@@ -1,10 +1,28 @@
 """The reference study side by side with our runs: trefoil Table 2 and candy-cane modes/slipknots.
 
-`knotflow-study --trefoil DIR --candycane DIR --out DIR` reads the case files of the two sweeps
-(inputs/trefoil_table2.nml, inputs/candycane.nml) after `knotflow-analyze` has filled their
-/analysis groups, and writes figures, `results.md` (the tables quoted in docs/REPRODUCTION.md)
-and `results.json`. Nothing is recomputed that /analysis already holds; k_f is computed here only
-for files without /analysis/knots.
+`knotflow-study --trefoil DIR --candycane DIR [--ensemble DIR] --out DIR` reads the case files of
+the sweeps (inputs/trefoil_table2*.nml, inputs/candycane*.nml) after `knotflow-analyze` has
+filled their /analysis groups, and writes into --out figures, `results.md` (the tables quoted in
+docs/REPRODUCTION.md), `results.json` and two small per-frame CSV files:
+`trefoil_kf.csv` (case, t, k_f: one row per case and frame with k_f) and `candycane_shape.csv`
+(case, t, R_g, a, b, c, theta, phi, close_pairs, k_f; k_f empty on frames without it).
+Nothing is recomputed that /analysis already holds; k_f is computed here only for files without
+/analysis/knots.
+
+Every trefoil table counts the re-knottings (knot events after an untying) per case and in
+total, against the study's 13 in 4 of 29 simulations. Per sweep, results.md has the overlap
+statistics under BWE (run diagnostics) and the run records (/runs: commit, wall time, load) of
+every case. A sweep may be running: cases not 'finished' are included, marked with their status
+and the time reached, and the tables say how many cases are finished.
+
+`--rpy-trefoil JSON` and `--rpy-candycane JSON` take the results.json of an earlier
+knotflow-study run with RPY + excluded volume (its "trefoil" part, resp. its "candycane" and
+"ensemble" parts); results.md then has three-column tables (the study, this run's directories
+= knotflow multipole, knotflow RPY + EV) and results.json a "comparison" part.
+
+`--select-frames CASE` prints the frames for the knot-matrix screen of CASE (every 50th frame,
+or with `--every-time T` the frames at the multiples of T time units, plus the last frame and
+the 5 frames with the most close pairs).
 """
 
 from __future__ import annotations
@@ -28,6 +46,20 @@ from .transitions import states  # noqa: E402
 #: Table 2 of the reference study: the cases whose k_f went unknotted and then knotted again.
 #: Every other case of the table had no such transition.
 STUDY_TRANSITIONS = {("b", 1.4), ("c", 2.1), ("c", 2.2), ("c", 2.3)}
+#: The study's Table 2: 29 simulations, with 13 unknot-then-knot events in 4 of them (the four
+#: cases of STUDY_TRANSITIONS) -- as issue 11 quotes the study.
+STUDY_TREFOIL_CASES, STUDY_REKNOT_EVENTS, STUDY_REKNOT_SIMULATIONS = 29, 13, 4
+#: The study's stiff trefoils (A >= 2.2) tumble (mode II): docs/REPRODUCTION.md, Summary.
+STUDY_STIFF_A, STUDY_STIFF_MODE = 2.2, "tumble (mode II)"
+#: The study's candy-canes (docs/REPRODUCTION.md, "Candy-cane", "What does not"): A = 1 coils and
+#: rolls about the vorticity axis (mode I), A = 3 stays open and tumbles (mode II); about 4 times
+#: more close pairs at A = 1 than at A = 3; a slipknot found at A = 1.4; whole-chain k_f about 0
+#: (Summary). The mode at A = 1.4 and the close-pair numbers per A are not stated there.
+STUDY_CANDYCANE_A = (1.0, 1.4, 3.0)
+STUDY_CANDYCANE_MODES = {1.0: "I", 3.0: "II"}
+STUDY_CLOSE_PAIR_RATIO = "about 4"
+STUDY_SLIPKNOT_A = {1.4}
+STUDY_WHOLE_KF = "about 0"
 #: Slipknot threshold on the knot matrix and whole-chain threshold (docs/analysis.md).
 SLIP_K, SLIP_WHOLE = 0.5, 0.1
 
@@ -40,12 +72,25 @@ def _in_study(a, o) -> bool:
     return any(_key(a, o) == _key(sa, so) for so, sa in STUDY_TRANSITIONS)
 
 
-def entangled_frames(path, every=50, extra=5, gap=20):
-    """Frames for knot matrices: every `every`-th frame plus the `extra` frames with the most close
-    pairs, at least `gap` frames from each other and from the regular ones."""
+def time_frames(time, every_time):
+    """Frames of the time axis `time` (increasing) at the multiples of `every_time` (> 0) in
+    [time[0], time[-1]]: the frame nearest to each multiple, each frame once."""
+    if not every_time > 0:
+        raise ValueError(f"--every-time {every_time:g} is not allowed (a positive number)")
+    t = np.asarray(time, dtype=float)
+    first, last = math.ceil(t[0] / every_time - 1e-9), math.floor(t[-1] / every_time + 1e-9)
+    marks = np.arange(first, last + 1) * every_time
+    return sorted({int(np.argmin(np.abs(t - m))) for m in marks})
+
+
+def entangled_frames(path, every=50, extra=5, gap=20, every_time=None):
+    """Frames for knot matrices: every `every`-th frame (or with `every_time` the frames at the
+    multiples of `every_time` time units, `time_frames`) and the last one, plus the `extra`
+    frames with the most close pairs, at least `gap` frames from each other."""
     case = read_case(path)
     cp = np.asarray(case.observables.get("close_pairs", np.zeros(case.nframes)))
-    sel = list(range(0, case.nframes, every))
+    sel = (list(range(0, case.nframes, every)) if every_time is None
+           else time_frames(case.time, every_time))
     if case.nframes and sel[-1] != case.nframes - 1:
         sel.append(case.nframes - 1)
     chosen = []
@@ -72,6 +117,70 @@ def history(time, kf, knotted_at_start):
     return events
 
 
+def reknottings(events) -> int:
+    """Knot events that follow an untying (the study's unknot-then-knot events) in `events`,
+    a list of (kind, time) or [kind, time] in time order."""
+    seen_unknot, count = False, 0
+    for kind, _t in events:
+        if kind == "unknot":
+            seen_unknot = True
+        elif kind == "knot" and seen_unknot:
+            count += 1
+    return count
+
+
+def status_of(case) -> dict:
+    """Status, target t_end (the case's integrator.t_end; None when not recorded) and the time
+    reached (the last frame read)."""
+    t_end = case.attrs.get("integrator.t_end")
+    return {"status": case.status, "model": str(case.attrs.get("hydro.model", "?")),
+            "t_end": None if t_end is None else float(t_end),
+            "t_reached": float(case.time[-1])}
+
+
+def finished(row) -> bool:
+    """Has the case of `row` (a row here or a case of an earlier results.json) finished?"""
+    return row.get("status", "finished") == "finished"
+
+
+def status_text(row) -> str:
+    """'finished', or e.g. 'running, t = 408 of 2000' (never a running case's t as its end)."""
+    if finished(row):
+        return "finished"
+    reached = row.get("t_reached", row.get("t_end"))
+    of = "" if row.get("t_end") is None else f" of {row['t_end']:g}"
+    return f"{row['status']}, t = {reached:g}{of}"
+
+
+def overlap_stats(case) -> dict | None:
+    """The run totals of the diagnostics under BWE (io.DIAGNOSTIC_TOTALS; a running case's from
+    its newest checkpoint), None when the case file has none."""
+    if case.diagnostic_totals is None:
+        return None
+    return {**case.diagnostic_totals, "source": case.diagnostic_totals_source}
+
+
+def runs_summary(runs) -> dict | None:
+    """The run records of a case (io.RUN_FIELDS per segment) summed: commits in order of first
+    use, total wall time, mean load weighted by wall time over the segments with a known load
+    (None when none is known), segments, t range. None without records."""
+    if not runs:
+        return None
+    commits: list = []
+    for r in runs:
+        if r["commit"] not in commits:
+            commits.append(r["commit"])
+    wall = float(sum(r["wall_seconds"] for r in runs))
+    known = [r for r in runs if math.isfinite(r["load_mean"]) and math.isfinite(r["wall_seconds"])]
+    weight = float(sum(r["wall_seconds"] for r in known))
+    load = float(sum(r["load_mean"] * r["wall_seconds"] for r in known) / weight) if weight > 0 \
+        else None
+    return {"commits": commits, "wall_seconds": wall, "mean_load": load, "load_seconds": weight,
+            "segments": len(runs),
+            "t_start": float(min(r["t_start"] for r in runs)),
+            "t_end": float(max(r["t_end"] for r in runs))}
+
+
 def _late(t, frac=0.5):
     """Mask of the second half of the run (after the transient)."""
     return t >= t[0] + frac * (t[-1] - t[0])
@@ -91,12 +200,13 @@ def trefoil_rows(files, closures=200):
             (t for k, t in events if k == "knot" and t > t_unknot), None)
         utk = t_reknot is not None
         rows.append({
-            "case": case.name, "A": a, "orientation": o, "status": case.status,
-            "t_end": float(case.time[-1]), "kf0": float(ana.kf[0]), "final_kf": ana.final_kf,
+            "case": case.name, "A": a, "orientation": o, **status_of(case),
+            "kf0": float(ana.kf[0]), "final_kf": ana.final_kf,
             "final_state": ana.final_state or "undecided",
-            "events": [[k, t] for k, t in events],
+            "events": [[k, t] for k, t in events], "reknottings": reknottings(events),
             "unknot_then_knot": utk, "t_unknot": t_unknot, "t_reknot": t_reknot,
             "study_transition": _in_study(a, o), "mode": mode_name(ana.case_mode),
+            "overlap": overlap_stats(case), "runs": runs_summary(case.runs),
             "time": ana.time.tolist(), "kf": ana.kf.tolist(), "kf_source": ana.kf_source,
         })
     rows.sort(key=lambda r: (r["A"], r["orientation"]))
@@ -170,8 +280,7 @@ def candycane_rows(files, closures=200, confirm_dir=None):
         modes = case.modes if case.modes is not None else ana.modes
         modes = np.asarray(modes)
         rows.append({
-            "case": case.name, "A": float(case.bending_a), "status": case.status,
-            "t_end": float(t[-1]),
+            "case": case.name, "A": float(case.bending_a), **status_of(case),
             "close_pairs_mean": float(np.mean(o["close_pairs"])),
             "close_pairs_late": float(np.mean(o["close_pairs"][late])),
             "rg_late": float(np.mean(o["rg"][late])),
@@ -183,6 +292,7 @@ def candycane_rows(files, closures=200, confirm_dir=None):
             "case_mode": mode_name(ana.case_mode),
             "max_kf": float(np.max(ana.kf)), "mean_kf": float(np.mean(ana.kf)),
             "matrices": slipknot_scan(case, ana.time, ana.kf, confirm_dir),
+            "overlap": overlap_stats(case), "runs": runs_summary(case.runs),
             "_case": case, "_ana": ana,
         })
     rows.sort(key=lambda r: r["A"])
@@ -299,11 +409,45 @@ def _f(v, spec=".2f"):
     return "-" if v is None else format(v, spec)
 
 
+def _star(row) -> str:
+    """'*' after a case that has not finished (its result may still change)."""
+    return "" if finished(row) else "*"
+
+
+def _utk(row) -> str:
+    return "U->K" if row["unknot_then_knot"] else "-"
+
+
+def reknot_totals(rows) -> dict:
+    """Re-knottings of a trefoil sweep: events, simulations with at least one, cases, finished."""
+    counts = [reknottings(r["events"]) for r in rows]
+    return {"events": sum(counts), "simulations": sum(c > 0 for c in counts),
+            "cases": len(rows), "finished": sum(finished(r) for r in rows)}
+
+
+def _finished_line(rows, of=None) -> str:
+    of = len(rows) if of is None else of
+    text = f"{sum(finished(r) for r in rows)} of {of} cases finished"
+    if len(rows) != of:
+        text += f" ({len(rows)} present)"
+    if all(finished(r) for r in rows):
+        return text + "."
+    return text + ("; a case not finished is marked (`*` in a grid, its status and the time "
+                   "reached in a table): its results may still change.")
+
+
+def _reknot_line(tot) -> str:
+    return (f"Unknot-then-knot events (re-knottings: knot events after an untying): "
+            f"{tot['events']} in {tot['simulations']} of {tot['cases']} simulations (the study: "
+            f"{STUDY_REKNOT_EVENTS} in {STUDY_REKNOT_SIMULATIONS} of {STUDY_TREFOIL_CASES}).")
+
+
 def trefoil_tables(rows):
     a_vals = sorted({r["A"] for r in rows})
     o_vals = sorted({r["orientation"] for r in rows})
     by = {(r["A"], r["orientation"]): r for r in rows}
     out = ["### Unknot-then-knot transitions, ours vs the study (Table 2)", "",
+           _finished_line(rows, STUDY_TREFOIL_CASES), "",
            "Cell: ours / study; `U->K` an unknot-then-knot transition, `-` none; "
            "**bold** where they differ. Every case starts as an open trefoil (knotted); an "
            "untying is k_f falling below 0.1, a re-knotting k_f rising above 0.9 afterwards.", "",
@@ -316,45 +460,115 @@ def trefoil_tables(rows):
             if r is None:
                 cells.append(" ")
                 continue
-            ours = "U->K" if r["unknot_then_knot"] else "-"
+            ours = _utk(r)
             study = "U->K" if r["study_transition"] else "-"
             total += 1
             agree += ours == study
-            cell = f"{ours} / {study}"
+            cell = f"{ours}{_star(r)} / {study}"
             cells.append(cell if ours == study else f"**{cell}**")
         out.append(f"| {a:g} | " + " | ".join(cells) + " |")
-    out += ["", f"Agreement: {agree} of {total} cases.", "",
+    out += ["", f"Agreement: {agree} of {total} cases.", "", _reknot_line(reknot_totals(rows)), "",
             "### Every trefoil case", "",
-            "| case | k_f(0) | events (time) | final k_f | final state | mode | study U->K |",
-            "|---|---|---|---|---|---|---|"]
+            "| case | status | k_f(0) | events (time) | re-knottings | final k_f | final state | "
+            "mode | study U->K |",
+            "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         ev = ", ".join(f"{k} {t:g}" for k, t in r["events"]) or "none"
-        out.append(f"| {r['case']} | {r['kf0']:.2f} | {ev} | {r['final_kf']:.2f} | "
-                   f"{r['final_state']} | {r['mode']} | {'yes' if r['study_transition'] else 'no'} |")
+        out.append(f"| {r['case']} | {status_text(r)} | {r['kf0']:.2f} | {ev} | "
+                   f"{reknottings(r['events'])} | {r['final_kf']:.2f} | {r['final_state']} | "
+                   f"{r['mode']} | {'yes' if r['study_transition'] else 'no'} |")
     return out, agree, total
 
 
+def overlap_table(rows) -> list:
+    """Overlap statistics under BWE of every case (the run diagnostics' totals)."""
+    out = ["| case | status | overlap episodes | mean duration | max duration | "
+           "max overlapping pairs | min distance | strand passages |",
+           "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        d = r["overlap"]
+        if d is None:
+            out.append(f"| {r['case']} | {status_text(r)} | not recorded | | | | | |")
+            continue
+        out.append(f"| {r['case']} | {status_text(r)} | {d.get('overlap_episodes', '-')} | "
+                   f"{_f(d.get('overlap_mean_duration'), '.2f')} | "
+                   f"{_f(d.get('overlap_max_duration'), '.2f')} | "
+                   f"{d.get('max_overlapping_pairs', '-')} | {_f(d.get('min_distance'), '.4f')} | "
+                   f"{d.get('strand_passages', '-')} |")
+    if any(r["overlap"] and r["overlap"]["source"] == "checkpoint" for r in rows):
+        out += ["", "A case not finished: its totals from the state in its newest checkpoint "
+                "(the frames read)."]
+    return out
+
+
+def _hours(seconds) -> str:
+    return f"{seconds / 3600:.2f} h"
+
+
+def runs_table(rows) -> list:
+    """Run records of every case (commit, wall time, time-weighted mean load, segments) and
+    the sum over the cases with records."""
+    out = ["| case | status | commit(s) | total wall time | mean load (time-weighted) | segments |",
+           "|---|---|---|---|---|---|"]
+    recorded = [r["runs"] for r in rows if r["runs"] is not None]
+    for r in rows:
+        s = r["runs"]
+        if s is None:
+            out.append(f"| {r['case']} | {status_text(r)} | not recorded | | | |")
+            continue
+        out.append(f"| {r['case']} | {status_text(r)} | {', '.join(s['commits'])} | "
+                   f"{_hours(s['wall_seconds'])} | {_f(s['mean_load'], '.2f')} | "
+                   f"{s['segments']} |")
+    if recorded:
+        weight = sum(s["load_seconds"] for s in recorded)
+        load = (sum(s["mean_load"] * s["load_seconds"] for s in recorded if s["mean_load"] is not None)
+                / weight) if weight > 0 else None
+        out.append(f"| all ({len(recorded)} of {len(rows)} cases recorded) | | | "
+                   f"{_hours(sum(s['wall_seconds'] for s in recorded))} | {_f(load, '.2f')} | "
+                   f"{sum(s['segments'] for s in recorded)} |")
+    return out
+
+
+def sweep_records(rows) -> list:
+    """The overlap statistics and run records sections of a sweep."""
+    return (["#### Overlap statistics under BWE", ""] + overlap_table(rows)
+            + ["", "#### Runs", ""] + runs_table(rows) + [""])
+
+
+def close_pair_ratio(rows, key="close_pairs_mean"):
+    """Mean of `key` over the cases with A = 1 over that with A = 3 (None without either or
+    with none at A = 3)."""
+    a1 = [r[key] for r in rows if abs(r["A"] - 1.0) < 1e-9]
+    a3 = [r[key] for r in rows if abs(r["A"] - 3.0) < 1e-9]
+    if not (a1 and a3) or np.mean(a3) <= 0:
+        return None
+    return float(np.mean(a1) / np.mean(a3))
+
+
 def candycane_tables(rows):
-    out = ["### Candy-cane cases (late = second half of the run)", "",
-           "| A | close pairs (mean, all t) | close pairs (late) | R_g (late) | a, b, c (late) | "
-           "mean abs cos theta (late) | frames in mode I / II (late) | case mode | max k_f | mean k_f |",
-           "|---|---|---|---|---|---|---|---|---|---|"]
+    out = ["### Candy-cane cases (late = second half of the frames read)", "",
+           _finished_line(rows), "",
+           "| A | status | close pairs (mean, all t) | close pairs (late) | R_g (late) | "
+           "a, b, c (late) | mean abs cos theta (late) | frames in mode I / II (late) | "
+           "case mode | max k_f | mean k_f |",
+           "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         out.append(
-            f"| {r['A']:g} | {r['close_pairs_mean']:.2f} | {r['close_pairs_late']:.2f} | "
+            f"| {r['A']:g} | {status_text(r)} | {r['close_pairs_mean']:.2f} | "
+            f"{r['close_pairs_late']:.2f} | "
             f"{r['rg_late']:.2f} | {r['a_late']:.1f}, {r['b_late']:.1f}, {r['c_late']:.1f} | "
             f"{r['abs_cos_theta_late']:.2f} | {_f(r['mode_I_late'])} / {_f(r['mode_II_late'])} | "
             f"{r['case_mode']} | {r['max_kf']:.3f} | {r['mean_kf']:.4f} |")
-    a1 = next((r for r in rows if abs(r["A"] - 1.0) < 1e-9), None)
-    a3 = next((r for r in rows if abs(r["A"] - 3.0) < 1e-9), None)
-    if a1 and a3 and a3["close_pairs_mean"] > 0:
-        out += ["", f"Close pairs A = 1 / A = 3: {a1['close_pairs_mean'] / a3['close_pairs_mean']:.1f} "
-                f"(whole run), {a1['close_pairs_late'] / max(a3['close_pairs_late'], 1e-12):.1f} (late)."]
+    ratio, ratio_late = close_pair_ratio(rows), close_pair_ratio(rows, "close_pairs_late")
+    if ratio is not None:
+        out += ["", f"Close pairs A = 1 / A = 3: {ratio:.1f} (whole run), "
+                f"{_f(ratio_late, '.1f')} (late)."]
     out += ["", "### Knot matrices (slipknot search)", "",
             f"Slipknot: some K(i, j) >= {SLIP_K} while the whole chain has k_f < {SLIP_WHOLE}. "
-            "Screening: 20 closures per subchain on every 50th frame and the 5 most entangled "
-            "frames; candidates recomputed with 100 closures per subchain (and 1000 for the whole "
-            "chain) where listed.", "",
+            "Screening (scripts/reproduce.sh): 20 closures per subchain on the frames of "
+            "`knotflow-study --select-frames` (every 50th frame, or every T time units with "
+            "--every-time T, the last and the 5 most entangled frames); candidates recomputed "
+            "with 100 closures per subchain (and 1000 for the whole chain) where listed.", "",
             "| A | frames screened | frames with max K >= 0.5 | candidates (t) | "
             "largest K in the screen (t, whole k_f, core) | candidates recomputed: t, max K, slipknot |",
             "|---|---|---|---|---|---|"]
@@ -380,11 +594,13 @@ def candycane_tables(rows):
 def ensemble_tables(rows):
     """Candy-canes with several random rotations: every case, then mean and range per A."""
     out = ["### Candy-cane ensemble (several random rotations; late = second half of the run)", "",
-           "| case | close pairs (all t) | close pairs (late) | R_g (late) | c (late) | "
+           _finished_line(rows), "",
+           "| case | status | close pairs (all t) | close pairs (late) | R_g (late) | c (late) | "
            "mean abs cos theta (late) | mode I / II frames (late) | max k_f |",
-           "|---|---|---|---|---|---|---|---|"]
+           "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        out.append(f"| {r['case']} | {r['close_pairs_mean']:.2f} | {r['close_pairs_late']:.2f} | "
+        out.append(f"| {r['case']} | {status_text(r)} | {r['close_pairs_mean']:.2f} | "
+                   f"{r['close_pairs_late']:.2f} | "
                    f"{r['rg_late']:.1f} | {r['c_late']:.2f} | {r['abs_cos_theta_late']:.2f} | "
                    f"{_f(r['mode_I_late'])} / {_f(r['mode_II_late'])} | {r['max_kf']:.2f} |")
     out += ["", "| A | cases | close pairs, all t: mean (min-max) | mean abs cos theta, late: mean "
@@ -400,34 +616,343 @@ def ensemble_tables(rows):
     return out
 
 
-def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None):
+# ------------------------------------------------------------------ three-column comparison
+
+#: What the comparison needs of each case of an earlier results.json (--rpy-trefoil: its
+#: "trefoil" part, --rpy-candycane: its "candycane" and "ensemble" parts).
+RPY_TREFOIL_KEYS = ("case", "A", "orientation", "events", "unknot_then_knot", "final_state",
+                    "mode")
+RPY_CANDYCANE_KEYS = ("case", "A", "close_pairs_mean", "close_pairs_late", "case_mode", "max_kf",
+                      "matrices")
+RPY_ENSEMBLE_KEYS = ("case", "A", "close_pairs_mean", "close_pairs_late", "case_mode")
+#: Column heads of the comparison; the middle one names this run's hydrodynamic model.
+STUDY_HEAD, RPY_HEAD = "the study", "knotflow RPY + EV"
+
+
+def _json_cases(path, doc, part, keys):
+    """The list of cases of `part` of results.json `doc`, each holding `keys`, or a ValueError."""
+    if part not in doc:
+        raise ValueError(f"{path}: no \"{part}\" part (a knotflow-study results.json of that sweep "
+                         "is needed)")
+    cases = doc[part]["cases"] if part == "trefoil" and isinstance(doc[part], dict) \
+        and "cases" in doc[part] else doc[part]
+    if not isinstance(cases, list) or not cases:
+        raise ValueError(f"{path}: the \"{part}\" part holds no cases")
+    for k, c in enumerate(cases):
+        missing = [key for key in keys if not isinstance(c, dict) or key not in c]
+        if missing:
+            raise ValueError(f"{path}: \"{part}\" case {k}: no " + ", ".join(missing))
+    return cases
+
+
+def load_rpy(path, parts):
+    """The parts (a tuple of "trefoil", "candycane", "ensemble") of the results.json at `path`
+    as {part: list of cases}; a ValueError (one line) names the file and the problem when it is
+    missing, unreadable, not JSON or lacks a part or a needed value."""
+    keys = {"trefoil": RPY_TREFOIL_KEYS, "candycane": RPY_CANDYCANE_KEYS,
+            "ensemble": RPY_ENSEMBLE_KEYS}
+    if not os.path.isfile(path):
+        raise ValueError(f"{path}: no such file")
+    try:
+        with open(path, encoding="utf-8") as fh:
+            doc = json.load(fh)
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{path}: cannot read: {exc}") from None
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not JSON: {exc}") from None
+    if not isinstance(doc, dict):
+        raise ValueError(f"{path}: not a knotflow-study results.json (no object at the top)")
+    return {part: _json_cases(path, doc, part, keys[part]) for part in parts}
+
+
+def model_head(rows) -> str:
+    """'knotflow <model>' for the hydrodynamic model(s) of this run's cases."""
+    return "knotflow " + "/".join(sorted({str(r.get("model", "?")) for r in rows}))
+
+
+def _row3(label, study, ours, rpy) -> str:
+    return f"| {label} | {study} | {ours} | {rpy} |"
+
+
+def _head3(first, ours_head) -> list:
+    return [f"| {first} | {STUDY_HEAD} | {ours_head} | {RPY_HEAD} |", "|---|---|---|---|"]
+
+
+def _bold_if(text, differs) -> str:
+    return f"**{text}**" if differs else text
+
+
+def _summary(rows) -> dict:
+    """Counts of one model's trefoil cases: agreement, re-knottings, final states, modes."""
+    tot = reknot_totals(rows)
+    stiff = [r for r in rows if r["A"] >= STUDY_STIFF_A - 1e-9]
+    return {**tot, "agree": sum(_utk(r) == ("U->K" if _in_study(r["A"], r["orientation"]) else "-")
+                                for r in rows),
+            "final_states": {s: sum(r["final_state"] == s for r in rows)
+                             for s in ("knotted", "unknotted", "undecided")},
+            "modes": {m: sum(r["mode"] == m for r in rows) for m in ("I", "II", "-", "?")},
+            "stiff_mode_II": [sum(r["mode"] == "II" for r in stiff), len(stiff)]}
+
+
+def trefoil_comparison(rows, rpy):
+    """Markdown lines and the "comparison" part of the trefoils: the study, this run (rows) and
+    the RPY + EV cases of an earlier results.json (rpy)."""
+    head = model_head(rows)
+    ours = {_key(r["A"], r["orientation"]): r for r in rows}
+    theirs = {_key(r["A"], r["orientation"]): r for r in rpy}
+    keys = sorted(set(ours) | set(theirs), key=lambda k: (k[1], k[0]))
+    a_vals = sorted({k[1] for k in keys})
+    o_vals = sorted({k[0] for k in keys})
+    cells = []
+    for o, a in keys:
+        study = "U->K" if _in_study(a, o) else "-"
+        cells.append({"A": a, "orientation": o, "study": study,
+                      "ours": _utk(ours[o, a]) if (o, a) in ours else None,
+                      "ours_finished": finished(ours[o, a]) if (o, a) in ours else None,
+                      "rpy": _utk(theirs[o, a]) if (o, a) in theirs else None})
+    by = {(c["A"], c["orientation"]): c for c in cells}
+    out = ["### The study, " + head + " and " + RPY_HEAD + ": Table 2", "",
+           f"{head}: " + _finished_line(rows, STUDY_TREFOIL_CASES), "",
+           f"Cell: {STUDY_HEAD} / {head} / {RPY_HEAD}; `U->K` an unknot-then-knot transition, "
+           "`-` none, `?` not run; **bold** where a model differs from the study.", "",
+           "| A | " + " | ".join(o_vals) + " |", "|---|" + "---|" * len(o_vals)]
+    for a in a_vals:
+        line = []
+        for o in o_vals:
+            c = by.get((a, o))
+            if c is None:
+                line.append(" ")
+                continue
+            mine = "?" if c["ours"] is None else c["ours"] + ("" if c["ours_finished"] else "*")
+            other = "?" if c["rpy"] is None else c["rpy"]
+            line.append(" / ".join([c["study"],
+                                    _bold_if(mine, c["ours"] not in (None, c["study"])),
+                                    _bold_if(other, c["rpy"] not in (None, c["study"]))]))
+        out.append(f"| {a:g} | " + " | ".join(line) + " |")
+    sm, sr = _summary(rows), _summary(rpy)
+
+    def states(s):
+        f = s["final_states"]
+        return f"{f['knotted']} / {f['unknotted']} / {f['undecided']}"
+
+    def modes(s):
+        m = s["modes"]
+        return f"{m['I']} / {m['II']} / {m['-']}" + (f" (? {m['?']})" if m["?"] else "")
+
+    out += ["", *_head3("", head),
+            _row3("cases finished", STUDY_TREFOIL_CASES,
+                  f"{sm['finished']} of {STUDY_TREFOIL_CASES}", f"{sr['finished']} of {sr['cases']}"),
+            _row3("cells agreeing with the study", "-", f"{sm['agree']} of {sm['cases']}",
+                  f"{sr['agree']} of {sr['cases']}"),
+            _row3("unknot-then-knot events", STUDY_REKNOT_EVENTS, sm["events"], sr["events"]),
+            _row3("simulations with one or more",
+                  f"{STUDY_REKNOT_SIMULATIONS} of {STUDY_TREFOIL_CASES}",
+                  f"{sm['simulations']} of {sm['cases']}", f"{sr['simulations']} of {sr['cases']}"),
+            _row3("final state knotted / unknotted / undecided", "not stated", states(sm),
+                  states(sr)),
+            _row3("case mode I / II / neither", "not stated", modes(sm), modes(sr)),
+            _row3(f"stiff trefoils (A >= {STUDY_STIFF_A:g}) in mode II", STUDY_STIFF_MODE,
+                  "{} of {}".format(*sm["stiff_mode_II"]), "{} of {}".format(*sr["stiff_mode_II"])),
+            "", "Every case:", "",
+            f"| case | status ({head}) | study U->K | {head}: events | re-knottings | final state "
+            f"| mode | {RPY_HEAD}: events | re-knottings | final state | mode |",
+            "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for o, a in keys:
+        r, q = ours.get((o, a)), theirs.get((o, a))
+        name = (r or q)["case"]
+
+        def part(x):
+            if x is None:
+                return "not run | | |"
+            ev = ", ".join(f"{k} {t:g}" for k, t in x["events"]) or "none"
+            return f"{ev} | {reknottings(x['events'])} | {x['final_state']} | {x['mode']} |"
+
+        out.append(f"| {name} | {'-' if r is None else status_text(r)} | "
+                   f"{'yes' if _in_study(a, o) else 'no'} | {part(r)} {part(q)}")
+    doc = {"columns": [STUDY_HEAD, head, RPY_HEAD], "cells": cells,
+           "study": {"cases": STUDY_TREFOIL_CASES, "events": STUDY_REKNOT_EVENTS,
+                     "simulations": STUDY_REKNOT_SIMULATIONS,
+                     "transitions": sorted([o, a] for o, a in STUDY_TRANSITIONS),
+                     "stiff_mode": STUDY_STIFF_MODE},
+           "ours": sm, "rpy": sr}
+    return out, doc
+
+
+def _by_a(rows, a):
+    return [r for r in rows if abs(r["A"] - a) < 1e-9]
+
+
+def _cc_numbers(r) -> dict:
+    """What the candy-cane comparison takes of one case (a row here or of a results.json)."""
+    ms = r["matrices"]
+    return {"case": r["case"], "status": r.get("status", "finished"),
+            "t_reached": r.get("t_reached", r.get("t_end")), "t_end": r.get("t_end"),
+            "case_mode": r["case_mode"], "close_pairs_mean": r["close_pairs_mean"],
+            "close_pairs_late": r["close_pairs_late"], "max_kf": r["max_kf"],
+            "frames_screened": len(ms), "slip_candidates": sum(m["slipknot"] for m in ms),
+            "slip_recomputed": sum("confirmed_max_K" in m for m in ms),
+            "slip_confirmed": sum(bool(m.get("confirmed_slipknot")) for m in ms)}
+
+
+def _slip_text(n) -> str:
+    if not n["frames_screened"]:
+        return "none screened"
+    if not n["slip_recomputed"]:
+        return f"{n['slip_candidates']} candidates, none recomputed ({n['frames_screened']} frames)"
+    return (f"{n['slip_candidates']} candidates, {n['slip_confirmed']} of "
+            f"{n['slip_recomputed']} recomputed confirmed ({n['frames_screened']} frames)")
+
+
+def _mode_counts(rows) -> dict:
+    return {m: sum(r["case_mode"] == m for r in rows) for m in ("I", "II", "-", "?")}
+
+
+def _mode_text(counts) -> str:
+    return (f"{counts['I']} / {counts['II']} / {counts['-']}"
+            + (f" (? {counts['?']})" if counts["?"] else ""))
+
+
+def candycane_comparison(rows, ensemble, rpy):
+    """Markdown lines and the "comparison" part of the candy-canes: the study, this run (rows,
+    ensemble: the --ensemble cases or []) and the RPY + EV cases of an earlier results.json
+    (rpy: its "candycane" and "ensemble" lists)."""
+    head = model_head(rows)
+    r_cc, r_en = rpy["candycane"], rpy["ensemble"]
+    a_vals = sorted({round(float(a), 6) for a in STUDY_CANDYCANE_A}
+                    | {round(r["A"], 6) for r in rows + r_cc})
+    out = ["### The study, " + head + " and " + RPY_HEAD + ": candy-canes", "",
+           f"{head}: " + _finished_line(rows) + " Several cases of one A are listed in turn; "
+           "late = second half of the frames read.", "", *_head3("A: quantity", head)]
+
+    def join(ns, fmt):
+        return ", ".join(fmt(n) for n in ns) or "not run"
+
+    per_a = []
+    for a in a_vals:
+        g = [_cc_numbers(r) for r in _by_a(rows, a)]
+        q = [_cc_numbers(r) for r in _by_a(r_cc, a)]
+        study = {"case_mode": STUDY_CANDYCANE_MODES.get(a),
+                 "slipknot": "found" if any(abs(a - x) < 1e-9 for x in STUDY_SLIPKNOT_A) else None,
+                 "whole_kf": STUDY_WHOLE_KF}
+        entry = {"A": a, "study": study, "ours": g, "rpy": q}
+        items = [
+            ("status", "-", join(g, status_text), join(q, status_text)),
+            ("case mode", study["case_mode"] or "not stated", join(g, lambda n: n["case_mode"]),
+             join(q, lambda n: n["case_mode"])),
+            ("close pairs, mean over all t", "not stated",
+             join(g, lambda n: f"{n['close_pairs_mean']:.2f}"),
+             join(q, lambda n: f"{n['close_pairs_mean']:.2f}")),
+            ("close pairs, mean over late t", "not stated",
+             join(g, lambda n: f"{n['close_pairs_late']:.2f}"),
+             join(q, lambda n: f"{n['close_pairs_late']:.2f}")),
+            ("whole-chain max k_f", STUDY_WHOLE_KF, join(g, lambda n: f"{n['max_kf']:.3f}"),
+             join(q, lambda n: f"{n['max_kf']:.3f}")),
+            ("slipknots", study["slipknot"] or "not stated", join(g, _slip_text),
+             join(q, _slip_text)),
+        ]
+        if _by_a(ensemble, a) or _by_a(r_en, a):
+            entry["ours_rotations_modes"] = _mode_counts(_by_a(ensemble, a)) if ensemble else None
+            entry["rpy_rotations_modes"] = _mode_counts(_by_a(r_en, a))
+            items.append(("rotations: case mode I / II / neither", "-",
+                          _mode_text(entry["ours_rotations_modes"]) if ensemble else "not run",
+                          _mode_text(entry["rpy_rotations_modes"])))
+        out += [_row3(f"{a:g}: {label}", s, m, r) for label, s, m, r in items]
+        per_a.append(entry)
+    ratios = {"all_t": [close_pair_ratio(rows), close_pair_ratio(r_cc)],
+              "late_t": [close_pair_ratio(rows, "close_pairs_late"),
+                         close_pair_ratio(r_cc, "close_pairs_late")],
+              "rotations_all_t": [close_pair_ratio(ensemble) if ensemble else None,
+                                  close_pair_ratio(r_en)]}
+    labels = {"all_t": "all t", "late_t": "late t", "rotations_all_t": "all t, mean over rotations"}
+    for k, (m, r) in ratios.items():
+        out.append(_row3(f"close pairs A = 1 / A = 3, {labels[k]}", STUDY_CLOSE_PAIR_RATIO,
+                         _f(m, ".1f"), _f(r, ".1f")))
+    doc = {"columns": [STUDY_HEAD, head, RPY_HEAD], "per_A": per_a,
+           "close_pair_ratio": {k: {"study": STUDY_CLOSE_PAIR_RATIO, "ours": m, "rpy": r}
+                                for k, (m, r) in ratios.items()}}
+    return out, doc
+
+
+# ------------------------------------------------------------------------ per-frame CSV files
+
+def write_trefoil_csv(rows, path):
+    """trefoil_kf.csv: case, t, k_f (one line per case and frame with k_f)."""
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write("case,t,k_f\n")
+        for r in rows:
+            for t, k in zip(r["time"], r["kf"]):
+                fh.write(f"{r['case']},{t:.6g},{k:.4g}\n")
+    return path
+
+
+CANDYCANE_CSV = ("rg", "a", "b", "c", "theta", "phi", "close_pairs")
+
+
+def write_candycane_csv(rows, path):
+    """candycane_shape.csv: case, t, R_g, a, b, c, theta, phi, close_pairs, k_f (one line per
+    case and frame; k_f empty on a frame without it)."""
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write("case,t,R_g,a,b,c,theta,phi,close_pairs,k_f\n")
+        for r in rows:
+            case, ana = r["_case"], r["_ana"]
+            kf = dict(zip((int(k) for k in ana.frame_index), ana.kf))
+            o = ana.observables
+            for k, t in enumerate(case.time):
+                vals = ",".join(f"{float(o[name][k]):.6g}" for name in CANDYCANE_CSV)
+                kk = f"{kf[k]:.4g}" if k in kf else ""
+                fh.write(f"{r['case']},{t:.6g},{vals},{kk}\n")
+    return path
+
+
+def _public(rows, drop=("time", "kf")):
+    return [{k: v for k, v in r.items() if not k.startswith("_") and k not in drop} for r in rows]
+
+
+def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None,
+                rpy_trefoil=None, rpy_candycane=None):
+    """Write figures, results.md, results.json and the per-frame CSV files into `out`.
+    rpy_trefoil, rpy_candycane: `load_rpy` of earlier RPY + EV results (or None): three-column
+    comparison tables and a "comparison" part in results.json."""
     confirm_dir = os.path.join(out, "confirm")
     os.makedirs(out, exist_ok=True)
     md = ["# knotflow-study: generated results", "",
           f"Trefoil sweep: `{trefoil_dir}`; candy-cane sweep: `{candycane_dir}`.", ""]
     result = {}
+    comparison = {}
+    ensemble = candycane_rows(find_case_files(ensemble_dir), closures) if ensemble_dir else []
     if trefoil_dir:
         rows = trefoil_rows(find_case_files(trefoil_dir), closures)
         plot_trefoil_grid(rows, os.path.join(out, "trefoil_kf_grid.png"))
+        write_trefoil_csv(rows, os.path.join(out, "trefoil_kf.csv"))
         lines, agree, total = trefoil_tables(rows)
         md += ["## Trefoils (Table 2)", "", "![k_f(t) of every case](trefoil_kf_grid.png)", ""] + lines + [""]
-        result["trefoil"] = {"agree": agree, "total": total,
-                             "cases": [{k: v for k, v in r.items() if k not in ("time", "kf")}
-                                       for r in rows]}
+        if rpy_trefoil is not None:
+            lines, comparison["trefoil"] = trefoil_comparison(rows, rpy_trefoil["trefoil"])
+            md += lines + [""]
+        md += sweep_records(rows)
+        result["trefoil"] = {"agree": agree, "total": total, "reknottings": reknot_totals(rows),
+                             "cases": _public(rows)}
     if candycane_dir:
         rows = candycane_rows(find_case_files(candycane_dir), closures, confirm_dir)
         figs = [plot_candycane_shapes(rows, os.path.join(out, "candycane_shape.png")),
                 plot_candycane_kf(rows, os.path.join(out, "candycane_kf.png")),
                 plot_candycane_snapshots(rows, os.path.join(out, "candycane_snapshots.png")),
                 plot_matrices(rows, os.path.join(out, "candycane_knot_matrices.png"))]
+        write_candycane_csv(rows, os.path.join(out, "candycane_shape.csv"))
         md += ["## Candy-cane", ""]
         md += [f"![{os.path.basename(f)}]({os.path.basename(f)})" for f in figs if f] + [""]
         md += candycane_tables(rows) + [""]
-        result["candycane"] = [{k: v for k, v in r.items() if not k.startswith("_")} for r in rows]
+        if rpy_candycane is not None:
+            lines, comparison["candycane"] = candycane_comparison(rows, ensemble, rpy_candycane)
+            md += lines + [""]
+        md += sweep_records(rows)
+        result["candycane"] = _public(rows)
     if ensemble_dir:
-        rows = candycane_rows(find_case_files(ensemble_dir), closures)
-        md += ["## Candy-cane ensemble", ""] + ensemble_tables(rows) + [""]
-        result["ensemble"] = [{k: v for k, v in r.items() if not k.startswith("_")} for r in rows]
+        md += ["## Candy-cane ensemble", ""] + ensemble_tables(ensemble) + [""]
+        md += sweep_records(ensemble)
+        result["ensemble"] = _public(ensemble)
+    if comparison:
+        result["comparison"] = comparison
     with open(os.path.join(out, "results.md"), "w", encoding="utf-8") as fh:
         fh.write("\n".join(md) + "\n")
     with open(os.path.join(out, "results.json"), "w", encoding="utf-8") as fh:
