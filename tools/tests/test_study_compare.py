@@ -135,6 +135,13 @@ def test_three_column_candycane_ratios_modes_and_slipknots():
     per = {e["A"]: e for e in doc["per_A"]}
     assert per[1.4]["rpy"][0]["slip_candidates"] == 1 and per[1.4]["ours"] == []
     assert per[1.0]["rpy_rotations_modes"] == {"I": 1, "II": 0, "-": 1, "?": 0}
+    assert "| close pairs A = 1 / A = 3, all t, mean over rotations | about 4 | not run | 1.7 |" \
+        in text
+    # with rotations of this run: A = 1 means (9 + 7) / 2 = 8, A = 3 one case of 2 -> 4
+    ensemble = [_cane(1.0, 9.0, 1.0, "I"), _cane(1.0, 7.0, 1.0, "-"), _cane(3.0, 2.0, 1.0, "II")]
+    lines, doc = study.candycane_comparison(ours, ensemble, rpy)
+    assert doc["close_pair_ratio"]["rotations_all_t"]["ours"] == pytest.approx(4.0)
+    assert "| 1: rotations: case mode I / II / neither | - | 1 / 0 / 1 | 1 / 0 / 1 |" in lines
 
 
 # ------------------------------------------------------------------------------- refusals

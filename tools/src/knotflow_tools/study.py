@@ -316,6 +316,8 @@ def plot_trefoil_grid(rows, path):
         for kind, t in r["events"]:
             ax.axvline(t, color="tab:red" if kind == "unknot" else "tab:green", lw=0.9, ls="--")
         mark = " [study: U->K]" if r["study_transition"] else ""
+        if not finished(r):
+            mark += f" [{r['status']}, t = {r['t_reached']:g}]"
         col = "tab:red" if r["unknot_then_knot"] != r["study_transition"] else "k"
         ax.set_title(f"A={r['A']:g} {r['orientation']}{mark}", fontsize=8, color=col)
         ax.set_ylim(-0.05, 1.05)
@@ -323,7 +325,8 @@ def plot_trefoil_grid(rows, path):
     for ax in axes[-1, :]:
         ax.set_xlabel("t", fontsize=8)
     fig.suptitle("Open trefoils, N = 99: k_f(t) (dashed: red unknot, green knot events; "
-                 "red title: differs from the study)", fontsize=9)
+                 "red title: differs from the study; a case not finished shows its status and "
+                 "the time reached)", fontsize=9)
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return path
@@ -865,8 +868,9 @@ def candycane_comparison(rows, ensemble, rpy):
                                   close_pair_ratio(r_en)]}
     labels = {"all_t": "all t", "late_t": "late t", "rotations_all_t": "all t, mean over rotations"}
     for k, (m, r) in ratios.items():
+        mine = "not run" if k == "rotations_all_t" and not ensemble else _f(m, ".1f")
         out.append(_row3(f"close pairs A = 1 / A = 3, {labels[k]}", STUDY_CLOSE_PAIR_RATIO,
-                         _f(m, ".1f"), _f(r, ".1f")))
+                         mine, _f(r, ".1f")))
     doc = {"columns": [STUDY_HEAD, head, RPY_HEAD], "per_A": per_a,
            "close_pair_ratio": {k: {"study": STUDY_CLOSE_PAIR_RATIO, "ours": m, "rpy": r}
                                 for k, (m, r) in ratios.items()}}
