@@ -251,7 +251,12 @@ def test_run_records_are_read_and_summed(tmp_path):
     # by hand: 3600 + 1800 + 5400 = 10800 s; load (2 x 3600 + 1 x 5400) / 9000 = 1.4
     assert sa["commits"] == ["abc", "def"] and sa["wall_seconds"] == 10800.0
     assert sa["mean_load"] == pytest.approx(1.4) and sa["segments"] == 3
-    assert (sa["t_start"], sa["t_end"]) == (0.0, 300.0)
+    assert (sa["t_start"], sa["t_end"]) == (0.0, 300.0) and sa["wall_unknown"] == 0
+    # a segment without a wall time (NaN): left out of the sum and of the load weights
+    d = study.runs_summary([dict(case.runs[0], wall_seconds=math.nan), case.runs[2]])
+    assert d["wall_seconds"] == 5400.0 and d["wall_unknown"] == 1 and d["mean_load"] == 1.0
+    assert "| x | finished | abc, def | 1.50 h (+ 1 segment(s) not recorded) | 1.00 | 2 |" in \
+        study.runs_table([{"case": "x", "status": "finished", "runs": d}])
     sb = study.runs_summary(io.read_case(b).runs)
     rows = [{"case": "a", "status": "finished", "runs": sa},
             {"case": "b", "status": "finished", "runs": sb},

@@ -162,21 +162,23 @@ def overlap_stats(case) -> dict | None:
 
 def runs_summary(runs) -> dict | None:
     """The run records of a case (io.RUN_FIELDS per segment) summed: commits in order of first
-    use, total wall time, mean load weighted by wall time over the segments with a known load
-    (None when none is known), segments, t range. None without records."""
+    use, total wall time of the segments that record one (a NaN wall time is counted in
+    `wall_unknown`), mean load weighted by wall time over the segments with a known load (None
+    when none is known), segments, t range. None without records."""
     if not runs:
         return None
     commits: list = []
     for r in runs:
         if r["commit"] not in commits:
             commits.append(r["commit"])
-    wall = float(sum(r["wall_seconds"] for r in runs))
+    wall = float(sum(r["wall_seconds"] for r in runs if math.isfinite(r["wall_seconds"])))
     known = [r for r in runs if math.isfinite(r["load_mean"]) and math.isfinite(r["wall_seconds"])]
     weight = float(sum(r["wall_seconds"] for r in known))
     load = float(sum(r["load_mean"] * r["wall_seconds"] for r in known) / weight) if weight > 0 \
         else None
-    return {"commits": commits, "wall_seconds": wall, "mean_load": load, "load_seconds": weight,
-            "segments": len(runs),
+    return {"commits": commits, "wall_seconds": wall,
+            "wall_unknown": sum(not math.isfinite(r["wall_seconds"]) for r in runs),
+            "mean_load": load, "load_seconds": weight, "segments": len(runs),
             "t_start": float(min(r["t_start"] for r in runs)),
             "t_end": float(max(r["t_end"] for r in runs))}
 
@@ -504,8 +506,8 @@ def overlap_table(rows) -> list:
     return out
 
 
-def _hours(seconds) -> str:
-    return f"{seconds / 3600:.2f} h"
+def _hours(seconds, unknown=0) -> str:
+    return f"{seconds / 3600:.2f} h" + (f" (+ {unknown} segment(s) not recorded)" if unknown else "")
 
 
 def runs_table(rows) -> list:
@@ -520,14 +522,17 @@ def runs_table(rows) -> list:
             out.append(f"| {r['case']} | {status_text(r)} | not recorded | | | |")
             continue
         out.append(f"| {r['case']} | {status_text(r)} | {', '.join(s['commits'])} | "
-                   f"{_hours(s['wall_seconds'])} | {_f(s['mean_load'], '.2f')} | "
+                   f"{_hours(s['wall_seconds'], s['wall_unknown'])} | "
+                   f"{_f(s['mean_load'], '.2f')} | "
                    f"{s['segments']} |")
     if recorded:
         weight = sum(s["load_seconds"] for s in recorded)
         load = (sum(s["mean_load"] * s["load_seconds"] for s in recorded if s["mean_load"] is not None)
                 / weight) if weight > 0 else None
-        out.append(f"| all ({len(recorded)} of {len(rows)} cases recorded) | | | "
-                   f"{_hours(sum(s['wall_seconds'] for s in recorded))} | {_f(load, '.2f')} | "
+        wall = _hours(sum(s["wall_seconds"] for s in recorded),
+                      sum(s["wall_unknown"] for s in recorded))
+        out.append(f"| all ({len(recorded)} of {len(rows)} cases recorded) | | | {wall} | "
+                   f"{_f(load, '.2f')} | "
                    f"{sum(s['segments'] for s in recorded)} |")
     return out
 
