@@ -30,31 +30,44 @@
 set -euo pipefail
 # shellcheck source=scripts/lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
+# shellcheck source=scripts/study_sweeps.sh
+source "$KF_ROOT/scripts/study_sweeps.sh"
 
 hydro=rpy
 run=1
 extras=1
 build=1
 results=results
-# closures per frame, per subchain of a knot matrix (trefoil last frame, candy-cane frames,
-# slipknot confirmation)
-closures=200 mat_trefoil=100 mat_cane=20 mat_confirm=100
+quick=0
+list=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --hydro) [ $# -ge 2 ] || kf_die "--hydro needs a value (rpy or multipole)"; hydro="$2"; shift 2 ;;
     --no-run) run=0; shift ;;
     --no-extras) extras=0; shift ;;
     --no-build) build=0; shift ;;
-    --quick) closures=20 mat_trefoil=5 mat_cane=5 mat_confirm=5; shift ;;
+    --quick) quick=1; shift ;;
+    --list-sweeps) list=1; shift ;;
     --results) [ $# -ge 2 ] || kf_die "--results needs a directory"; results="$2"; shift 2 ;;
-    *) kf_die "unknown argument '$1' (allowed: --hydro rpy|multipole, --no-run, --no-extras, --no-build, --results DIR, --quick)" ;;
+    *) kf_die "unknown argument '$1' (allowed: --hydro rpy|multipole, --no-run, --no-extras, --no-build, --results DIR, --quick, --list-sweeps)" ;;
   esac
 done
+# The study's sweeps ("ROLE SWEEP" lines: scripts/study_sweeps.sh, the list jobs/submit_study.sh
+# submits too).
+study="$(kf_study_sweeps "$hydro" "$extras")" || exit 1
+if [ "$list" = 1 ]; then
+  printf '%s\n' "$study"
+  exit 0
+fi
+# Closures per frame (trefoils and candy-canes; the ensemble, with its frame stride), per
+# subchain of a knot matrix (trefoil last frame, candy-cane frames, slipknot confirmation), and
+# the options of knotflow-study --select-frames (the candy-cane frames with knot matrices).
 case "$hydro" in
-  rpy) suffix="" ;;
-  multipole) suffix="_multipole"; extras=0 ;;
-  *) kf_die "--hydro $hydro is unknown (allowed: rpy, multipole)" ;;
+  rpy) suffix="" closures=200 ens_closures=100 ens_stride=2 select=() ;;
+  multipole) suffix="_multipole" closures=1000 ens_closures=1000 ens_stride=1 select=(--every-time 10) ;;
 esac
+mat_trefoil=100 mat_cane=20 mat_confirm=100
+if [ "$quick" = 1 ]; then closures=20 ens_closures=20 mat_trefoil=5 mat_cane=5 mat_confirm=5; fi
 np="$(kf_ranks)"
 
 cd "$KF_ROOT"
@@ -80,47 +93,47 @@ fi
 analyze="$KF_BUILD_DIR/bin/knotflow-analyze"
 
 # Sweeps: name of the input (inputs/<name>.nml) = name of the output directory (results/<name>).
-trefoil_sweeps=("trefoil_table2$suffix")
-cane_sweeps=("candycane$suffix")
-if [ "$extras" = 1 ]; then
-  trefoil_sweeps+=(trefoil_table2_p24)
-  cane_sweeps+=(candycane_seeds)
-fi
 if [ "$run" = 1 ]; then
-  for sweep in "${trefoil_sweeps[@]}" "${cane_sweeps[@]}"; do
+  while read -r _ sweep; do
     kf_log "knotflow inputs/$sweep.nml on $np rank(s)"
     # A failed case (exit 3) is reported in the summary; the others are still analysed.
     "${mpi[@]}" "$KF_BUILD_DIR/bin/knotflow" "inputs/$sweep.nml" || [ $? -eq 3 ]
-  done
+  done <<<"$study"
 fi
 
 shopt -s nullglob
-# Trefoils: k_f of every frame (200 closures), knot matrix of the last frame (100 per subchain).
-for sweep in "${trefoil_sweeps[@]}"; do
+declare -A dir_of=()
+while read -r role sweep; do
+  dir_of[$role]="$results/$sweep"
   files=("$results/$sweep"/*.h5)
   [ "${#files[@]}" -gt 0 ] || { kf_log "no case files in $results/$sweep: skipped"; continue; }
-  kf_log "knotflow-analyze: ${#files[@]} case(s) of $results/$sweep"
-  "${mpi[@]}" "$analyze" "${files[@]}" --closures "$closures" --stride 1 --matrix-frames last --matrix-closures "$mat_trefoil"
-done
-# Candy-canes: k_f of every frame; for the main sweep also knot matrices (20 closures per
-# subchain) every 50 frames and at the 5 most entangled frames: the slipknot search.
-for sweep in "${cane_sweeps[@]}"; do
-  for f in "$results/$sweep"/*.h5; do
-    if [ "$sweep" = "candycane$suffix" ]; then
-      frames="$(knotflow-study --select-frames "$f")"
-      kf_log "knotflow-analyze $f (knot matrices of frames $frames)"
-      "${mpi[@]}" "$analyze" "$f" --closures "$closures" --stride 1 --matrix-frames "$frames" --matrix-closures "$mat_cane"
-    else
-      kf_log "knotflow-analyze $f (ensemble: 100 closures, every 2nd frame)"
-      "${mpi[@]}" "$analyze" "$f" --closures 100 --stride 2
-    fi
-  done
-done
+  case "$role" in
+    trefoil|trefoil_p24)
+      # k_f of every frame, knot matrix of the last frame.
+      kf_log "knotflow-analyze: ${#files[@]} case(s) of $results/$sweep"
+      "${mpi[@]}" "$analyze" "${files[@]}" --closures "$closures" --stride 1 --matrix-frames last --matrix-closures "$mat_trefoil" ;;
+    candycane)
+      # k_f of every frame and knot matrices (mat_cane closures per subchain) of the frames
+      # knotflow-study selects: the slipknot search.
+      for f in "${files[@]}"; do
+        frames="$(knotflow-study --select-frames "$f" "${select[@]}")"
+        kf_log "knotflow-analyze $f (knot matrices of frames $frames)"
+        "${mpi[@]}" "$analyze" "$f" --closures "$closures" --stride 1 --matrix-frames "$frames" --matrix-closures "$mat_cane"
+      done ;;
+    ensemble)
+      for f in "${files[@]}"; do
+        kf_log "knotflow-analyze $f (ensemble: $ens_closures closures, every frame with stride $ens_stride)"
+        "${mpi[@]}" "$analyze" "$f" --closures "$ens_closures" --stride "$ens_stride"
+      done ;;
+    *) kf_die "scripts/study_sweeps.sh: role '$role' of $sweep has no analysis here" ;;
+  esac
+done <<<"$study"
+
 out="$results/reproduction$suffix"
 # Slipknot candidates of the screen (20 closures per subchain: its largest K over ~10^4
 # subchains is biased upwards) are recomputed with 100 closures per subchain.
 mkdir -p "$out/confirm"
-for f in "$results/candycane$suffix"/*.h5; do
+for f in "${dir_of[candycane]}"/*.h5; do
   name="$(basename "$f" .h5)"
   for k in $(knotflow-study --slip-candidates "$f"); do
     json="$out/confirm/${name}_frame$k.json"
@@ -132,10 +145,15 @@ for f in "$results/candycane$suffix"/*.h5; do
   done
 done
 kf_log "knotflow-study -> $out"
-args=(--trefoil "$results/${trefoil_sweeps[0]}" --candycane "$results/${cane_sweeps[0]}" --closures "$closures")
-[ "$extras" = 1 ] && args+=(--ensemble "$results/candycane_seeds")
+args=(--trefoil "${dir_of[trefoil]}" --candycane "${dir_of[candycane]}" --closures "$closures")
+[ -n "${dir_of[ensemble]:-}" ] && args+=(--ensemble "${dir_of[ensemble]}")
+# The multipole study beside the RPY one (three columns: the study, multipole, RPY), when the
+# RPY comparisons are there: Table 2 with the same trefoil (k_f(0) = 0.98), and the candy-canes.
+if [ "$hydro" = multipole ] && [ -f docs/reproduction_p24/results.json ] && [ -f docs/reproduction/results.json ]; then
+  args+=(--rpy-trefoil docs/reproduction_p24/results.json --rpy-candycane docs/reproduction/results.json)
+fi
 knotflow-study "${args[@]}" --out "$out"
-if [ "$extras" = 1 ]; then
+if [ -n "${dir_of[trefoil_p24]:-}" ]; then
   kf_log "knotflow-study -> ${out}_p24 (the open trefoil with k_f(0) = 0.98)"
-  knotflow-study --trefoil "$results/trefoil_table2_p24" --out "${out}_p24"
+  knotflow-study --trefoil "${dir_of[trefoil_p24]}" --out "${out}_p24"
 fi
