@@ -16,6 +16,9 @@
 #   --ntasks-analysis N  MPI ranks of the analysis job (default: the study script's directives)
 #   --max-resubmits N    follow-up jobs of each sweep (MAX_RESUBMITS, default 0)
 #   --quick-analysis     few closures in the analysis (scripts/reproduce.sh --quick): for a trial
+#   --hold               submit every job held (sbatch --hold, qsub -h): nothing starts until
+#                        released (scontrol release ID... / qrls ID..., printed), e.g. after a look
+#                        at the queue
 # Settings of the job scripts (BUILD_DIR, MODULES, LAUNCHER, SRUN_MPI, HDF5_FILE_LOCKING; MPIRUN,
 # MPIRUN_FLAGS, MPIRUN_HOSTFILE on PBS) are taken from the environment. Everything is checked
 # before the first job is submitted (under SLURM every job with sbatch --test-only); if a
@@ -25,7 +28,7 @@
 # day: raise the walltime in the sweep scripts or use --max-resubmits (jobs/README.md).
 set -euo pipefail
 die() { echo "ERROR: $*" >&2; exit 2; }
-usage="usage: bash jobs/submit_study.sh slurm|pbs [rpy|multipole] [--time-scale F] [--ntasks-trefoil N] [--ntasks-candycane N] [--ntasks-ensemble N] [--ntasks-analysis N] [--max-resubmits N] [--quick-analysis]"
+usage="usage: bash jobs/submit_study.sh slurm|pbs [rpy|multipole] [--time-scale F] [--ntasks-trefoil N] [--ntasks-candycane N] [--ntasks-ensemble N] [--ntasks-analysis N] [--max-resubmits N] [--quick-analysis] [--hold]"
 scheduler="${1:-}"
 [[ "${scheduler}" == slurm || "${scheduler}" == pbs ]] || die "${usage}"
 shift
@@ -42,10 +45,11 @@ study="$(kf_study_sweeps "${hydro}" 0)" || exit 2
 roles=() sweeps=()
 while read -r role sweep; do roles+=("${role}"); sweeps+=("${sweep}"); done <<<"${study}"
 
-scale="" resubmits=0 quick=0
+scale="" resubmits=0 quick=0 hold=()
 declare -A ntasks=()
 while [[ $# -gt 0 ]]; do
   if [[ "$1" == --quick-analysis ]]; then quick=1; shift; continue; fi
+  if [[ "$1" == --hold ]]; then hold=("$([[ ${scheduler} == slurm ]] && echo --hold || echo -h)"); shift; continue; fi
   [[ $# -ge 2 ]] || die "option $1 needs a value (${usage})"
   case "$1" in
     --time-scale) scale="$2" ;;
@@ -112,11 +116,11 @@ trap 'cancel_queued' ERR
 ids=()
 if [[ "${scheduler}" == slurm ]]; then
   sweep_opts() {   # sweep_opts ROLE: the sbatch options of the sweep job of that role
-    opts=(--job-name="${tag}-sweep" --export="ALL,BUILD_DIR=${build},KNOTFLOW_DIR=${KNOTFLOW_DIR},MAX_RESUBMITS=${resubmits}")
+    opts=("${hold[@]}" --job-name="${tag}-sweep" --export="ALL,BUILD_DIR=${build},KNOTFLOW_DIR=${KNOTFLOW_DIR},MAX_RESUBMITS=${resubmits}")
     [[ -n "${ntasks[$1]:-}" ]] && opts+=(--ntasks="${ntasks[$1]}")
     return 0
   }
-  opt_c=(--job-name="${tag}-analysis"
+  opt_c=("${hold[@]}" --job-name="${tag}-analysis"
          --export="ALL,BUILD_DIR=${build},KNOTFLOW_DIR=${KNOTFLOW_DIR},STUDY_DIR=${study_dir},WAIT_FOR=${tag}-sweep,STUDY_QUICK=${quick}")
   [[ -n "${ntasks[analysis]:-}" ]] && opt_c+=(--ntasks="${ntasks[analysis]}")
   # sbatch --test-only checks the script and the resources (partition, account, tasks)
@@ -141,11 +145,11 @@ else
   sel() { [[ -n "${ntasks[$1]:-}" ]] && echo "-l select=1:ncpus=${ntasks[$1]}:mpiprocs=${ntasks[$1]}"; return 0; }
   for i in "${!sweeps[@]}"; do
     # shellcheck disable=SC2046  # sel prints options or nothing
-    ids+=("$(qsub -N "${tag}-sweep" $(sel "${roles[i]}") -v "${vars},SWEEP=${inputs[i]},MAX_RESUBMITS=${resubmits}" jobs/pbs_sweep.sh)")
+    ids+=("$(qsub "${hold[@]}" -N "${tag}-sweep" $(sel "${roles[i]}") -v "${vars},SWEEP=${inputs[i]},MAX_RESUBMITS=${resubmits}" jobs/pbs_sweep.sh)")
     submitted+=("${ids[i]}")
   done
   # shellcheck disable=SC2046
-  c=$(qsub -N "${tag}-analysis" $(sel analysis) -W "depend=afterany:$(IFS=:; echo "${ids[*]}")" \
+  c=$(qsub "${hold[@]}" -N "${tag}-analysis" $(sel analysis) -W "depend=afterany:$(IFS=:; echo "${ids[*]}")" \
         -v "${vars},HYDRO=${hydro},STUDY_DIR=${study_dir},WAIT_FOR=${tag}-sweep,STUDY_QUICK=${quick}" jobs/pbs_study.sh)
   submitted+=("${c}")
 fi
@@ -153,3 +157,6 @@ trap - ERR
 for i in "${!sweeps[@]}"; do echo "submitted: sweep ${sweeps[i]} ${ids[i]}"; done
 echo "submitted: analysis ${c} (runs after the ${#ids[@]} sweep jobs and their follow-ups)"
 echo "inputs ${inputs[*]}; results in ${study_dir}/; job names ${tag}-sweep, ${tag}-analysis"
+if [[ ${#hold[@]} -gt 0 ]]; then
+  echo "held: release with $([[ ${scheduler} == slurm ]] && echo scontrol release || echo qrls) ${submitted[*]}"
+fi

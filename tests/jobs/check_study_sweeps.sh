@@ -8,7 +8,8 @@
 #   2. sourcing scripts/study_sweeps.sh sets no variable and runs no command (a login node);
 #   3. submit_study.sh pbs multipole --time-scale: one sweep job per multipole sweep, each with
 #      its scaled input (t_end x F, output in the trial's directory) and its --ntasks-*; the
-#      analysis job depends on every sweep job id qsub printed; rpy submits exactly two sweeps;
+#      analysis job depends on every sweep job id qsub printed; rpy submits exactly two sweeps
+#      (with --hold: every job held);
 #   4. a qsub that fails at the third job: the two queued are deleted, no analysis submitted;
 #      --ntasks-ensemble for rpy (no ensemble there) is refused before any qsub.
 # Usage: check_study_sweeps.sh SOURCE_DIR WORKDIR
@@ -111,11 +112,13 @@ grep -q "^submitted: analysis 4.pbs (runs after the 3 sweep jobs" <<<"${out}" ||
 echo "pbs multipole: 3 sweep jobs (scaled inputs, ranks per role), the analysis after all 3 ids"
 
 rm -f "${work}/qsub.calls"
-out=$(submit rpy --time-scale 0.001) || fail "submit_study.sh pbs rpy: ${out}"
+out=$(submit rpy --time-scale 0.001 --hold) || fail "submit_study.sh pbs rpy: ${out}"
 [[ "$(grep -c '^submitted: sweep ' <<<"${out}")" -eq 2 && "${out}" == *"sweep trefoil_table2 1.pbs"* && "${out}" == *"sweep candycane 2.pbs"* ]] \
   || fail "pbs rpy: expected the sweeps trefoil_table2 and candycane: ${out}"
 [[ "$(call 3)" == *"-W depend=afterany:1.pbs:2.pbs "* ]] || fail "rpy analysis dependency: $(call 3)"
-echo "pbs rpy: 2 sweep jobs, the analysis after both"
+for k in 1 2 3; do [[ "$(call "${k}")" == "-h -N "* ]] || fail "--hold: qsub call ${k} not held: $(call "${k}")"; done
+grep -qx "held: release with qrls 1.pbs 2.pbs 3.pbs" <<<"${out}" || fail "--hold: no release command: ${out}"
+echo "pbs rpy --hold: 2 sweep jobs, the analysis after both, all held"
 
 # --- 4. failures ------------------------------------------------------------------------------
 rm -f "${work}/qsub.calls"
