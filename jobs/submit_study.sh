@@ -41,9 +41,8 @@ build="${BUILD_DIR:-build}"
 # The study's sweeps and their roles (trefoil, candycane, ensemble): one job each.
 # shellcheck source=scripts/study_sweeps.sh
 source scripts/study_sweeps.sh
-study="$(kf_study_sweeps "${hydro}" 0)" || exit 2
-roles=() sweeps=()
-while read -r role sweep; do roles+=("${role}"); sweeps+=("${sweep}"); done <<<"${study}"
+kf_study_arrays "${hydro}" 0 || exit 2
+roles=("${KF_STUDY_ROLES[@]}") sweeps=("${KF_STUDY_SWEEPS[@]}")
 
 scale="" resubmits=0 quick=0 hold=()
 declare -A ntasks=()

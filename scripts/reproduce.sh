@@ -52,13 +52,13 @@ while [ $# -gt 0 ]; do
     *) kf_die "unknown argument '$1' (allowed: --hydro rpy|multipole, --no-run, --no-extras, --no-build, --results DIR, --quick, --list-sweeps)" ;;
   esac
 done
-# The study's sweeps ("ROLE SWEEP" lines: scripts/study_sweeps.sh, the list jobs/submit_study.sh
+# The study's sweeps and their roles (scripts/study_sweeps.sh: the list jobs/submit_study.sh
 # submits too).
-study="$(kf_study_sweeps "$hydro" "$extras")" || exit 1
 if [ "$list" = 1 ]; then
-  printf '%s\n' "$study"
-  exit 0
+  kf_study_sweeps "$hydro" "$extras"
+  exit
 fi
+kf_study_arrays "$hydro" "$extras" || exit 1
 # Closures per frame (trefoils and candy-canes; the ensemble, with its frame stride), per
 # subchain of a knot matrix (trefoil last frame, candy-cane frames, slipknot confirmation), and
 # the options of knotflow-study --select-frames (the candy-cane frames with knot matrices).
@@ -94,16 +94,17 @@ analyze="$KF_BUILD_DIR/bin/knotflow-analyze"
 
 # Sweeps: name of the input (inputs/<name>.nml) = name of the output directory (results/<name>).
 if [ "$run" = 1 ]; then
-  while read -r _ sweep; do
+  for sweep in "${KF_STUDY_SWEEPS[@]}"; do
     kf_log "knotflow inputs/$sweep.nml on $np rank(s)"
     # A failed case (exit 3) is reported in the summary; the others are still analysed.
     "${mpi[@]}" "$KF_BUILD_DIR/bin/knotflow" "inputs/$sweep.nml" || [ $? -eq 3 ]
-  done <<<"$study"
+  done
 fi
 
 shopt -s nullglob
 declare -A dir_of=()
-while read -r role sweep; do
+for i in "${!KF_STUDY_SWEEPS[@]}"; do
+  role="${KF_STUDY_ROLES[i]}" sweep="${KF_STUDY_SWEEPS[i]}"
   dir_of[$role]="$results/$sweep"
   files=("$results/$sweep"/*.h5)
   [ "${#files[@]}" -gt 0 ] || { kf_log "no case files in $results/$sweep: skipped"; continue; }
@@ -127,7 +128,7 @@ while read -r role sweep; do
       done ;;
     *) kf_die "scripts/study_sweeps.sh: role '$role' of $sweep has no analysis here" ;;
   esac
-done <<<"$study"
+done
 
 out="$results/reproduction$suffix"
 # Slipknot candidates of the screen (20 closures per subchain: its largest K over ~10^4

@@ -6,7 +6,9 @@
 #   kf_study_sweeps HYDRO EXTRAS   prints one "ROLE SWEEP" line per sweep, in the order of the
 #                                  study (HYDRO rpy|multipole; EXTRAS 1|0); status 2 and a message
 #                                  on stderr for an unknown HYDRO
-#   kf_study_roles                 prints the roles, one a line
+#   kf_study_arrays HYDRO EXTRAS   the same list in the arrays KF_STUDY_ROLES and KF_STUDY_SWEEPS
+#                                  (loop over these: a loop reading the lines from stdin would
+#                                  lose them to mpirun or srun inside it, which read stdin)
 #
 # SWEEP names both the input, inputs/SWEEP.nml, and the output directory, <results>/SWEEP.
 # ROLE says how the sweep is analysed and compared with the study:
@@ -21,10 +23,6 @@
 # multipole: the campaign of issue 11: trefoil_table2_multipole (with the k_f(0) = 0.98
 #            trefoil), candycane_multipole and candycane_seeds_multipole (A = 1, 3 from two
 #            further rotations) - the last is part of the study, whatever EXTRAS says.
-
-kf_study_roles() {
-  printf '%s\n' trefoil candycane ensemble trefoil_p24
-}
 
 kf_study_sweeps() {
   local hydro="$1" extras="${2:-1}"
@@ -44,4 +42,14 @@ kf_study_sweeps() {
       return 2
       ;;
   esac
+}
+
+kf_study_arrays() {
+  local list role sweep
+  list="$(kf_study_sweeps "$@")" || return 2
+  KF_STUDY_ROLES=() KF_STUDY_SWEEPS=()
+  while read -r role sweep; do
+    KF_STUDY_ROLES+=("$role")
+    KF_STUDY_SWEEPS+=("$sweep")
+  done <<<"$list"
 }
