@@ -1,13 +1,17 @@
 #!/usr/bin/env bash
-# Reproduce the reference study: run the trefoil Table 2 sweep (29 cases, N = 99) and the
-# candy-cane sweep (A = 1, 1.4, 3; N = 152), analyse them, and write the comparison.
+# Reproduce the reference study: run its sweeps (scripts/study_sweeps.sh: trefoil Table 2, 29
+# cases, N = 99; the candy-cane, A = 1, 1.4, 3, N = 152; and more below), analyse them, and
+# write the comparison.
 #   scripts/reproduce.sh [--hydro rpy|multipole] [--no-run] [--no-extras] [--no-build]
-#                        [--results DIR] [--quick]
+#                        [--results DIR] [--quick] [--list-sweeps]
 #
 #   --hydro rpy        (default) inputs/trefoil_table2.nml and inputs/candycane.nml:
 #                      RPY + excluded volume, about 30 s per trefoil case on one core.
-#   --hydro multipole  the *_multipole.nml variants: multipole L = 2 + lubrication, hours per case
-#                      (a cluster job: jobs/README.md).
+#   --hydro multipole  the campaign of issue 11 with the study's model (multipole L = 2 +
+#                      lubrication): inputs/trefoil_table2_multipole.nml, candycane_multipole.nml
+#                      and candycane_seeds_multipole.nml (A = 1, 3 from two further rotations:
+#                      part of this study, not an extra); hours per case (a cluster job:
+#                      jobs/README.md).
 #   --no-run           only analyse what the sweeps already wrote (e.g. after cluster jobs).
 #   --no-extras        (rpy) skip the two checks beyond the study's inputs: the candy-cane with 5
 #                      random rotations (inputs/candycane_seeds.nml) and Table 2 with the open
@@ -18,8 +22,23 @@
 #                      shortened study of jobs/submit_study.sh has its own), the comparison goes
 #                      to DIR/reproduction[_multipole].
 #   --quick            a trial of the workflow (with a shortened study): 20 closures per frame
-#                      and 5 per subchain for knot matrices instead of 200 and 20-100; the
-#                      numbers are then too noisy to compare with the study.
+#                      and 5 per subchain for knot matrices; the numbers are then too noisy to
+#                      compare with the study.
+#   --list-sweeps      print the sweeps of --hydro (and --no-extras), "ROLE SWEEP" a line, and exit.
+#
+# Analysis (knotflow-analyze fills /analysis of every case file; knotflow-study compares):
+#                      rpy                            multipole (as the study)
+#   k_f per frame      200 closures, every frame      1000 closures, every frame
+#                      (ensemble: 100, every 2nd)     (rotations too)
+#   knot matrices      trefoils: last frame, 100 closures per subchain (both)
+#                      candy-canes: 20 per subchain at the frames of knotflow-study
+#                      --select-frames: every 50th   --every-time 10: every 10 time units
+#                      (and the last frame and the 5 most entangled frames, both)
+#   slipknots          candidates of the screen recomputed with 100 closures per subchain (both)
+#   comparison         results/reproduction[_multipole]/; multipole: the rotations as --ensemble,
+#                      and the RPY results beside it (--rpy-trefoil docs/reproduction_p24/results.json
+#                      --rpy-candycane docs/reproduction/results.json) when both files are there.
+# Cost of the multipole analysis, one core: MEASURED_COST
 #
 # Re-running continues: finished cases are skipped, killed ones resumed, and knotflow-analyze
 # reuses the k_f and knot matrices it already stored. Output: results/<sweep>/ (case files,
