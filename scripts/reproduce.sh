@@ -38,7 +38,14 @@
 #   comparison         results/reproduction[_multipole]/; multipole: the rotations as --ensemble,
 #                      and the RPY results beside it (--rpy-trefoil docs/reproduction_p24/results.json
 #                      --rpy-candycane docs/reproduction/results.json) when both files are there.
-# Cost of the multipole analysis, one core: MEASURED_COST
+# Cost of the multipole analysis, measured with build/bin/knotflow-analyze on one rank (CPU
+# time; load 4.2-4.9 on 2 cores, wall time twice that): k_f with 1000 closures 38 s for a
+# trefoil case (N = 99, 1001 frames: 29 cases 18 min) and 0.066 s per candy-cane frame (N = 152,
+# frames to t = 432 of the running A = 1 case; 2001 frames: 2.2 min a case, 7 cases 15 min); a
+# candy-cane knot matrix 3.8 s with 20 closures per subchain (the most entangled frame so far,
+# 44 close pairs) and 19 s with 100. About 206 matrices per candy-cane: 13 min a case, 40 min for
+# three. In all about 1.3 h of one core plus 19 s per slipknot candidate; knotflow-analyze
+# shares the closures of every frame and matrix among its ranks (RPY: docs/REPRODUCTION.md).
 #
 # Re-running continues: finished cases are skipped, killed ones resumed, and knotflow-analyze
 # reuses the k_f and knot matrices it already stored. Output: results/<sweep>/ (case files,
