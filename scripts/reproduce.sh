@@ -149,7 +149,7 @@ for i in "${!KF_STUDY_SWEEPS[@]}"; do
       done ;;
     ensemble)
       for f in "${files[@]}"; do
-        kf_log "knotflow-analyze $f (ensemble: $ens_closures closures, every frame with stride $ens_stride)"
+        kf_log "knotflow-analyze $f (ensemble: $ens_closures closures, frame stride $ens_stride)"
         "${mpi[@]}" "$analyze" "$f" --closures "$ens_closures" --stride "$ens_stride"
       done ;;
     *) kf_die "scripts/study_sweeps.sh: role '$role' of $sweep has no analysis here" ;;
