@@ -128,12 +128,12 @@ if [ "$run" = 1 ]; then
 fi
 
 shopt -s nullglob
-declare -A dir_of=()
+declare -A dir_of=()   # role -> output directory, for the sweeps with case files
 for i in "${!KF_STUDY_SWEEPS[@]}"; do
   role="${KF_STUDY_ROLES[i]}" sweep="${KF_STUDY_SWEEPS[i]}"
-  dir_of[$role]="$results/$sweep"
   files=("$results/$sweep"/*.h5)
   [ "${#files[@]}" -gt 0 ] || { kf_log "no case files in $results/$sweep: skipped"; continue; }
+  dir_of[$role]="$results/$sweep"
   case "$role" in
     trefoil|trefoil_p24)
       # k_f of every frame, knot matrix of the last frame.
@@ -160,7 +160,7 @@ out="$results/reproduction$suffix"
 # Slipknot candidates of the screen (20 closures per subchain: its largest K over ~10^4
 # subchains is biased upwards) are recomputed with 100 closures per subchain.
 mkdir -p "$out/confirm"
-for f in "${dir_of[candycane]}"/*.h5; do
+for f in ${dir_of[candycane]:+"${dir_of[candycane]}"/*.h5}; do
   name="$(basename "$f" .h5)"
   for k in $(knotflow-study --slip-candidates "$f"); do
     json="$out/confirm/${name}_frame$k.json"
@@ -172,8 +172,12 @@ for f in "${dir_of[candycane]}"/*.h5; do
   done
 done
 kf_log "knotflow-study -> $out"
-args=(--trefoil "${dir_of[trefoil]}" --candycane "${dir_of[candycane]}" --closures "$closures")
-[ -n "${dir_of[ensemble]:-}" ] && args+=(--ensemble "${dir_of[ensemble]}")
+# (A sweep without case files is left out of the comparison.)
+args=(--closures "$closures")
+for role in trefoil candycane ensemble; do
+  [ -n "${dir_of[$role]:-}" ] && args+=("--$role" "${dir_of[$role]}")
+done
+[ "${#args[@]}" -gt 2 ] || kf_die "no case files in any sweep under $results: nothing to compare"
 # The multipole study beside the RPY one (three columns: the study, multipole, RPY), when the
 # RPY comparisons are there: Table 2 with the same trefoil (k_f(0) = 0.98), and the candy-canes.
 if [ "$hydro" = multipole ] && [ -f docs/reproduction_p24/results.json ] && [ -f docs/reproduction/results.json ]; then
