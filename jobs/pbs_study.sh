@@ -1,9 +1,10 @@
 #!/bin/bash
 # Analyse the reference-study sweeps under PBS (after they ran with jobs/pbs_sweep.sh):
 #   qsub [-v HYDRO=multipole] jobs/pbs_study.sh
-# Runs scripts/reproduce.sh --no-run --no-build --no-extras on the job's ranks: k_f of every
-# frame, knot matrices, and the comparison with the study in STUDY_DIR/reproduction[_multipole]/.
-# jobs/submit_study.sh submits the two sweeps and this job in one go (and sets STUDY_DIR and
+# Runs scripts/reproduce.sh --no-run --no-build --no-extras on the job's ranks, for the sweeps of
+# scripts/study_sweeps.sh (multipole: the rotations ensemble too): k_f of every frame, knot
+# matrices, and the comparison with the study in STUDY_DIR/reproduction[_multipole]/.
+# jobs/submit_study.sh submits the study's sweeps and this job in one go (and sets STUDY_DIR and
 # WAIT_FOR). Resumable: stored k_f and knot matrices are reused.
 # ---- edit these for your site ------------------------------------------------------------
 #PBS -N knotflow-study

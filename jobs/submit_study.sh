@@ -1,52 +1,67 @@
 #!/bin/bash
-# Submit the whole reproduction of the reference study: the trefoil Table 2 sweep (29 cases), the
-# candy-cane sweep (3 cases), and the analysis job that runs when both have ended (follow-up jobs
-# included) and analyses exactly these two sweeps.
+# Submit the whole reproduction of the reference study: one sweep job for every sweep of the
+# study (scripts/study_sweeps.sh, the list scripts/reproduce.sh analyses; without the RPY
+# extras), and the analysis job that runs when all of them have ended (follow-up jobs included)
+# and analyses exactly these sweeps:
+#   rpy        trefoil_table2 (29 cases), candycane (3 cases)
+#   multipole  trefoil_table2_multipole (29), candycane_multipole (3), candycane_seeds_multipole (4)
 #   bash jobs/submit_study.sh slurm|pbs [rpy|multipole] [options]
 # Options:
 #   --time-scale F       a shortened trial: every t_end times F (0 < F <= 1), into its own
 #                        directory results/study_<hydro>_t<F>/ (inputs and results), with its own
 #                        job names, so a trial never blocks or touches the real run
-#   --ntasks-trefoil N   MPI ranks of the trefoil sweep (default: the sweep script's directives;
-#   --ntasks-candycane N   29 and 3 run every case at once)
+#   --ntasks-trefoil N   MPI ranks of the sweep of that role (default: the sweep script's
+#   --ntasks-candycane N   directives; 29, 3 and 4 run every case at once);
+#   --ntasks-ensemble N    --ntasks-ensemble only where the study has an ensemble (multipole)
 #   --ntasks-analysis N  MPI ranks of the analysis job (default: the study script's directives)
 #   --max-resubmits N    follow-up jobs of each sweep (MAX_RESUBMITS, default 0)
 #   --quick-analysis     few closures in the analysis (scripts/reproduce.sh --quick): for a trial
+#   --hold               submit every job held (sbatch --hold, qsub -h): nothing starts until
+#                        released (scontrol release ID... / qrls ID..., printed), e.g. after a look
+#                        at the queue
 # Settings of the job scripts (BUILD_DIR, MODULES, LAUNCHER, SRUN_MPI, HDF5_FILE_LOCKING; MPIRUN,
 # MPIRUN_FLAGS, MPIRUN_HOSTFILE on PBS) are taken from the environment. Everything is checked
-# before the first job is submitted; if a submission fails, the jobs already queued are
-# cancelled. Prints the job ids.
+# before the first job is submitted (under SLURM every job with sbatch --test-only); if a
+# submission fails, the jobs already queued are cancelled. Prints the job ids, one
+# "submitted: sweep NAME ID" line per sweep and "submitted: analysis ID ...".
 # With multipole (L = 2 + lubrication) a trefoil case takes hours and a candy-cane case about a
 # day: raise the walltime in the sweep scripts or use --max-resubmits (jobs/README.md).
 set -euo pipefail
 die() { echo "ERROR: $*" >&2; exit 2; }
-usage="usage: bash jobs/submit_study.sh slurm|pbs [rpy|multipole] [--time-scale F] [--ntasks-trefoil N] [--ntasks-candycane N] [--ntasks-analysis N] [--max-resubmits N] [--quick-analysis]"
+usage="usage: bash jobs/submit_study.sh slurm|pbs [rpy|multipole] [--time-scale F] [--ntasks-trefoil N] [--ntasks-candycane N] [--ntasks-ensemble N] [--ntasks-analysis N] [--max-resubmits N] [--quick-analysis] [--hold]"
 scheduler="${1:-}"
 [[ "${scheduler}" == slurm || "${scheduler}" == pbs ]] || die "${usage}"
 shift
 hydro=rpy
 if [[ $# -gt 0 && "$1" != --* ]]; then hydro="$1"; shift; fi
-scale="" nt_trefoil="" nt_cane="" nt_analysis="" resubmits=0 quick=0
+
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+export KNOTFLOW_DIR="${PWD}"
+build="${BUILD_DIR:-build}"
+# The study's sweeps and their roles (trefoil, candycane, ensemble): one job each.
+# shellcheck source=scripts/study_sweeps.sh
+source scripts/study_sweeps.sh
+kf_study_arrays "${hydro}" 0 || exit 2
+roles=("${KF_STUDY_ROLES[@]}") sweeps=("${KF_STUDY_SWEEPS[@]}")
+
+scale="" resubmits=0 quick=0 hold=()
+declare -A ntasks=()
 while [[ $# -gt 0 ]]; do
   if [[ "$1" == --quick-analysis ]]; then quick=1; shift; continue; fi
+  if [[ "$1" == --hold ]]; then hold=("$([[ ${scheduler} == slurm ]] && echo --hold || echo -h)"); shift; continue; fi
   [[ $# -ge 2 ]] || die "option $1 needs a value (${usage})"
   case "$1" in
     --time-scale) scale="$2" ;;
-    --ntasks-trefoil) nt_trefoil="$2" ;;
-    --ntasks-candycane) nt_cane="$2" ;;
-    --ntasks-analysis) nt_analysis="$2" ;;
+    --ntasks-*)
+      what="${1#--ntasks-}"
+      [[ " ${roles[*]} analysis " == *" ${what} "* ]] \
+        || die "option $1: the ${hydro} study has no ${what} sweep (its ranks: $(printf -- '--ntasks-%s ' "${roles[@]}" analysis))"
+      [[ "$2" =~ ^[1-9][0-9]*$ ]] || die "$1 must be an integer >= 1, not '$2'"
+      ntasks[${what}]="$2" ;;
     --max-resubmits) resubmits="$2" ;;
     *) die "unknown option $1 (${usage})" ;;
   esac
   shift 2
-done
-case "${hydro}" in
-  rpy) suffix="" ;;
-  multipole) suffix="_multipole" ;;
-  *) die "hydro '${hydro}' is unknown (allowed: rpy, multipole)" ;;
-esac
-for n in "${nt_trefoil}" "${nt_cane}" "${nt_analysis}"; do
-  [[ -z "${n}" || "${n}" =~ ^[1-9][0-9]*$ ]] || die "a task count must be an integer >= 1, not '${n}'"
 done
 [[ "${resubmits}" =~ ^[0-9]+$ ]] || die "--max-resubmits must be an integer >= 0, not '${resubmits}'"
 if [[ -n "${scale}" ]]; then
@@ -54,20 +69,15 @@ if [[ -n "${scale}" ]]; then
     || die "--time-scale must be a number in (0, 1], not '${scale}'"
 fi
 
-cd "$(dirname "${BASH_SOURCE[0]}")/.."
-export KNOTFLOW_DIR="${PWD}"
-build="${BUILD_DIR:-build}"
-sweeps=("trefoil_table2${suffix}" "candycane${suffix}")
-
 # Inputs and names: the study, or a shortened trial with its own directory and job names.
+inputs=()
 if [[ -z "${scale}" ]]; then
   study_dir=results
   tag="knotflow-${hydro}"
-  inputs=("inputs/${sweeps[0]}.nml" "inputs/${sweeps[1]}.nml")
+  for s in "${sweeps[@]}"; do inputs+=("inputs/${s}.nml"); done
 else
   study_dir="results/study_${hydro}_t${scale}"
   tag="knotflow-${hydro}-t${scale}"
-  inputs=()
   mkdir -p "${study_dir}/inputs"
   for s in "${sweeps[@]}"; do
     [[ -r "inputs/${s}.nml" ]] || die "inputs/${s}.nml not found"
@@ -102,42 +112,50 @@ cancel_queued() {
 }
 trap 'cancel_queued' ERR
 
+ids=()
 if [[ "${scheduler}" == slurm ]]; then
-  sweep_export="ALL,BUILD_DIR=${build},KNOTFLOW_DIR=${KNOTFLOW_DIR},MAX_RESUBMITS=${resubmits}"
-  opt_a=(--job-name="${tag}-sweep" --export="${sweep_export}")
-  opt_b=(--job-name="${tag}-sweep" --export="${sweep_export}")
-  opt_c=(--job-name="${tag}-analysis"
+  sweep_opts() {   # sweep_opts ROLE: the sbatch options of the sweep job of that role
+    opts=("${hold[@]}" --job-name="${tag}-sweep" --export="ALL,BUILD_DIR=${build},KNOTFLOW_DIR=${KNOTFLOW_DIR},MAX_RESUBMITS=${resubmits}")
+    [[ -n "${ntasks[$1]:-}" ]] && opts+=(--ntasks="${ntasks[$1]}")
+    return 0
+  }
+  opt_c=("${hold[@]}" --job-name="${tag}-analysis"
          --export="ALL,BUILD_DIR=${build},KNOTFLOW_DIR=${KNOTFLOW_DIR},STUDY_DIR=${study_dir},WAIT_FOR=${tag}-sweep,STUDY_QUICK=${quick}")
-  [[ -n "${nt_trefoil}" ]] && opt_a+=(--ntasks="${nt_trefoil}")
-  [[ -n "${nt_cane}" ]] && opt_b+=(--ntasks="${nt_cane}")
-  [[ -n "${nt_analysis}" ]] && opt_c+=(--ntasks="${nt_analysis}")
+  [[ -n "${ntasks[analysis]:-}" ]] && opt_c+=(--ntasks="${ntasks[analysis]}")
   # sbatch --test-only checks the script and the resources (partition, account, tasks)
   test_only() {
     local what="$1" why
     shift
     why=$(sbatch --test-only "$@" 2>&1) || die "sbatch refuses the ${what} job: $(tail -n 1 <<<"${why}")"
   }
-  test_only "trefoil sweep" "${opt_a[@]}" jobs/slurm_sweep.sh "${inputs[0]}"
-  test_only "candy-cane sweep" "${opt_b[@]}" jobs/slurm_sweep.sh "${inputs[1]}"
+  for i in "${!sweeps[@]}"; do
+    sweep_opts "${roles[i]}"
+    test_only "${sweeps[i]} sweep" "${opts[@]}" jobs/slurm_sweep.sh "${inputs[i]}"
+  done
   test_only analysis "${opt_c[@]}" jobs/slurm_study.sh "${hydro}"
-  a=$(sbatch --parsable "${opt_a[@]}" jobs/slurm_sweep.sh "${inputs[0]}"); submitted+=("${a}")
-  b=$(sbatch --parsable "${opt_b[@]}" jobs/slurm_sweep.sh "${inputs[1]}"); submitted+=("${b}")
-  c=$(sbatch --parsable --dependency="afterany:${a}:${b}" "${opt_c[@]}" jobs/slurm_study.sh "${hydro}")
+  for i in "${!sweeps[@]}"; do
+    sweep_opts "${roles[i]}"
+    ids+=("$(sbatch --parsable "${opts[@]}" jobs/slurm_sweep.sh "${inputs[i]}")"); submitted+=("${ids[i]}")
+  done
+  c=$(sbatch --parsable --dependency="afterany:$(IFS=:; echo "${ids[*]}")" "${opt_c[@]}" jobs/slurm_study.sh "${hydro}")
   submitted+=("${c}")
 else
   vars="BUILD_DIR=${build},KNOTFLOW_DIR=${KNOTFLOW_DIR},MODULES=${MODULES:-},MPIRUN=${MPIRUN:-mpirun},MPIRUN_FLAGS=${MPIRUN_FLAGS:-},MPIRUN_HOSTFILE=${MPIRUN_HOSTFILE:---hostfile},HDF5_FILE_LOCKING=${HDF5_FILE_LOCKING:-on}"
-  sel() { [[ -n "$1" ]] && echo "-l select=1:ncpus=$1:mpiprocs=$1"; return 0; }
-  # shellcheck disable=SC2046  # sel prints options or nothing
-  a=$(qsub -N "${tag}-sweep" $(sel "${nt_trefoil}") -v "${vars},SWEEP=${inputs[0]},MAX_RESUBMITS=${resubmits}" jobs/pbs_sweep.sh)
-  submitted+=("${a}")
+  sel() { [[ -n "${ntasks[$1]:-}" ]] && echo "-l select=1:ncpus=${ntasks[$1]}:mpiprocs=${ntasks[$1]}"; return 0; }
+  for i in "${!sweeps[@]}"; do
+    # shellcheck disable=SC2046  # sel prints options or nothing
+    ids+=("$(qsub "${hold[@]}" -N "${tag}-sweep" $(sel "${roles[i]}") -v "${vars},SWEEP=${inputs[i]},MAX_RESUBMITS=${resubmits}" jobs/pbs_sweep.sh)")
+    submitted+=("${ids[i]}")
+  done
   # shellcheck disable=SC2046
-  b=$(qsub -N "${tag}-sweep" $(sel "${nt_cane}") -v "${vars},SWEEP=${inputs[1]},MAX_RESUBMITS=${resubmits}" jobs/pbs_sweep.sh)
-  submitted+=("${b}")
-  # shellcheck disable=SC2046
-  c=$(qsub -N "${tag}-analysis" $(sel "${nt_analysis}") -W "depend=afterany:${a}:${b}" \
+  c=$(qsub "${hold[@]}" -N "${tag}-analysis" $(sel analysis) -W "depend=afterany:$(IFS=:; echo "${ids[*]}")" \
         -v "${vars},HYDRO=${hydro},STUDY_DIR=${study_dir},WAIT_FOR=${tag}-sweep,STUDY_QUICK=${quick}" jobs/pbs_study.sh)
   submitted+=("${c}")
 fi
 trap - ERR
-echo "submitted: trefoil sweep ${a}, candy-cane sweep ${b}, analysis ${c} (runs after both and their follow-ups)"
+for i in "${!sweeps[@]}"; do echo "submitted: sweep ${sweeps[i]} ${ids[i]}"; done
+echo "submitted: analysis ${c} (runs after the ${#ids[@]} sweep jobs and their follow-ups)"
 echo "inputs ${inputs[*]}; results in ${study_dir}/; job names ${tag}-sweep, ${tag}-analysis"
+if [[ ${#hold[@]} -gt 0 ]]; then
+  echo "held: release with $([[ ${scheduler} == slurm ]] && echo scontrol release || echo qrls) ${submitted[*]}"
+fi

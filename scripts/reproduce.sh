@@ -1,13 +1,17 @@
 #!/usr/bin/env bash
-# Reproduce the reference study: run the trefoil Table 2 sweep (29 cases, N = 99) and the
-# candy-cane sweep (A = 1, 1.4, 3; N = 152), analyse them, and write the comparison.
+# Reproduce the reference study: run its sweeps (scripts/study_sweeps.sh: trefoil Table 2, 29
+# cases, N = 99; the candy-cane, A = 1, 1.4, 3, N = 152; and more below), analyse them, and
+# write the comparison.
 #   scripts/reproduce.sh [--hydro rpy|multipole] [--no-run] [--no-extras] [--no-build]
-#                        [--results DIR] [--quick]
+#                        [--results DIR] [--quick] [--list-sweeps]
 #
 #   --hydro rpy        (default) inputs/trefoil_table2.nml and inputs/candycane.nml:
 #                      RPY + excluded volume, about 30 s per trefoil case on one core.
-#   --hydro multipole  the *_multipole.nml variants: multipole L = 2 + lubrication, hours per case
-#                      (a cluster job: jobs/README.md).
+#   --hydro multipole  the campaign of issue 11 with the study's model (multipole L = 2 +
+#                      lubrication): inputs/trefoil_table2_multipole.nml, candycane_multipole.nml
+#                      and candycane_seeds_multipole.nml (A = 1, 3 from two further rotations:
+#                      part of this study, not an extra); hours per case (a cluster job:
+#                      jobs/README.md).
 #   --no-run           only analyse what the sweeps already wrote (e.g. after cluster jobs).
 #   --no-extras        (rpy) skip the two checks beyond the study's inputs: the candy-cane with 5
 #                      random rotations (inputs/candycane_seeds.nml) and Table 2 with the open
@@ -18,8 +22,30 @@
 #                      shortened study of jobs/submit_study.sh has its own), the comparison goes
 #                      to DIR/reproduction[_multipole].
 #   --quick            a trial of the workflow (with a shortened study): 20 closures per frame
-#                      and 5 per subchain for knot matrices instead of 200 and 20-100; the
-#                      numbers are then too noisy to compare with the study.
+#                      and 5 per subchain for knot matrices; the numbers are then too noisy to
+#                      compare with the study.
+#   --list-sweeps      print the sweeps of --hydro (and --no-extras), "ROLE SWEEP" a line, and exit.
+#
+# Analysis (knotflow-analyze fills /analysis of every case file; knotflow-study compares):
+#                      rpy                            multipole (as the study)
+#   k_f per frame      200 closures, every frame      1000 closures, every frame
+#                      (ensemble: 100, every 2nd)     (rotations too)
+#   knot matrices      trefoils: last frame, 100 closures per subchain (both)
+#                      candy-canes: 20 per subchain at the frames of knotflow-study
+#                      --select-frames: every 50th   --every-time 10: every 10 time units
+#                      (and the last frame and the 5 most entangled frames, both)
+#   slipknots          candidates of the screen recomputed with 100 closures per subchain (both)
+#   comparison         results/reproduction[_multipole]/; multipole: the rotations as --ensemble,
+#                      and the RPY results beside it (--rpy-trefoil docs/reproduction_p24/results.json
+#                      --rpy-candycane docs/reproduction/results.json) when both files are there.
+# Cost of the multipole analysis, measured with build/bin/knotflow-analyze on one rank (CPU
+# time; load 4.2-4.9 on 2 cores, wall time twice that): k_f with 1000 closures 38 s for a
+# trefoil case (N = 99, 1001 frames: 29 cases 18 min) and 0.066 s per candy-cane frame (N = 152,
+# frames to t = 432 of the running A = 1 case; 2001 frames: 2.2 min a case, 7 cases 15 min); a
+# candy-cane knot matrix 3.8 s with 20 closures per subchain (the most entangled frame so far,
+# 44 close pairs) and 19 s with 100. About 206 matrices per candy-cane: 13 min a case, 40 min for
+# three. In all about 1.3 h of one core plus 19 s per slipknot candidate; knotflow-analyze
+# shares the closures of every frame and matrix among its ranks (RPY: docs/REPRODUCTION.md).
 #
 # Re-running continues: finished cases are skipped, killed ones resumed, and knotflow-analyze
 # reuses the k_f and knot matrices it already stored. Output: results/<sweep>/ (case files,
@@ -30,31 +56,44 @@
 set -euo pipefail
 # shellcheck source=scripts/lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
+# shellcheck source=scripts/study_sweeps.sh
+source "$KF_ROOT/scripts/study_sweeps.sh"
 
 hydro=rpy
 run=1
 extras=1
 build=1
 results=results
-# closures per frame, per subchain of a knot matrix (trefoil last frame, candy-cane frames,
-# slipknot confirmation)
-closures=200 mat_trefoil=100 mat_cane=20 mat_confirm=100
+quick=0
+list=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --hydro) [ $# -ge 2 ] || kf_die "--hydro needs a value (rpy or multipole)"; hydro="$2"; shift 2 ;;
     --no-run) run=0; shift ;;
     --no-extras) extras=0; shift ;;
     --no-build) build=0; shift ;;
-    --quick) closures=20 mat_trefoil=5 mat_cane=5 mat_confirm=5; shift ;;
+    --quick) quick=1; shift ;;
+    --list-sweeps) list=1; shift ;;
     --results) [ $# -ge 2 ] || kf_die "--results needs a directory"; results="$2"; shift 2 ;;
-    *) kf_die "unknown argument '$1' (allowed: --hydro rpy|multipole, --no-run, --no-extras, --no-build, --results DIR, --quick)" ;;
+    *) kf_die "unknown argument '$1' (allowed: --hydro rpy|multipole, --no-run, --no-extras, --no-build, --results DIR, --quick, --list-sweeps)" ;;
   esac
 done
+# The study's sweeps and their roles (scripts/study_sweeps.sh: the list jobs/submit_study.sh
+# submits too).
+if [ "$list" = 1 ]; then
+  kf_study_sweeps "$hydro" "$extras"
+  exit
+fi
+kf_study_arrays "$hydro" "$extras" || exit 1
+# Closures per frame (trefoils and candy-canes; the ensemble, with its frame stride), per
+# subchain of a knot matrix (trefoil last frame, candy-cane frames, slipknot confirmation), and
+# the options of knotflow-study --select-frames (the candy-cane frames with knot matrices).
 case "$hydro" in
-  rpy) suffix="" ;;
-  multipole) suffix="_multipole"; extras=0 ;;
-  *) kf_die "--hydro $hydro is unknown (allowed: rpy, multipole)" ;;
+  rpy) suffix="" closures=200 ens_closures=100 ens_stride=2 select=() ;;
+  multipole) suffix="_multipole" closures=1000 ens_closures=1000 ens_stride=1 select=(--every-time 10) ;;
 esac
+mat_trefoil=100 mat_cane=20 mat_confirm=100
+if [ "$quick" = 1 ]; then closures=20 ens_closures=20 mat_trefoil=5 mat_cane=5 mat_confirm=5; fi
 np="$(kf_ranks)"
 
 cd "$KF_ROOT"
@@ -80,14 +119,8 @@ fi
 analyze="$KF_BUILD_DIR/bin/knotflow-analyze"
 
 # Sweeps: name of the input (inputs/<name>.nml) = name of the output directory (results/<name>).
-trefoil_sweeps=("trefoil_table2$suffix")
-cane_sweeps=("candycane$suffix")
-if [ "$extras" = 1 ]; then
-  trefoil_sweeps+=(trefoil_table2_p24)
-  cane_sweeps+=(candycane_seeds)
-fi
 if [ "$run" = 1 ]; then
-  for sweep in "${trefoil_sweeps[@]}" "${cane_sweeps[@]}"; do
+  for sweep in "${KF_STUDY_SWEEPS[@]}"; do
     kf_log "knotflow inputs/$sweep.nml on $np rank(s)"
     # A failed case (exit 3) is reported in the summary; the others are still analysed.
     "${mpi[@]}" "$KF_BUILD_DIR/bin/knotflow" "inputs/$sweep.nml" || [ $? -eq 3 ]
@@ -95,32 +128,39 @@ if [ "$run" = 1 ]; then
 fi
 
 shopt -s nullglob
-# Trefoils: k_f of every frame (200 closures), knot matrix of the last frame (100 per subchain).
-for sweep in "${trefoil_sweeps[@]}"; do
+declare -A dir_of=()   # role -> output directory, for the sweeps with case files
+for i in "${!KF_STUDY_SWEEPS[@]}"; do
+  role="${KF_STUDY_ROLES[i]}" sweep="${KF_STUDY_SWEEPS[i]}"
   files=("$results/$sweep"/*.h5)
   [ "${#files[@]}" -gt 0 ] || { kf_log "no case files in $results/$sweep: skipped"; continue; }
-  kf_log "knotflow-analyze: ${#files[@]} case(s) of $results/$sweep"
-  "${mpi[@]}" "$analyze" "${files[@]}" --closures "$closures" --stride 1 --matrix-frames last --matrix-closures "$mat_trefoil"
+  dir_of[$role]="$results/$sweep"
+  case "$role" in
+    trefoil|trefoil_p24)
+      # k_f of every frame, knot matrix of the last frame.
+      kf_log "knotflow-analyze: ${#files[@]} case(s) of $results/$sweep"
+      "${mpi[@]}" "$analyze" "${files[@]}" --closures "$closures" --stride 1 --matrix-frames last --matrix-closures "$mat_trefoil" ;;
+    candycane)
+      # k_f of every frame and knot matrices (mat_cane closures per subchain) of the frames
+      # knotflow-study selects: the slipknot search.
+      for f in "${files[@]}"; do
+        frames="$(knotflow-study --select-frames "$f" "${select[@]}")"
+        kf_log "knotflow-analyze $f (knot matrices of frames $frames)"
+        "${mpi[@]}" "$analyze" "$f" --closures "$closures" --stride 1 --matrix-frames "$frames" --matrix-closures "$mat_cane"
+      done ;;
+    ensemble)
+      for f in "${files[@]}"; do
+        kf_log "knotflow-analyze $f (ensemble: $ens_closures closures, frame stride $ens_stride)"
+        "${mpi[@]}" "$analyze" "$f" --closures "$ens_closures" --stride "$ens_stride"
+      done ;;
+    *) kf_die "scripts/study_sweeps.sh: role '$role' of $sweep has no analysis here" ;;
+  esac
 done
-# Candy-canes: k_f of every frame; for the main sweep also knot matrices (20 closures per
-# subchain) every 50 frames and at the 5 most entangled frames: the slipknot search.
-for sweep in "${cane_sweeps[@]}"; do
-  for f in "$results/$sweep"/*.h5; do
-    if [ "$sweep" = "candycane$suffix" ]; then
-      frames="$(knotflow-study --select-frames "$f")"
-      kf_log "knotflow-analyze $f (knot matrices of frames $frames)"
-      "${mpi[@]}" "$analyze" "$f" --closures "$closures" --stride 1 --matrix-frames "$frames" --matrix-closures "$mat_cane"
-    else
-      kf_log "knotflow-analyze $f (ensemble: 100 closures, every 2nd frame)"
-      "${mpi[@]}" "$analyze" "$f" --closures 100 --stride 2
-    fi
-  done
-done
+
 out="$results/reproduction$suffix"
 # Slipknot candidates of the screen (20 closures per subchain: its largest K over ~10^4
 # subchains is biased upwards) are recomputed with 100 closures per subchain.
 mkdir -p "$out/confirm"
-for f in "$results/candycane$suffix"/*.h5; do
+for f in ${dir_of[candycane]:+"${dir_of[candycane]}"/*.h5}; do
   name="$(basename "$f" .h5)"
   for k in $(knotflow-study --slip-candidates "$f"); do
     json="$out/confirm/${name}_frame$k.json"
@@ -132,10 +172,19 @@ for f in "$results/candycane$suffix"/*.h5; do
   done
 done
 kf_log "knotflow-study -> $out"
-args=(--trefoil "$results/${trefoil_sweeps[0]}" --candycane "$results/${cane_sweeps[0]}" --closures "$closures")
-[ "$extras" = 1 ] && args+=(--ensemble "$results/candycane_seeds")
+# (A sweep without case files is left out of the comparison.)
+args=(--closures "$closures")
+for role in trefoil candycane ensemble; do
+  [ -n "${dir_of[$role]:-}" ] && args+=("--$role" "${dir_of[$role]}")
+done
+[ "${#args[@]}" -gt 2 ] || kf_die "no case files in any sweep under $results: nothing to compare"
+# The multipole study beside the RPY one (three columns: the study, multipole, RPY), when the
+# RPY comparisons are there: Table 2 with the same trefoil (k_f(0) = 0.98), and the candy-canes.
+if [ "$hydro" = multipole ] && [ -f docs/reproduction_p24/results.json ] && [ -f docs/reproduction/results.json ]; then
+  args+=(--rpy-trefoil docs/reproduction_p24/results.json --rpy-candycane docs/reproduction/results.json)
+fi
 knotflow-study "${args[@]}" --out "$out"
-if [ "$extras" = 1 ]; then
+if [ -n "${dir_of[trefoil_p24]:-}" ]; then
   kf_log "knotflow-study -> ${out}_p24 (the open trefoil with k_f(0) = 0.98)"
-  knotflow-study --trefoil "$results/trefoil_table2_p24" --out "${out}_p24"
+  knotflow-study --trefoil "${dir_of[trefoil_p24]}" --out "${out}_p24"
 fi

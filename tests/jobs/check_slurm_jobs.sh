@@ -13,6 +13,10 @@
 #      follow-up is cancelled (CANCELLED, never ran);
 #   4. a sweep whose case fails for good (max_steps): exit status 3, the follow-up cancelled;
 #   5. jobs/submit_study.sh with a refused analysis job (too many tasks): exit 2, no job queued;
+#   5b. the multipole study submitted held (--hold; its runs take hours): a sweep job for each of
+#      its three sweeps (trefoil_table2_multipole, candycane_multipole, candycane_seeds_multipole,
+#      the list of issue 11 written out here) with its scaled input and --ntasks-*, all held, and
+#      the analysis job depending on all three; then cancelled, nothing ran;
 #   6. the shortened study (--time-scale) with a follow-up per sweep: in its own directory, the
 #      analysis job starts only after every sweep job (follow-ups included) has ended, COMPLETED,
 #      analysing exactly the two sweeps it submitted (results.json); nothing written to results/;
@@ -50,7 +54,7 @@ proj="${work}/project"
 mkdir -p "${proj}/build/bin" "${proj}/inputs" "${work}/home"
 cp -r "${src}/jobs" "${src}/scripts" "${proj}/"
 mkdir -p "${proj}/tools" && cp -r "${src}/tools/pyproject.toml" "${src}/tools/src" "${proj}/tools/"
-cp "${src}/inputs/trefoil_table2.nml" "${src}/inputs/candycane.nml" "${proj}/inputs/"
+cp "${src}/inputs/trefoil_table2.nml" "${src}/inputs/candycane.nml" "${src}"/inputs/*_multipole.nml "${proj}/inputs/"
 ln -s "${build}/bin/knotflow" "${proj}/build/bin/knotflow"
 ln -s "${build}/bin/knotflow-analyze" "${proj}/build/bin/knotflow-analyze"
 chown -R "${user}" "${proj}" "${work}/home"
@@ -182,12 +186,45 @@ grep -q "refuses the analysis job" <<<"${out}" || fail "no reason given: ${out}"
 [[ "$(squeue -h | wc -l)" -eq "${before}" ]] || fail "submit_study.sh left jobs queued: $(squeue)"
 log "submit_study.sh with a refused analysis job: exit 2, nothing queued ($(tail -n 1 <<<"${out}"))"
 
+# --- 5b. the multipole study, held: three sweep jobs, the analysis after all of them -----------
+out=$(as_user "bash jobs/submit_study.sh slurm multipole --time-scale 0.001 --hold --ntasks-trefoil 1 --ntasks-ensemble 1 --ntasks-analysis 1 2>&1") \
+  || fail "submit_study.sh slurm multipole --hold: ${out}"
+mp="results/study_multipole_t0.001"
+held=()
+for s in trefoil_table2_multipole candycane_multipole candycane_seeds_multipole; do
+  j=$(sed -n "s/^submitted: sweep ${s} \([0-9]*\)\$/\1/p" <<<"${out}")
+  [[ -n "${j}" ]] || fail "the multipole study submitted no ${s} sweep: ${out}"
+  held+=("${j}")
+  [[ "$(scontrol show job "${j}" | grep -o 'Command=.*')" == *"/jobs/slurm_sweep.sh ${mp}/inputs/${s}.nml" ]] \
+    || fail "job ${j} does not run the sweep ${mp}/inputs/${s}.nml: $(scontrol show job "${j}" | grep Command)"
+  [[ "$(state "${j}")" == PENDING && "$(field "${j}" Reason)" == JobHeldUser ]] || fail "sweep job ${j} is not held: $(state "${j}") $(field "${j}" Reason)"
+  want=1   # --ntasks-trefoil 1, --ntasks-ensemble 1; the candy-canes the script's 2 per node
+  [[ "${s}" == candycane_multipole ]] && want=2
+  [[ "$(field "${j}" NumTasks)" == "${want}" ]] || fail "sweep job ${j} (${s}): NumTasks=$(field "${j}" NumTasks), expected ${want}"
+  grep -q "t_end = $([[ ${s} == trefoil* ]] && echo 1 || echo 2)," "${proj}/${mp}/inputs/${s}.nml" || fail "${mp}/inputs/${s}.nml: t_end not scaled"
+done
+[[ "$(grep -c '^submitted: sweep ' <<<"${out}")" -eq 3 ]] || fail "the multipole study submitted other sweeps too: ${out}"
+ma=$(sed -n 's/^submitted: analysis \([0-9]*\) .*/\1/p' <<<"${out}")
+[[ -n "${ma}" ]] || fail "no analysis job: ${out}"
+dep="$(field "${ma}" Dependency)"
+for j in "${held[@]}"; do [[ "${dep}" == *"afterany:${j}("* ]] || fail "the multipole analysis ${ma} does not wait for sweep job ${j}: Dependency=${dep}"; done
+[[ "$(scontrol show job "${ma}" | grep -o 'Command=.*')" == *"jobs/slurm_study.sh multipole" ]] || fail "analysis ${ma}: $(scontrol show job "${ma}" | grep Command)"
+as_user "scancel ${held[*]} ${ma}"
+for j in "${held[@]}" "${ma}"; do
+  wait_end "${j}" 30 >/dev/null
+  [[ "$(state "${j}")" == CANCELLED && "$(field "${j}" RunTime)" == 00:00:00 ]] || fail "held job ${j} ran or was not cancelled: $(state "${j}")"
+done
+log "multipole study (held): sweeps ${held[*]} (trefoil_table2_multipole, candycane_multipole, candycane_seeds_multipole), analysis ${ma} after all three; cancelled unrun"
+
 # --- 6. the shortened study with its analysis job ---------------------------------------------
 out=$(as_user "bash jobs/submit_study.sh slurm rpy --time-scale 0.004 --ntasks-trefoil 2 --ntasks-candycane 1 --ntasks-analysis 2 --max-resubmits 1 --quick-analysis 2>&1") \
   || fail "submit_study.sh: ${out}"
 log "${out//$'\n'/ }"
-read -r sa sb sc < <(sed -n 's/^submitted: trefoil sweep \([0-9]*\), candy-cane sweep \([0-9]*\), analysis \([0-9]*\).*/\1 \2 \3/p' <<<"${out}")
-[[ -n "${sc}" ]] || fail "no job ids printed: ${out}"
+sa=$(sed -n 's/^submitted: sweep trefoil_table2 \([0-9]*\)$/\1/p' <<<"${out}")
+sb=$(sed -n 's/^submitted: sweep candycane \([0-9]*\)$/\1/p' <<<"${out}")
+sc=$(sed -n 's/^submitted: analysis \([0-9]*\) .*/\1/p' <<<"${out}")
+[[ -n "${sa}" && -n "${sb}" && -n "${sc}" && "$(grep -c '^submitted: sweep ' <<<"${out}")" -eq 2 ]] \
+  || fail "not the two rpy sweeps and the analysis: ${out}"
 study="${proj}/results/study_rpy_t0.004"
 for j in "${sa}" "${sb}"; do
   wait_end "${j}" 300 >/dev/null

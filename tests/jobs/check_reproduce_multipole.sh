@@ -1,0 +1,77 @@
+#!/bin/bash
+# The analysis of the multipole study (scripts/reproduce.sh --hydro multipole --no-run --no-build,
+# as the analysis job runs it) on small case files put where the multipole sweeps write: issue 11
+# asks for k_f with 1000 closures on every frame, for the trefoils and for the rotations
+# ensemble (candycane_seeds_multipole, part of this study), and the ensemble in the comparison.
+#   - every frame of every trefoil and ensemble case has k_f stored with 1000 closures, and each
+#     trefoil the knot matrix of its last frame (100 closures per subchain);
+#   - reproduction_multipole/results.json lists the ensemble's cases; nothing else is analysed.
+# The candy-cane sweep is left empty here: its knot-matrix frames come from knotflow-study
+# --select-frames CASE --every-time 10 (a knotflow-study option of another branch).
+# The case files are RPY runs (seconds): the analysis does not depend on the model.
+# Exit status 77 (ctest: skipped) without the system's numpy/h5py/matplotlib for the tools.
+# Usage: check_reproduce_multipole.sh SOURCE_DIR BUILD_DIR WORKDIR
+set -uo pipefail
+src="$(cd "$1" && pwd)" build="$(cd "$2" && pwd)" work="$3"
+fail() { echo "FAIL: $*" >&2; exit 1; }
+rm -rf "${work}"
+proj="${work}/project"
+mkdir -p "${proj}/build/bin" "${proj}/inputs" "${proj}/tools"
+cp -r "${src}/scripts" "${proj}/"
+cp -r "${src}/tools/pyproject.toml" "${src}/tools/src" "${proj}/tools/"
+ln -s "${build}/bin/knotflow" "${proj}/build/bin/knotflow"
+ln -s "${build}/bin/knotflow-analyze" "${proj}/build/bin/knotflow-analyze"
+# The Python tools of this checkout in build/venv, without a network (as tests/jobs/check_slurm_jobs.sh)
+if ! { /usr/bin/python3 -m venv --system-site-packages "${proj}/build/venv" \
+       && "${proj}/build/venv/bin/python" -m pip install -q --no-deps --no-build-isolation --no-index -e "${proj}/tools" \
+       && "${proj}/build/venv/bin/knotflow-study" --help; } >"${work}/venv.log" 2>&1; then
+  echo "SKIP: no Python tools (system python3 without numpy/h5py/matplotlib?): $(tail -n 2 "${work}/venv.log")"
+  exit 77
+fi
+
+cd "${proj}" || fail "no project directory"
+scene() {   # scene SWEEP "chain" "sweep line" T_END
+  cat >"inputs/$1.nml" <<NML
+&chain $2 /
+&forces excluded_volume = .true. /
+&integrator t_end = $4 /
+&output directory = 'results/$1', frame_interval = 1.0, progress_interval = 0.0 /
+$3
+NML
+  build/bin/knotflow "inputs/$1.nml" >"${work}/$1.log" 2>&1 || fail "knotflow inputs/$1.nml: $(tail -n 5 "${work}/$1.log")"
+}
+scene trefoil_table2_multipole "shape = 'trefoil'" "&sweep orientation = 'a', 'c' /" 3.0
+scene candycane_seeds_multipole "shape = 'candycane'" "&sweep bending_a = 1.0, 3.0 /" 2.0
+mkdir -p results/candycane_multipole
+
+KNOTFLOW_NP=1 KNOTFLOW_NO_INSTALL=1 bash scripts/reproduce.sh --hydro multipole --no-run --no-build \
+  >"${work}/reproduce.log" 2>&1 || fail "reproduce.sh --hydro multipole: $(tail -n 15 "${work}/reproduce.log")"
+
+"${proj}/build/venv/bin/python" - results <<'PY' || fail "the stored analysis is not the multipole study's"
+import glob, json, os, sys
+import h5py
+import numpy as np
+res = sys.argv[1]
+for sweep, n in (("trefoil_table2_multipole", 2), ("candycane_seeds_multipole", 2)):
+    files = sorted(glob.glob(os.path.join(res, sweep, "*.h5")))
+    assert len(files) == n, (sweep, files)
+    for path in files:
+        with h5py.File(path, "r") as h:
+            nframes = h["frames/time"].shape[0]
+            knots = h["analysis/knots"]
+            assert int(knots.attrs["closures"]) == 1000, (path, dict(knots.attrs))
+            assert np.array_equal(knots["frame_index"][:], np.arange(nframes)), (path, knots["frame_index"][:])
+            if sweep.startswith("trefoil"):
+                last = h["analysis/knot_matrix"][f"frame_{nframes - 1}"]
+                assert int(last.attrs["closures"]) == 100, (path, dict(last.attrs))
+print("stored: 1000 closures on every frame of the trefoils and the ensemble")
+with open(os.path.join(res, "reproduction_multipole", "results.json")) as f:
+    out = json.load(f)
+assert len(out.get("ensemble", [])) == 2, out.get("ensemble")
+print("results.json: the ensemble's 2 cases")
+PY
+grep -q "no case files in results/candycane_multipole: skipped" "${work}/reproduce.log" \
+  || fail "the candy-cane sweep: $(grep candycane_multipole "${work}/reproduce.log")"
+! grep -qE "results/(trefoil_table2|candycane|candycane_seeds|trefoil_table2_p24)/" "${work}/reproduce.log" \
+  || fail "the multipole analysis looked at RPY sweeps: $(grep -E 'results/(trefoil_table2|candycane)' "${work}/reproduce.log" | head -n 3)"
+echo "reproduce.sh --hydro multipole: trefoils and the rotations ensemble with 1000 closures on every frame"
