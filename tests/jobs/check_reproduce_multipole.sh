@@ -5,9 +5,10 @@
 # ensemble (candycane_seeds_multipole, part of this study), and the ensemble in the comparison.
 #   - every frame of every trefoil and ensemble case has k_f stored with 1000 closures, and each
 #     trefoil the knot matrix of its last frame (100 closures per subchain);
-#   - reproduction_multipole/results.json lists the ensemble's cases; nothing else is analysed.
-# The candy-cane sweep is left empty here: its knot-matrix frames come from knotflow-study
-# --select-frames CASE --every-time 10 (a knotflow-study option of another branch).
+#   - the candy-cane has k_f on every frame (1000 closures) and knot matrices (20 closures per
+#     subchain) every 10 time units: frames 0, 10, 20 of a run to t = 20 without close pairs;
+#   - reproduction_multipole/results.json lists the ensemble's cases and holds the three-column
+#     comparison (the RPY results.json of docs/reproduction*); nothing else is analysed.
 # The case files are RPY runs (seconds): the analysis does not depend on the model.
 # Exit status 77 (ctest: skipped) without the system's numpy/h5py/matplotlib for the tools.
 # Usage: check_reproduce_multipole.sh SOURCE_DIR BUILD_DIR WORKDIR
@@ -16,8 +17,10 @@ src="$(cd "$1" && pwd)" build="$(cd "$2" && pwd)" work="$3"
 fail() { echo "FAIL: $*" >&2; exit 1; }
 rm -rf "${work}"
 proj="${work}/project"
-mkdir -p "${proj}/build/bin" "${proj}/inputs" "${proj}/tools"
+mkdir -p "${proj}/build/bin" "${proj}/inputs" "${proj}/tools" "${proj}/docs/reproduction" "${proj}/docs/reproduction_p24"
 cp -r "${src}/scripts" "${proj}/"
+cp "${src}/docs/reproduction/results.json" "${proj}/docs/reproduction/"
+cp "${src}/docs/reproduction_p24/results.json" "${proj}/docs/reproduction_p24/"
 cp -r "${src}/tools/pyproject.toml" "${src}/tools/src" "${proj}/tools/"
 ln -s "${build}/bin/knotflow" "${proj}/build/bin/knotflow"
 ln -s "${build}/bin/knotflow-analyze" "${proj}/build/bin/knotflow-analyze"
@@ -42,7 +45,7 @@ NML
 }
 scene trefoil_table2_multipole "shape = 'trefoil'" "&sweep orientation = 'a', 'c' /" 3.0
 scene candycane_seeds_multipole "shape = 'candycane'" "&sweep bending_a = 1.0, 3.0 /" 2.0
-mkdir -p results/candycane_multipole
+scene candycane_multipole "shape = 'candycane'" "&sweep bending_a = 1.0 /" 20.0
 
 KNOTFLOW_NP=1 KNOTFLOW_NO_INSTALL=1 bash scripts/reproduce.sh --hydro multipole --no-run --no-build \
   >"${work}/reproduce.log" 2>&1 || fail "reproduce.sh --hydro multipole: $(tail -n 15 "${work}/reproduce.log")"
@@ -65,13 +68,26 @@ for sweep, n in (("trefoil_table2_multipole", 2), ("candycane_seeds_multipole", 
                 last = h["analysis/knot_matrix"][f"frame_{nframes - 1}"]
                 assert int(last.attrs["closures"]) == 100, (path, dict(last.attrs))
 print("stored: 1000 closures on every frame of the trefoils and the ensemble")
+(cane,) = glob.glob(os.path.join(res, "candycane_multipole", "*.h5"))
+with h5py.File(cane, "r") as h:
+    nframes = h["frames/time"].shape[0]
+    assert nframes == 21, nframes
+    assert int(h["analysis/knots"].attrs["closures"]) == 1000, dict(h["analysis/knots"].attrs)
+    assert np.array_equal(h["analysis/knots/frame_index"][:], np.arange(nframes))
+    cp = h["frames/observables/close_pairs"][:]
+    assert not np.any(cp > 0), cp   # no entangled frames: the matrices are exactly every 10
+    mats = h["analysis/knot_matrix"]
+    assert sorted(mats) == ["frame_0", "frame_10", "frame_20"], sorted(mats)
+    assert all(int(mats[k].attrs["closures"]) == 20 for k in mats), [dict(mats[k].attrs) for k in mats]
+print("candy-cane: 1000 closures on every frame, knot matrices at t = 0, 10, 20")
 with open(os.path.join(res, "reproduction_multipole", "results.json")) as f:
     out = json.load(f)
 assert len(out.get("ensemble", [])) == 2, out.get("ensemble")
-print("results.json: the ensemble's 2 cases")
+cmp = out.get("comparison", {})
+assert set(cmp) == {"trefoil", "candycane"}, sorted(cmp)
+assert len(cmp["trefoil"]["columns"]) == 3 and len(cmp["candycane"]["columns"]) == 3, cmp
+print("results.json: the ensemble's 2 cases and the three-column comparison")
 PY
-grep -q "no case files in results/candycane_multipole: skipped" "${work}/reproduce.log" \
-  || fail "the candy-cane sweep: $(grep candycane_multipole "${work}/reproduce.log")"
 ! grep -qE "results/(trefoil_table2|candycane|candycane_seeds|trefoil_table2_p24)/" "${work}/reproduce.log" \
   || fail "the multipole analysis looked at RPY sweeps: $(grep -E 'results/(trefoil_table2|candycane)' "${work}/reproduce.log" | head -n 3)"
 echo "reproduce.sh --hydro multipole: trefoils and the rotations ensemble with 1000 closures on every frame"
