@@ -1116,8 +1116,8 @@ contains
     type(h5_file_t), intent(in) :: file
     type(checkpoint_t), intent(in) :: ck
     type(error_t), allocatable, intent(out) :: error
-    character(len=*), parameter :: old_parts(10) = [character(len=11) :: 'time', 'positions', 'dt', &
-      'steps', 'rejected', 'nframes', 'digest', 'stepper', 'counters', 'diagnostics']
+    character(len=*), parameter :: old_parts(11) = [character(len=11) :: 'time', 'positions', 'dt', &
+      'steps', 'rejected', 'nframes', 'digest', 'stepper', 'counters', 'diagnostics', 'run']
     integer :: k
     call write_checkpoint(file, trim(slot_groups(0)), ck, error)
     if (.not. allocated(error)) call write_checkpoint(file, trim(slot_groups(1)), ck, error)
