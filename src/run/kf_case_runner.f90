@@ -3,6 +3,7 @@
 !> The library never prints: progress lines go to a reporter (case_reporter_t) the program supplies.
 module kf_case_runner
   use, intrinsic :: iso_fortran_env, only: int64
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use kf_kinds, only: wp, i8
   use kf_strings, only: to_str, to_str_short, to_str_exact
   use kf_error, only: error_t, fatal_error
@@ -16,7 +17,7 @@ module kf_case_runner
   use kf_stepper_factory, only: make_stepper
   use kf_shape, only: shape_t, compute_shape
   use kf_case_file, only: case_file_t, case_file_status, stepper_checkpoint_t, verify_case_file, &
-    diagnostics_record_t, stresslet_record_t
+    diagnostics_record_t, stresslet_record_t, run_record_t
   use kf_run_segment, only: run_segment_t, run_launch_t
   use kf_frame_records, only: observables_record, diagnostics_record, stresslet_record
   use kf_run_diagnostics, only: run_diagnostics_t, diag_pair_cutoff
@@ -82,6 +83,7 @@ contains
     type(diagnostics_record_t), allocatable :: diag_rec   !< the frame's records (allocated: as above)
     type(stresslet_record_t), allocatable :: st_rec
     type(run_segment_t) :: segment
+    type(run_record_t) :: final   !< the segment's record at the end
     real(wp), allocatable :: r(:, :)
     real(wp) :: rotation(3, 3), t, t_next, dt
     integer(i8) :: steps, rejected, nframes
@@ -300,7 +302,8 @@ contains
       end if
     end do
     ! 'finished' only after the last frame is flushed and the file read back and verified.
-    call file%finish(sc%integrator%t_end, error, damaged, segment%record(t, integ%steps()))
+    final = segment%record(t, integ%steps())
+    call file%finish(sc%integrator%t_end, error, damaged, final)
     if (allocated(error)) then
       status = case_failed
       if (damaged) then
@@ -320,6 +323,7 @@ contains
     call system_clock(clock_now)
     message = to_str(integ%steps())//' steps ('//to_str(integ%rejected())//' rejected), '// &
               to_str_short(real(clock_now - clock0, wp)/rate)//' s'
+    if (ieee_is_finite(final%load_mean)) message = message//', mean load '//to_str_short(final%load_mean)
 
   contains
 
