@@ -237,7 +237,6 @@ module kf_case_file
     procedure :: has_stresslet
     procedure :: read_counter
     procedure :: start_run
-    procedure :: run_count
     !> Write one more root attribute (same kinds as `attribute_list_t%add`).
     generic :: write_attribute => write_attr_str, write_attr_i4, write_attr_i8, write_attr_real, &
       write_attr_logical, write_attr_real1, write_attr_real2
@@ -715,13 +714,6 @@ contains
     if (.not. allocated(error)) this%run_started = .true.
   end subroutine start_run
 
-  !> Number of /runs entries of the open file (the current segment's included once started).
-  pure integer function run_count(this)
-    class(case_file_t), intent(in) :: this
-    run_count = 0
-    if (allocated(this%runs)) run_count = size(this%runs)
-  end function run_count
-
   !> Every /runs dataset, `runs` in full (a dataset of another length is replaced).
   subroutine write_runs(file, runs, error)
     type(h5_file_t), intent(in) :: file
@@ -995,6 +987,7 @@ contains
     logical :: legacy
     integer :: n_sets
     call this%close()
+    this%run_started = .false.
     call h5_open_file(this%file, path, .true., error)
     if (allocated(error)) return
     call h5_read_attr(this%file, '/', 'n_beads', n_beads, error)
