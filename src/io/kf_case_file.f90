@@ -105,6 +105,9 @@ module kf_case_file
 
   !> The /runs datasets, in the order of `run_record_t`: strings, int32, float64, int64.
   character(len=*), parameter :: runs_group = '/runs'
+  !> The longest string of /runs read back (commit, start time, host name: host names have at
+  !> most 255 bytes).
+  integer, parameter :: run_text_capacity = 256
   character(len=*), parameter :: run_sets(11) = [character(len=12) :: 'commit', 'started', 'host', 'ranks', &
     'threads', 't_start', 't_end', 'steps', 'wall_seconds', 'load_start', 'load_mean']
 
@@ -175,12 +178,6 @@ module kf_case_file
     real(wp) :: wall_seconds = 0.0_wp          !< wall time of the segment so far
     real(wp) :: load_start = 0.0_wp, load_mean = 0.0_wp   !< 1-minute load average (NaN: unknown)
   end type run_record_t
-
-  !> A column of strings as read from a dataset (a component: gfortran 12 warns, wrongly, that
-  !> the hidden length of a plain deferred-length array read through intent(out) is unset).
-  type :: text_column_t
-    character(len=:), allocatable :: text(:)
-  end type text_column_t
 
   !> The state of the time stepper in the checkpoint: the plain arrays of its `get_state` and
   !> the name of its method. Unallocated components: no stepper state.
@@ -782,7 +779,7 @@ contains
     logical, intent(out) :: equal
     type(error_t), allocatable, intent(out) :: error
     integer, intent(in), optional :: limit
-    type(text_column_t) :: commit, started, host
+    character(len=run_text_capacity), allocatable :: commit(:), started(:), host(:)
     integer(i4), allocatable :: ranks(:), threads(:)
     real(wp), allocatable :: t_start(:), t_end(:), wall(:), load_start(:), load_mean(:)
     integer(i8), allocatable :: steps(:)
@@ -794,9 +791,9 @@ contains
         return
       end if
     end do
-    call h5_read(file, runs_group//'/commit', commit%text, error)
-    if (.not. allocated(error)) call h5_read(file, runs_group//'/started', started%text, error)
-    if (.not. allocated(error)) call h5_read(file, runs_group//'/host', host%text, error)
+    call h5_read(file, runs_group//'/commit', commit, error)
+    if (.not. allocated(error)) call h5_read(file, runs_group//'/started', started, error)
+    if (.not. allocated(error)) call h5_read(file, runs_group//'/host', host, error)
     if (.not. allocated(error)) call h5_read(file, runs_group//'/ranks', ranks, error)
     if (.not. allocated(error)) call h5_read(file, runs_group//'/threads', threads, error)
     if (.not. allocated(error)) call h5_read(file, runs_group//'/t_start', t_start, error)
@@ -806,16 +803,16 @@ contains
     if (.not. allocated(error)) call h5_read(file, runs_group//'/load_start', load_start, error)
     if (.not. allocated(error)) call h5_read(file, runs_group//'/load_mean', load_mean, error)
     if (allocated(error)) return
-    lengths = [size(commit%text), size(started%text), size(host%text), size(ranks), size(threads), size(t_start), &
+    lengths = [size(commit), size(started), size(host), size(ranks), size(threads), size(t_start), &
                size(t_end), size(steps), size(wall), size(load_start), size(load_mean)]
     equal = all(lengths == lengths(1))
     n = minval(lengths)
     if (present(limit)) n = min(n, limit)
     allocate (runs(n))
     do k = 1, n
-      runs(k)%commit = trim(commit%text(k))
-      runs(k)%started = trim(started%text(k))
-      runs(k)%host = trim(host%text(k))
+      runs(k)%commit = trim(commit(k))
+      runs(k)%started = trim(started(k))
+      runs(k)%host = trim(host(k))
       runs(k)%ranks = ranks(k)
       runs(k)%threads = threads(k)
       runs(k)%t_start = t_start(k)
