@@ -132,8 +132,9 @@ for k in ("load_start", "load_mean"):
         assert np.all(np.isfinite(r[k])) or np.all(np.isnan(r[k])), (k, r[k])
 print("killed at t = %g (%d steps) and resumed: /runs t %s, steps %s (total %d), wall %s s, "
       "threads %s, load at start %s, mean %s"
-      % (t_ck, steps_ck, list(zip(r["t_start"], r["t_end"])), list(r["steps"]), total_steps,
-         np.round(r["wall_seconds"], 2), list(r["threads"]), r["load_start"], r["load_mean"]))
+      % (t_ck, steps_ck, list(zip(r["t_start"].tolist(), r["t_end"].tolist())), r["steps"].tolist(),
+         total_steps, np.round(r["wall_seconds"], 2).tolist(), r["threads"].tolist(),
+         np.round(r["load_start"], 2).tolist(), np.round(r["load_mean"], 2).tolist()))
 
 # 2. a finished case rerun is skipped and gets no entry
 out = run(scene("two"), 1)
