@@ -26,7 +26,9 @@ program knotflow
   use kf_sweep_tasks, only: sweep_tasks_t, status_word
   use kf_exit, only: exit_program_now
   use kf_cli, only: standard_option, argument, version_line, die
-  use kf_blas_threads, only: allowed_cpus, load_average, blas_threads_for, set_blas_threads
+  use kf_blas_threads, only: allowed_cpus, blas_threads_for, set_blas_threads, blas_threads_in_use
+  use kf_platform, only: load_average
+  use kf_kinds, only: wp
   implicit none
 
   character(len=*), parameter :: program_name = 'knotflow'
@@ -45,6 +47,7 @@ program knotflow
   logical :: summary_failed = .false.
   integer :: me = 0, nfailed, threads, k
   logical :: threads_set
+  real(wp) :: load
 
   ! --help and --version before MPI start-up (kf_cli).
   do k = 1, command_argument_count()
@@ -95,7 +98,12 @@ program knotflow
   end if
 
   ! Idle CPUs for the BLAS of a run with one rank on its node (kf_blas_threads).
-  threads = blas_threads_for(allowed_cpus(), comm%ranks_on_node(), load_average())
+  call load_average(load, error)
+  if (allocated(error)) then   ! not known: taken as an idle machine
+    load = 0.0_wp
+    deallocate (error)
+  end if
+  threads = blas_threads_for(allowed_cpus(), comm%ranks_on_node(), real(load))
   call set_blas_threads(threads, threads_set)
   if (me == 0 .and. threads_set .and. threads > 1) then
     write (output_unit, '(a)') 'knotflow: '//to_str(threads)//' BLAS threads per rank'
@@ -104,6 +112,8 @@ program knotflow
 
   tasks%sweep = sw
   tasks%reporter%rank = me
+  tasks%launch%ranks = comm%size()
+  tasks%launch%threads = blas_threads_in_use()
   call run_task_farm(comm, sw%n_cases(), tasks, results, error)
   if (allocated(error)) call stop_all(error%message, 1)
   nfailed = count(results%status /= task_ok .and. results%status /= task_skipped)

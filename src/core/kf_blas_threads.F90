@@ -6,9 +6,10 @@
 !> (`knotflow scene.nml`, `mpirun -n 1`, a batch task with several CPUs), because the other ranks
 !> of a run occupy the remaining CPUs, computing or waiting in MPI (Open MPI polls while it
 !> waits); then the CPUs this process may run on (its affinity mask, from /proc/self/status on
-!> Linux; 1 where unknown) less those busy at start-up (the 1-minute load average, rounded),
-!> at least 1. Threads that must share a busy CPU slow a BLAS call down several-fold (measured:
-!> 4x for a 2-thread factorisation with the other core busy), hence the load. A sweep that keeps
+!> Linux; 1 where unknown) less those busy at start-up (the 1-minute load average of
+!> kf_platform, rounded), at least 1. Threads that must share a busy CPU slow a BLAS call down
+!> several-fold (measured: 4x for a 2-thread factorisation with the other core busy), hence the
+!> load. A sweep that keeps
 !> every core busy keeps 1 thread per rank. An explicit OPENBLAS_NUM_THREADS (any count >= 1) in
 !> the environment is the user's choice and is left alone: `OPENBLAS_NUM_THREADS=1 knotflow ...`
 !> really runs on one core (scripts/lib.sh sets 1 unless the caller set it).
@@ -19,7 +20,7 @@ module kf_blas_threads
   implicit none
   private
 
-  public :: allowed_cpus, cpu_list_count, load_average, blas_threads_for, requested_threads, set_blas_threads
+  public :: allowed_cpus, cpu_list_count, blas_threads_for, requested_threads, set_blas_threads, blas_threads_in_use
 
 contains
 
@@ -79,17 +80,6 @@ contains
     end do
   end function cpu_list_count
 
-  !> The 1-minute load average (first field of /proc/loadavg), or 0 when it cannot be read.
-  real function load_average() result(load)
-    integer :: unit, ios
-    load = 0.0
-    open (newunit=unit, file='/proc/loadavg', action='read', status='old', iostat=ios)
-    if (ios /= 0) return
-    read (unit, *, iostat=ios) load
-    if (ios /= 0) load = 0.0
-    close (unit)
-  end function load_average
-
   !> BLAS threads for a rank with `cpus` CPUs in its affinity mask, `ranks_on_node` ranks of
   !> its run on the node and the given load average at start-up (the rule above).
   pure integer function blas_threads_for(cpus, ranks_on_node, load) result(threads)
@@ -135,5 +125,21 @@ contains
     applied = .false.
 #endif
   end subroutine set_blas_threads
+
+  !> The threads the BLAS library uses now (openblas_get_num_threads), 0 where the library
+  !> cannot be asked (not OpenBLAS).
+  integer function blas_threads_in_use() result(n)
+#ifdef KNOTFLOW_HAVE_OPENBLAS_THREADS
+    interface
+      function openblas_get_num_threads() bind(c, name='openblas_get_num_threads') result(k)
+        import :: c_int
+        integer(c_int) :: k
+      end function openblas_get_num_threads
+    end interface
+    n = int(openblas_get_num_threads())
+#else
+    n = 0
+#endif
+  end function blas_threads_in_use
 
 end module kf_blas_threads

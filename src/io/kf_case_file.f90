@@ -33,6 +33,14 @@
 !>   units pi eta d^3 gamma_dot, Batchelor's sign) and /frames/stresslet/{viscosity, psi1, psi2}
 !>   (nframes,) float64 (intrinsic-viscosity form), one entry per frame, truncated
 !>   with the frames on resume. Files without /frames/stresslet are valid: it is optional.
+!> - /runs (schema 4): one entry per run segment (the first start and every resume), 1-D
+!>   datasets of equal length: commit, started, host (strings), ranks, threads (int32), t_start,
+!>   t_end, wall_seconds, load_start, load_mean (float64), steps (int64). `start_run` appends
+!>   the segment's entry (a `run_record_t` the run layer fills); `append_frame` and `finish`
+!>   given the record rewrite its changing figures (t_end, steps, wall_seconds, load_mean) in
+!>   place, and each checkpoint holds them too (run/counts = [entries, steps], run/figures =
+!>   [t_end, wall_seconds, load_mean]), so that `open_resume` restores /runs to the checkpoint
+!>   it continues from. Files without /runs (schema < 4) are valid and get it from a resume on.
 !>
 !> The file takes plain records (observables, run diagnostics, stresslet of a frame) and writes
 !> them as given: it computes nothing (the run layer fills the records, kf_frame_records).
@@ -78,9 +86,10 @@ module kf_case_file
 
   !> Version of the case file layout written by `create`. 1: files without the attribute
   !> (before it existed); 2: the attribute itself; 3: two checkpoint slots written alternately
-  !> (/checkpoint/slot0, /checkpoint/slot1) instead of one /checkpoint rewritten in place.
-  !> Raise it with any change a reader must know.
-  integer(i4), parameter, public :: case_schema_version = 3
+  !> (/checkpoint/slot0, /checkpoint/slot1) instead of one /checkpoint rewritten in place;
+  !> 4: /runs, one entry per run segment (kept up to date only by a program that knows it: an
+  !> older one refuses to continue such a file). Raise it with any change a reader must know.
+  integer(i4), parameter, public :: case_schema_version = 4
 
   !> The checkpoint slots of schema 3: the checkpoint of frame count k is written to
   !> slot_groups(mod(k, 2)), so the other slot keeps the previous checkpoint whole while one is
@@ -93,6 +102,14 @@ module kf_case_file
   !> 'running' and 'finished' replace each other in place (a kill while the root object header
   !> is flushed then leaves one or the other, never no status).
   integer, parameter :: status_capacity = 64
+
+  !> The /runs datasets, in the order of `run_record_t`: strings, int32, float64, int64.
+  character(len=*), parameter :: runs_group = '/runs'
+  !> The longest string of /runs read back (commit, start time, host name: host names have at
+  !> most 255 bytes).
+  integer, parameter :: run_text_capacity = 256
+  character(len=*), parameter :: run_sets(11) = [character(len=12) :: 'commit', 'started', 'host', 'ranks', &
+    'threads', 't_start', 't_end', 'steps', 'wall_seconds', 'load_start', 'load_mean']
 
   integer, parameter :: kind_str = 1, kind_i4 = 2, kind_i8 = 3, kind_real = 4, kind_real1 = 5, &
     kind_real2 = 6
@@ -149,6 +166,19 @@ module kf_case_file
     real(wp) :: viscosity = 0.0_wp, psi1 = 0.0_wp, psi2 = 0.0_wp
   end type stresslet_record_t
 
+  !> One run segment of the case (the first start or a resume): an entry of /runs, filled by
+  !> the run layer (kf_run_segment).
+  type, public :: run_record_t
+    character(len=:), allocatable :: commit    !< git hash the program was built from
+    character(len=:), allocatable :: started   !< start of the segment, ISO 8601 UTC
+    character(len=:), allocatable :: host      !< host name
+    integer :: ranks = 0, threads = 0          !< MPI ranks of the sweep, BLAS threads of the rank
+    real(wp) :: t_start = 0.0_wp, t_end = 0.0_wp   !< model time at the start, newest reached
+    integer(i8) :: steps = 0                   !< steps taken in the segment
+    real(wp) :: wall_seconds = 0.0_wp          !< wall time of the segment so far
+    real(wp) :: load_start = 0.0_wp, load_mean = 0.0_wp   !< 1-minute load average (NaN: unknown)
+  end type run_record_t
+
   !> The state of the time stepper in the checkpoint: the plain arrays of its `get_state` and
   !> the name of its method. Unallocated components: no stepper state.
   type, public :: stepper_checkpoint_t
@@ -166,6 +196,8 @@ module kf_case_file
     integer(i8), allocatable :: counters(:)         !< the caller's run counters (or none)
     integer(i8), allocatable :: diag_counters(:)    !< run diagnostics state (or none)
     real(wp), allocatable :: diag_values(:), diag_ongoing(:, :)
+    integer(i8), allocatable :: run_counts(:)       !< [/runs entries, steps of the segment] (or none)
+    real(wp), allocatable :: run_figures(:)         !< [t_end, wall_seconds, load_mean] of the segment
   end type checkpoint_t
 
   !> An open case file being written by the simulation.
@@ -179,6 +211,8 @@ module kf_case_file
     logical :: stresslet = .false.       !< the file has /frames/stresslet
     real(wp) :: flushed_time = -1.0_wp   !< time of the last checkpoint flushed (-1: none)
     type(checkpoint_t) :: resumed         !< the checkpoint `open_resume` continued from
+    type(run_record_t), allocatable :: runs(:)   !< the /runs entries (the last: this segment)
+    logical :: run_started = .false.     !< `start_run` gave this segment's entry
   contains
     !> create(path, case_name, n_beads, scene_text, [scene_attrs,] rotation, error): the
     !> scene attributes can also be written afterwards with `write_attribute`.
@@ -199,6 +233,7 @@ module kf_case_file
     procedure :: enable_stresslet
     procedure :: has_stresslet
     procedure :: read_counter
+    procedure :: start_run
     !> Write one more root attribute (same kinds as `attribute_list_t%add`).
     generic :: write_attribute => write_attr_str, write_attr_i4, write_attr_i8, write_attr_real, &
       write_attr_logical, write_attr_real1, write_attr_real2
@@ -348,6 +383,9 @@ contains
     this%diagnostics = .false.
     this%stresslet = .false.
     this%flushed_time = -1.0_wp
+    this%run_started = .false.
+    if (allocated(this%runs)) deallocate (this%runs)
+    allocate (this%runs(0))
     call h5_write_attr(this%file, '/', 'status', status_value('running'), error)
     if (allocated(error)) return
     call h5_write_attr(this%file, '/', 'schema_version', case_schema_version, error)
@@ -489,8 +527,10 @@ contains
   !> The checkpoint is written to the slot the previous frame did not use (schema 3), so a kill
   !> or a failed write while it is written leaves the previous checkpoint whole. A file with the
   !> stresslet (`enable_stresslet`) needs `stresslet`, the fibre's stresslet at the frame.
+  !> `run`, the record of the run segment after the frame (after `start_run`), replaces the
+  !> segment's /runs entry and goes into the checkpoint.
   subroutine append_frame(this, t, r, shape, steps, rejected, dt, error, diagnostics, stepper, counters, &
-                          stresslet)
+                          stresslet, run)
     class(case_file_t), intent(inout) :: this
     real(wp), intent(in) :: t
     real(wp), intent(in) :: r(:, :)
@@ -502,6 +542,7 @@ contains
     type(stepper_checkpoint_t), intent(in), optional :: stepper
     integer(i8), intent(in), optional :: counters(:)
     type(stresslet_record_t), intent(in), optional :: stresslet
+    type(run_record_t), intent(in), optional :: run
     real(wp), allocatable :: rc(:, :)
     type(checkpoint_t) :: ck
     if (.not. this%file%is_open()) then
@@ -526,6 +567,10 @@ contains
     end if
     if (size(r, 1) /= 3 .or. size(r, 2) /= this%n_beads) then
       call fatal_error(error, "case file '"//this%file%name()//"': frame positions do not have shape (3, n_beads)")
+      return
+    end if
+    if (present(run) .and. .not. this%run_started) then
+      call fatal_error(error, "case file '"//this%file%name()//"': append_frame got a run record before start_run")
       return
     end if
     if (this%nframes > 0 .and. .not. t > this%last_time) then
@@ -591,10 +636,16 @@ contains
     ck%rejected = rejected
     if (present(stepper)) ck%stepper = stepper
     if (present(counters)) ck%counters = counters
+    if (present(run)) then
+      this%runs(size(this%runs)) = run
+      ck%run_counts = [size(this%runs, kind=i8), run%steps]
+      ck%run_figures = [run%t_end, run%wall_seconds, run%load_mean]
+    end if
     ! The first checkpoint goes to both slots, so that their structure exists before any frame
     ! but the first could be lost.
     if (this%nframes == 1) call write_checkpoint(this%file, trim(slot_groups(0)), ck, error)
     if (.not. allocated(error)) call write_checkpoint(this%file, trim(slot_groups(mod(this%nframes, 2_i8))), ck, error)
+    if (.not. allocated(error) .and. present(run)) call write_run_figures(this%file, this%runs, error)
     if (allocated(error)) return
     call h5_flush(this%file, error)
     if (.not. allocated(error)) this%flushed_time = t
@@ -627,6 +678,183 @@ contains
     if (.not. allocated(error)) call h5_append(file, trim(stresslet_sets(4)), st%psi1, error)
     if (.not. allocated(error)) call h5_append(file, trim(stresslet_sets(5)), st%psi2, error)
   end subroutine write_stresslet_frame
+
+  ! ---------------------------------------------------------------- run segments (/runs)
+
+  !> Begin a run segment (after `create`, or after `open_resume`): `run` is appended to /runs
+  !> (every /runs dataset rewritten one entry longer; a file without /runs gets it) and the
+  !> file marked with this schema version; flushed. Later `append_frame` and `finish` calls
+  !> given the segment's record update its entry.
+  subroutine start_run(this, run, error)
+    class(case_file_t), intent(inout) :: this
+    type(run_record_t), intent(in) :: run
+    type(error_t), allocatable, intent(out) :: error
+    type(run_record_t), allocatable :: longer(:)
+    integer :: n
+    if (.not. this%file%is_open()) then
+      call fatal_error(error, 'case file: start_run on a file that is not open')
+      return
+    end if
+    if (this%run_started) then
+      call fatal_error(error, "case file '"//this%file%name()//"': start_run called twice")
+      return
+    end if
+    if (.not. allocated(this%runs)) allocate (this%runs(0))
+    n = size(this%runs)
+    allocate (longer(n + 1))
+    longer(1:n) = this%runs
+    longer(n + 1) = run
+    call move_alloc(longer, this%runs)
+    call write_runs(this%file, this%runs, error)
+    if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'schema_version', case_schema_version, error)
+    if (.not. allocated(error)) call h5_flush(this%file, error)
+    if (.not. allocated(error)) this%run_started = .true.
+  end subroutine start_run
+
+  !> Every /runs dataset, `runs` in full (a dataset of another length is replaced).
+  subroutine write_runs(file, runs, error)
+    type(h5_file_t), intent(in) :: file
+    type(run_record_t), intent(in) :: runs(:)
+    type(error_t), allocatable, intent(out) :: error
+    integer :: k
+    do k = 1, 3
+      call h5_write(file, runs_group//'/'//trim(run_sets(k)), run_texts(runs, k), error)
+      if (allocated(error)) return
+    end do
+    call h5_write(file, runs_group//'/ranks', int(runs%ranks, i4), error)
+    if (.not. allocated(error)) call h5_write(file, runs_group//'/threads', int(runs%threads, i4), error)
+    if (.not. allocated(error)) call h5_write(file, runs_group//'/t_start', runs%t_start, error)
+    if (.not. allocated(error)) call h5_write(file, runs_group//'/load_start', runs%load_start, error)
+    if (.not. allocated(error)) call write_run_figures(file, runs, error)
+  end subroutine write_runs
+
+  !> The /runs datasets that change during a segment (t_end, steps, wall_seconds, load_mean),
+  !> rewritten in place.
+  subroutine write_run_figures(file, runs, error)
+    type(h5_file_t), intent(in) :: file
+    type(run_record_t), intent(in) :: runs(:)
+    type(error_t), allocatable, intent(out) :: error
+    call h5_write(file, runs_group//'/t_end', runs%t_end, error)
+    if (.not. allocated(error)) call h5_write(file, runs_group//'/steps', runs%steps, error)
+    if (.not. allocated(error)) call h5_write(file, runs_group//'/wall_seconds', runs%wall_seconds, error)
+    if (.not. allocated(error)) call h5_write(file, runs_group//'/load_mean', runs%load_mean, error)
+  end subroutine write_run_figures
+
+  !> The string field `field` (1 commit, 2 started, 3 host) of every entry ('' if not set).
+  pure function run_texts(runs, field) result(text)
+    type(run_record_t), intent(in) :: runs(:)
+    integer, intent(in) :: field
+    character(len=:), allocatable :: text(:)
+    integer :: k, n
+    n = 1
+    do k = 1, size(runs)
+      n = max(n, len(run_text(runs(k), field)))
+    end do
+    allocate (character(len=n) :: text(size(runs)))
+    do k = 1, size(runs)
+      text(k) = run_text(runs(k), field)
+    end do
+  end function run_texts
+
+  pure function run_text(run, field) result(text)
+    type(run_record_t), intent(in) :: run
+    integer, intent(in) :: field
+    character(len=:), allocatable :: text
+    text = ''
+    select case (field)
+    case (1)
+      if (allocated(run%commit)) text = run%commit
+    case (2)
+      if (allocated(run%started)) text = run%started
+    case (3)
+      if (allocated(run%host)) text = run%host
+    end select
+  end function run_text
+
+  !> Read /runs: the entries as far as every dataset holds them, at most `limit` (`equal`: all
+  !> datasets have the same length). The error names the missing or unreadable dataset.
+  subroutine read_runs_table(file, runs, equal, error, limit)
+    type(h5_file_t), intent(in) :: file
+    type(run_record_t), allocatable, intent(out) :: runs(:)
+    logical, intent(out) :: equal
+    type(error_t), allocatable, intent(out) :: error
+    integer, intent(in), optional :: limit
+    character(len=run_text_capacity), allocatable :: commit(:), started(:), host(:)
+    integer(i4), allocatable :: ranks(:), threads(:)
+    real(wp), allocatable :: t_start(:), t_end(:), wall(:), load_start(:), load_mean(:)
+    integer(i8), allocatable :: steps(:)
+    integer :: k, n, lengths(size(run_sets))
+    equal = .false.
+    do k = 1, size(run_sets)
+      if (.not. h5_exists(file, runs_group//'/'//trim(run_sets(k)))) then
+        call fatal_error(error, "case file '"//file%name()//"': no dataset "//runs_group//'/'//trim(run_sets(k)))
+        return
+      end if
+    end do
+    call h5_read(file, runs_group//'/commit', commit, error)
+    if (.not. allocated(error)) call h5_read(file, runs_group//'/started', started, error)
+    if (.not. allocated(error)) call h5_read(file, runs_group//'/host', host, error)
+    if (.not. allocated(error)) call h5_read(file, runs_group//'/ranks', ranks, error)
+    if (.not. allocated(error)) call h5_read(file, runs_group//'/threads', threads, error)
+    if (.not. allocated(error)) call h5_read(file, runs_group//'/t_start', t_start, error)
+    if (.not. allocated(error)) call h5_read(file, runs_group//'/t_end', t_end, error)
+    if (.not. allocated(error)) call h5_read(file, runs_group//'/steps', steps, error)
+    if (.not. allocated(error)) call h5_read(file, runs_group//'/wall_seconds', wall, error)
+    if (.not. allocated(error)) call h5_read(file, runs_group//'/load_start', load_start, error)
+    if (.not. allocated(error)) call h5_read(file, runs_group//'/load_mean', load_mean, error)
+    if (allocated(error)) return
+    lengths = [size(commit), size(started), size(host), size(ranks), size(threads), size(t_start), &
+               size(t_end), size(steps), size(wall), size(load_start), size(load_mean)]
+    equal = all(lengths == lengths(1))
+    n = minval(lengths)
+    if (present(limit)) n = min(n, limit)
+    allocate (runs(n))
+    do k = 1, n
+      runs(k)%commit = trim(commit(k))
+      runs(k)%started = trim(started(k))
+      runs(k)%host = trim(host(k))
+      runs(k)%ranks = ranks(k)
+      runs(k)%threads = threads(k)
+      runs(k)%t_start = t_start(k)
+      runs(k)%t_end = t_end(k)
+      runs(k)%steps = steps(k)
+      runs(k)%wall_seconds = wall(k)
+      runs(k)%load_start = load_start(k)
+      runs(k)%load_mean = load_mean(k)
+    end do
+  end subroutine read_runs_table
+
+  !> The /runs entries of a file being resumed, as they were at the checkpoint it continues
+  !> from: the entries the checkpoint counts, the last with the checkpoint's figures (a kill
+  !> after the checkpoint may have left /runs ahead of or behind it). A file without /runs, or
+  !> whose /runs cannot be read, starts a new list (the resume itself never fails for it);
+  !> a checkpoint without run figures (written before they existed) keeps /runs as it is.
+  subroutine restore_runs(this)
+    class(case_file_t), intent(inout) :: this
+    type(error_t), allocatable :: err
+    logical :: equal, fix
+    integer :: n
+    this%run_started = .false.
+    if (allocated(this%runs)) deallocate (this%runs)
+    associate (ck => this%resumed)
+      fix = allocated(ck%run_counts) .and. allocated(ck%run_figures)
+      if (fix) fix = size(ck%run_counts) == 2 .and. size(ck%run_figures) == 3
+      if (fix) fix = ck%run_counts(1) >= 1 .and. ck%run_counts(1) <= huge(n)
+      n = huge(n)
+      if (fix) n = int(ck%run_counts(1))
+      if (h5_exists(this%file, runs_group)) call read_runs_table(this%file, this%runs, equal, err, n)
+      if (allocated(err) .or. .not. allocated(this%runs)) then
+        if (allocated(this%runs)) deallocate (this%runs)
+        allocate (this%runs(0))
+        return
+      end if
+      if (.not. fix .or. size(this%runs) /= n) return
+      this%runs(n)%steps = ck%run_counts(2)
+      this%runs(n)%t_end = ck%run_figures(1)
+      this%runs(n)%wall_seconds = ck%run_figures(2)
+      this%runs(n)%load_mean = ck%run_figures(3)
+    end associate
+  end subroutine restore_runs
 
   !> Run totals of the run diagnostics (root attributes).
   subroutine write_diagnostics_totals(file, diag, error)
@@ -696,6 +924,11 @@ contains
       if (.not. allocated(error)) call h5_write(file, group//'/diagnostics/ongoing', ck%diag_ongoing, error)
       if (allocated(error)) return
     end if
+    if (allocated(ck%run_counts)) then
+      call h5_write(file, group//'/run/counts', ck%run_counts, error)
+      if (.not. allocated(error)) call h5_write(file, group//'/run/figures', ck%run_figures, error)
+      if (allocated(error)) return
+    end if
     call h5_write(file, group//'/digest', digest_value(checkpoint_digest(ck)), error)
     if (.not. allocated(error)) call h5_write(file, group//'/nframes', ck%nframes, error)
   end subroutine write_checkpoint
@@ -751,6 +984,7 @@ contains
     logical :: legacy
     integer :: n_sets
     call this%close()
+    this%run_started = .false.
     call h5_open_file(this%file, path, .true., error)
     if (allocated(error)) return
     call h5_read_attr(this%file, '/', 'n_beads', n_beads, error)
@@ -787,6 +1021,7 @@ contains
       if (length > this%resumed%nframes) call h5_set_length(this%file, trim(all_sets(i)), this%resumed%nframes, error)
       if (allocated(error)) return
     end do
+    call restore_runs(this)
     call h5_write_attr(this%file, '/', 'status', status_value('running'), error)
     if (.not. allocated(error)) call h5_flush(this%file, error)
     if (allocated(error)) return
@@ -871,8 +1106,8 @@ contains
     type(h5_file_t), intent(in) :: file
     type(checkpoint_t), intent(in) :: ck
     type(error_t), allocatable, intent(out) :: error
-    character(len=*), parameter :: old_parts(10) = [character(len=11) :: 'time', 'positions', 'dt', &
-      'steps', 'rejected', 'nframes', 'digest', 'stepper', 'counters', 'diagnostics']
+    character(len=*), parameter :: old_parts(11) = [character(len=11) :: 'time', 'positions', 'dt', &
+      'steps', 'rejected', 'nframes', 'digest', 'stepper', 'counters', 'diagnostics', 'run']
     integer :: k
     call write_checkpoint(file, trim(slot_groups(0)), ck, error)
     if (.not. allocated(error)) call write_checkpoint(file, trim(slot_groups(1)), ck, error)
@@ -923,6 +1158,11 @@ contains
       call h5_read(file, group//'/diagnostics/counters', ck%diag_counters, error)
       if (.not. allocated(error)) call h5_read(file, group//'/diagnostics/values', ck%diag_values, error)
       if (.not. allocated(error)) call h5_read(file, group//'/diagnostics/ongoing', ck%diag_ongoing, error)
+      if (allocated(error)) return
+    end if
+    if (h5_exists(file, group//'/run/counts')) then
+      call h5_read(file, group//'/run/counts', ck%run_counts, error)
+      if (.not. allocated(error)) call h5_read(file, group//'/run/figures', ck%run_figures, error)
       if (allocated(error)) return
     end if
     if (.not. h5_exists(file, group//'/digest')) then
@@ -982,14 +1222,25 @@ contains
   !> verify it (`verify_case_file`), and only then write status = 'finished' (written, flushed
   !> and closed, all checked). On error the file is closed and still says 'running'; `damaged`
   !> tells that the verification found the file itself bad (then it must not be resumed).
-  subroutine finish(this, t_end, error, damaged)
+  !> `run`, the final record of the run segment (after `start_run`), replaces its /runs entry
+  !> before the flush.
+  subroutine finish(this, t_end, error, damaged, run)
     class(case_file_t), intent(inout) :: this
     real(wp), intent(in) :: t_end
     type(error_t), allocatable, intent(out) :: error
     logical, intent(out) :: damaged
+    type(run_record_t), intent(in), optional :: run
     character(len=:), allocatable :: path
     damaged = .false.
     path = this%file%name()
+    if (present(run) .and. this%run_started) then
+      this%runs(size(this%runs)) = run
+      call write_run_figures(this%file, this%runs, error)
+      if (allocated(error)) then
+        call this%close()
+        return
+      end if
+    end if
     call h5_flush(this%file, error)
     if (allocated(error)) then
       call this%close()
@@ -1186,6 +1437,10 @@ contains
       call add_bytes(d, transfer(ck%diag_ongoing, [0_int8]))
     end if
     if (allocated(ck%counters)) call add_bytes(d, transfer(ck%counters, [0_int8]))
+    if (allocated(ck%run_counts)) then
+      call add_bytes(d, transfer(ck%run_counts, [0_int8]))
+      call add_bytes(d, transfer(ck%run_figures, [0_int8]))
+    end if
   end function checkpoint_digest
 
   pure subroutine add_bytes(d, bytes)
@@ -1322,7 +1577,18 @@ contains
         end select
         if (allocated(error)) return
       end do
+      if (h5_exists(file, runs_group)) call check_runs()
     end subroutine check
+
+    !> /runs (files of schema 4): every dataset reads back, all of one length, at least 1.
+    subroutine check_runs()
+      type(run_record_t), allocatable :: runs(:)
+      logical :: equal
+      call read_runs_table(file, runs, equal, error)
+      if (allocated(error)) return
+      if (.not. equal .or. size(runs) < 1) call fatal_error(error, runs_group// &
+        ' does not hold one entry per run segment in every dataset')
+    end subroutine check_runs
 
   end subroutine verify_case_file
 

@@ -8,6 +8,7 @@ module kf_sweep_tasks
   use kf_sweep, only: sweep_t
   use kf_case_runner, only: run_case, case_path, case_reporter_t, case_ok, case_skipped
   use kf_task_farm, only: task_worker_t, task_ok, task_failed, task_skipped
+  use kf_run_segment, only: run_launch_t
   implicit none
   private
 
@@ -22,10 +23,12 @@ module kf_sweep_tasks
   end type rank_reporter_t
 
   !> The sweep's cases as tasks; `reporter` receives the lines of the cases this rank runs
-  !> and one line per completed case.
+  !> and one line per completed case; `launch` (ranks, BLAS threads) is recorded in each case
+  !> file's /runs.
   type, extends(task_worker_t), public :: sweep_tasks_t
     type(sweep_t) :: sweep
     type(rank_reporter_t) :: reporter
+    type(run_launch_t) :: launch
   contains
     procedure :: run => run_sweep_case
     procedure :: progress => case_done
@@ -50,7 +53,7 @@ contains
     character(len=:), allocatable :: name, msg
     call this%sweep%case_scene(itask, sc, name)
     call this%reporter%line('case '//name//': started ('//case_path(sc)//')')
-    call run_case(sc, this%reporter, status, msg)
+    call run_case(sc, this%reporter, status, msg, this%launch)
     select case (status)
     case (case_ok)
       status = task_ok

@@ -3,6 +3,7 @@
 !> The library never prints: progress lines go to a reporter (case_reporter_t) the program supplies.
 module kf_case_runner
   use, intrinsic :: iso_fortran_env, only: int64
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use kf_kinds, only: wp, i8
   use kf_strings, only: to_str, to_str_short, to_str_exact
   use kf_error, only: error_t, fatal_error
@@ -16,7 +17,8 @@ module kf_case_runner
   use kf_stepper_factory, only: make_stepper
   use kf_shape, only: shape_t, compute_shape
   use kf_case_file, only: case_file_t, case_file_status, stepper_checkpoint_t, verify_case_file, &
-    diagnostics_record_t, stresslet_record_t
+    diagnostics_record_t, stresslet_record_t, run_record_t
+  use kf_run_segment, only: run_segment_t, run_launch_t
   use kf_frame_records, only: observables_record, diagnostics_record, stresslet_record
   use kf_run_diagnostics, only: run_diagnostics_t, diag_pair_cutoff
   use kf_rheology, only: fibre_stresslet_t
@@ -61,11 +63,13 @@ contains
 
   !> Run (or resume, or skip) the case described by `sc`. Returns case_ok, case_failed or
   !> case_skipped and a one-line message. Failures are recorded in the case file's status.
-  subroutine run_case(sc, report, status, message)
+  !> `launch` (MPI ranks, BLAS threads) goes into the /runs entry of this run segment.
+  subroutine run_case(sc, report, status, message, launch)
     type(scene_t), intent(in) :: sc
     class(case_reporter_t), intent(inout) :: report
     integer, intent(out) :: status
     character(len=:), allocatable, intent(out) :: message
+    type(run_launch_t), intent(in) :: launch
     type(error_t), allocatable :: error
     type(case_file_t) :: file
     type(dynamics_t), target :: dyn
@@ -78,6 +82,8 @@ contains
     type(fibre_stresslet_t), allocatable :: st     !< allocated only with the stresslet: else absent
     type(diagnostics_record_t), allocatable :: diag_rec   !< the frame's records (allocated: as above)
     type(stresslet_record_t), allocatable :: st_rec
+    type(run_segment_t) :: segment
+    type(run_record_t) :: final   !< the segment's record at the end
     real(wp), allocatable :: r(:, :)
     real(wp) :: rotation(3, 3), t, t_next, dt
     integer(i8) :: steps, rejected, nframes
@@ -87,6 +93,7 @@ contains
     logical :: resumed, with_diag, with_stresslet, unreadable, damaged, extended
     integer(i8) :: old_size, new_size
 
+    call segment%begin(launch)
     path = case_path(sc)
     name = trim(sc%output%case_name)
     hydro_base = 0
@@ -219,6 +226,12 @@ contains
     if (resumed) then
       call report%line('case '//name//': resuming at t = '//to_str_short(t)//' from its checkpoint ('// &
                   to_str(nframes)//' frames)')
+      call segment%place(t, integ%steps())
+      call file%start_run(segment%record(t, integ%steps()), error)
+      if (allocated(error)) then
+        call write_failed(error%message)
+        return
+      end if
     else
       call file%create(path, name, size(r, 2), scene_text(sc), rotation, error)
       if (.not. allocated(error)) call write_scene_attributes(file, sc, error)
@@ -227,6 +240,7 @@ contains
       ! every root attribute rewritten with the frames exists before the first frame, so that
       ! later frames overwrite them in place
       if (.not. allocated(error)) call write_hydro_counters(error)
+      if (.not. allocated(error)) call file%start_run(segment%record(0.0_wp, 0_i8), error)
       if (allocated(error)) then
         call write_failed(error%message)
         return
@@ -240,7 +254,7 @@ contains
         call integ%get_state(saved%reals, saved%ints)
         call frame_records()
         call file%append_frame(t, r, observables_record(obs), 0_i8, 0_i8, integ%dt(), error, diag_rec, saved, &
-                               hydro_counts(), st_rec)
+                               hydro_counts(), st_rec, segment%record(t, 0_i8))
         if (allocated(error)) then
           call write_failed(error%message)
           return
@@ -272,8 +286,9 @@ contains
       end if
       call integ%get_state(saved%reals, saved%ints)
       call frame_records()
+      call segment%sample_load()
       call file%append_frame(t, r, observables_record(obs), integ%steps(), integ%rejected(), integ%dt(), error, &
-                             diag_rec, saved, hydro_counts(), st_rec)
+                             diag_rec, saved, hydro_counts(), st_rec, segment%record(t, integ%steps()))
       if (.not. allocated(error)) call write_hydro_counters(error)
       if (allocated(error)) then
         call write_failed(error%message)
@@ -287,7 +302,8 @@ contains
       end if
     end do
     ! 'finished' only after the last frame is flushed and the file read back and verified.
-    call file%finish(sc%integrator%t_end, error, damaged)
+    final = segment%record(t, integ%steps())
+    call file%finish(sc%integrator%t_end, error, damaged, final)
     if (allocated(error)) then
       status = case_failed
       if (damaged) then
@@ -307,6 +323,7 @@ contains
     call system_clock(clock_now)
     message = to_str(integ%steps())//' steps ('//to_str(integ%rejected())//' rejected), '// &
               to_str_short(real(clock_now - clock0, wp)/rate)//' s'
+    if (ieee_is_finite(final%load_mean)) message = message//', mean load '//to_str_short(final%load_mean)
 
   contains
 

@@ -6,7 +6,8 @@ Then it is started again and again, each time killed, and run once more without 
 (the rerun of a user after a crash); that rerun must exit 0 with the case finished and the file
 equal to the uninterrupted run: every /frames dataset (times, positions, observables,
 integrator counts and step sizes, run diagnostics) bit for bit and the diagnostics.* and hydro.*
-attributes exactly. After a kill that came after frame k had been reported (its checkpoint
+attributes exactly; its /runs segments join up (each starts at the t_end of the one before),
+end at t_end and their steps add up to the run's. After a kill that came after frame k had been reported (its checkpoint
 flushed), the rerun must resume from frame k or later: a kill costs at most the frame being
 written. A kill before the first checkpoint is whole may instead make the rerun move the file
 aside (named `.damaged`) and compute the case from the start; the result is checked the same.
@@ -99,6 +100,18 @@ print("uninterrupted run: %d frames" % len(reference["time"]))
 progress = re.compile(r": t = ([0-9.]+) / ")
 
 
+def check_runs(label):
+    """/runs after the rerun: the segments join up (each starts where the one before ended, at
+    the checkpoint it resumed from, whatever moment the kill hit), the last ends at t_end and
+    their steps add up to the run's."""
+    with h5py.File(case, "r") as h:
+        r = {k: h["runs/" + k][()] for k in ("t_start", "t_end", "steps", "wall_seconds")}
+        total = int(h["frames/integrator/steps"][-1])
+    assert r["t_start"][0] == 0.0 and r["t_end"][-1] == 4.0, (label, r)
+    assert np.array_equal(r["t_start"][1:], r["t_end"][:-1]), (label, r)
+    assert r["steps"].sum() == total and np.all(r["wall_seconds"] > 0), (label, r, total)
+
+
 def check_rerun(label, frames_done):
     """Rerun after a kill: finished, equal to the uninterrupted run, resumed from a frame not
     before `frames_done` (frames reported complete before the kill; None: unknown)."""
@@ -109,6 +122,7 @@ def check_rerun(label, frames_done):
     assert data.keys() == reference.keys(), (label, sorted(set(data) ^ set(reference)))
     for k, v in reference.items():
         assert np.array_equal(data[k], v), (label, k, data[k], v)
+    check_runs(label)
     m = re.search(r"resuming at t = \S+ from its checkpoint \((\d+) frames\)", again.stdout)
     if m:
         kind = "resumed"

@@ -142,6 +142,7 @@ with h5py.File(os.path.join(work, "legacy", "c.h5"), "r+") as h:
     assert h["checkpoint/stepper"].attrs["name"] in (b"dopri45", "dopri45")
     del h["checkpoint/stepper"]
     del h["checkpoint/digest"]        # an older file has neither the stepper state nor the digest
+    t_legacy = float(h["checkpoint/time"][()])
 again = subprocess.run([exe, legacy], capture_output=True, text=True, timeout=600)
 assert again.returncode == 0, again.stderr
 assert "resuming" in again.stdout, again.stdout
@@ -152,7 +153,9 @@ dev_legacy = np.abs(r - r_ref).max()
 assert dev_legacy < 1e-2, dev_legacy
 with h5py.File(os.path.join(work, "legacy", "c.h5"), "r") as h:
     assert sorted(h["checkpoint"].keys()) == ["slot0", "slot1"], list(h["checkpoint"].keys())
-    assert h.attrs["schema_version"] == 3
+    assert h.attrs["schema_version"] == 4
+    # the run records begin with the resume (/runs, schema 4)
+    assert list(h["runs/t_start"][()]) == [t_legacy] and list(h["runs/t_end"][()]) == [300.0]
 print("resumed without the stepper state: max deviation from the uninterrupted run %.2e" % dev_legacy)
 
 bad = scene("failing", extra=", max_steps = 50")

@@ -2,7 +2,8 @@
 
 Checks: every case ran exactly once (one file each, status 'finished', summary lists each
 once), frames are strictly increasing in time with frame 0 at t = 0 and the last at t_end,
-the bond lengths stay within 2% of l0, and the rerun skips every case without touching files.
+the bond lengths stay within 2% of l0, /runs records one segment on 2 ranks, and the rerun
+skips every case without touching files.
 Usage: check_sweep.py MPIEXEC "FLAGS" KNOTFLOW WORKDIR
 """
 import json
@@ -37,6 +38,8 @@ names = [c["case"] for c in summary["cases"]]
 assert len(names) == 6 and len(set(names)) == 6, names
 assert all(c["status"] == "finished" for c in summary["cases"]), summary
 assert {c["rank"] for c in summary["cases"]} == {0, 1}, "both ranks must compute"
+user_threads = os.environ.get("OPENBLAS_NUM_THREADS", "").strip()
+threads = int(user_threads) if user_threads.isdigit() and int(user_threads) >= 1 else 1
 mtimes = {}
 for name in names:
     path = os.path.join(out, name + ".h5")
@@ -47,6 +50,11 @@ for name in names:
         r = h["frames/positions"][:]
         bonds = np.linalg.norm(np.diff(r, axis=1), axis=2)
         assert np.all(np.abs(bonds - 1.02) < 0.02 * 1.02), bonds.max()
+        # one run segment, recorded with the sweep's 2 ranks and 1 BLAS thread per rank
+        # (several ranks on a node keep one each, unless OPENBLAS_NUM_THREADS says otherwise;
+        # 0 where the BLAS is not OpenBLAS)
+        assert list(h["runs/ranks"][()]) == [2], h["runs/ranks"][()]
+        assert list(h["runs/threads"][()]) in ([threads], [0]), h["runs/threads"][()]
     mtimes[path] = os.path.getmtime(path)
 for name in names:
     assert run.stdout.count("case %s: started" % name) == 1, name
