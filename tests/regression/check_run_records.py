@@ -28,6 +28,7 @@ import sys
 import h5py
 import numpy as np
 from kf_legacy import drop_run_records, newest_slot
+from knotflow_tools.io import read_case
 
 exe, work, have_openblas = sys.argv[1], sys.argv[2], sys.argv[3] == "1"
 shutil.rmtree(work, ignore_errors=True)
@@ -144,6 +145,15 @@ with h5py.File(case, "r") as h:
 for k in RUN_SETS:
     assert np.array_equal(again[k], r[k]), (k, again[k], r[k])
 print("rerun of the finished case: skipped, /runs unchanged (2 entries)")
+
+# ... and the Python tools read the same records (knotflow-study's runs table)
+tool_runs = read_case(case).runs
+assert len(tool_runs) == 2, tool_runs
+for k in RUN_SETS:
+    got = [e[k] for e in tool_runs]
+    want = [text(v) for v in r[k]] if r[k].dtype.kind in "SOU" else r[k].tolist()
+    assert got == want, (k, got, want)
+print("knotflow_tools.io.read_case reads the same 2 run records")
 
 # 3. a file of schema 3 (before /runs), interrupted: resumed, it gets /runs from then on
 old = os.path.join(work, "old", "c.h5")
