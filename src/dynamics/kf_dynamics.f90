@@ -6,7 +6,8 @@
 !> diagnostics use it too when it was built at the configuration they look at (`pairs`).
 !> The overlap rule (kf_overlap_rule) says at which configuration the hydrodynamics is evaluated:
 !> the positions themselves, or, under 'separate' and only while beads overlap, the nearest
-!> configuration without overlaps, whose velocities (ambient flow included) the beads then take.
+!> configuration without overlaps, whose velocities (ambient flow included) the beads then take;
+!> under 'relax' the beads also move towards that configuration (its kinematic contact velocity).
 module kf_dynamics
   use kf_kinds, only: wp, i8
   use kf_error, only: error_t
@@ -63,7 +64,7 @@ contains
     call make_hydro_model(scene%hydro, scene%integrator%tolerance, this%model, error)
     if (allocated(error)) return
     call make_overlap_rule(scene%hydro%overlap, &
-      effective_eps_lub(scene%hydro, scene%integrator%tolerance), this%overlap, error)
+      effective_eps_lub(scene%hydro, scene%integrator%tolerance), scene%hydro%overlap_time, this%overlap, error)
     if (allocated(error)) return
     this%n = n_beads
     this%pair_cutoff = max(this%forces%pair_range(), this%model%pair_cutoff())
@@ -122,6 +123,8 @@ contains
     else
       call hydro_velocities(r, this%pairs)
     end if
+    if (allocated(error)) return
+    call this%overlap%add_contact_velocity(r, this%rh, moved, v)
 
   contains
 

@@ -19,9 +19,13 @@ module kf_scene_hydro
   !> The valid values of &hydro update (multipole).
   character(len=*), parameter, public :: update_names(2) = [character(len=8) :: update_stage, update_adaptive]
 
-  character(len=*), parameter, public :: overlap_pair = 'pair', overlap_separate = 'separate'
+  character(len=*), parameter, public :: overlap_pair = 'pair', overlap_separate = 'separate', &
+    overlap_relax = 'relax'
   !> The valid values of &hydro overlap (multipole).
-  character(len=*), parameter, public :: overlap_names(2) = [character(len=8) :: overlap_pair, overlap_separate]
+  character(len=*), parameter, public :: overlap_names(3) = [character(len=8) :: overlap_pair, overlap_separate, &
+    overlap_relax]
+  !> The default of &hydro overlap_time (in units of 1/shear rate; kf_overlap_rule says why).
+  real(wp), parameter :: overlap_time_default = 0.1_wp
 
   real(wp), parameter :: eps_lub_max = 0.5_wp    !< the lubrication model's range: 0 < eps_lub < 0.5
 
@@ -35,7 +39,10 @@ module kf_scene_hydro
     !> multipole: adaptive (reuse, the default) | stage (exact every stage)
     character(len=name_len) :: update = update_adaptive
     !> multipole: pair (BWE per pair, the default) | separate (the configuration without overlaps)
+    !> | relax (separate, and overlaps relax kinematically over overlap_time)
     character(len=name_len) :: overlap = overlap_pair
+    !> relax: the time over which an overlap is undone
+    real(wp) :: overlap_time = overlap_time_default
   end type hydro_params_t
 
   public :: read_hydro_group, hydro_items, check_hydro, resolve_hydro, effective_eps_lub
@@ -53,12 +60,13 @@ contains
     logical :: lubrication
     real(wp) :: eps_lub
     character(len=name_len) :: update, overlap
-    namelist /hydro/ model, order, lubrication, eps_lub, update, overlap
+    real(wp) :: overlap_time
+    namelist /hydro/ model, order, lubrication, eps_lub, update, overlap, overlap_time
     model = p%model; order = p%order; lubrication = p%lubrication; eps_lub = p%eps_lub
-    update = p%update; overlap = p%overlap
+    update = p%update; overlap = p%overlap; overlap_time = p%overlap_time
     read (text, nml=hydro, iostat=ios, iomsg=msg)
     p%model = model; p%order = order; p%lubrication = lubrication; p%eps_lub = eps_lub
-    p%update = update; p%overlap = overlap
+    p%update = update; p%overlap = overlap; p%overlap_time = overlap_time
   end subroutine read_hydro_group
 
   !> The variables of &hydro, in namelist order, appended to `items`.
@@ -71,6 +79,7 @@ contains
     call add_r(items, 'hydro.eps_lub', p%eps_lub)
     call add_s(items, 'hydro.update', p%update)
     call add_s(items, 'hydro.overlap', p%overlap)
+    call add_r(items, 'hydro.overlap_time', p%overlap_time)
   end subroutine hydro_items
 
   !> Check &hydro (`file`: the scene file named in the messages, '' from code).
@@ -108,6 +117,14 @@ contains
     if (p%overlap /= overlap_pair .and. p%model /= model_multipole) then
       call refuse(error, file, 'hydro', 'overlap', quoted(p%overlap), &
         quoted(overlap_pair)//' with model = '//quoted(p%model)//' (the rule is for the multipole model)'); return
+    end if
+    if (.not. (p%overlap_time > 0.0_wp)) then
+      call refuse(error, file, 'hydro', 'overlap_time', to_str_exact(p%overlap_time), 'a number > 0'); return
+    end if
+    if (p%overlap /= overlap_relax .and. p%overlap_time /= overlap_time_default) then
+      call refuse(error, file, 'hydro', 'overlap_time', to_str_exact(p%overlap_time), &
+        'only with overlap = '//quoted(overlap_relax)//' (it has no effect with overlap = '// &
+        quoted(p%overlap)//')'); return
     end if
   end subroutine check_hydro
 
