@@ -38,8 +38,8 @@ module kf_scene_hydro
     real(wp) :: eps_lub = -1.0_wp
     !> multipole: adaptive (reuse, the default) | stage (exact every stage)
     character(len=name_len) :: update = update_adaptive
-    !> multipole: pair (BWE per pair, the default) | separate (the configuration without overlaps)
-    !> | relax (separate, and overlaps relax kinematically over overlap_time)
+    !> Overlap rule of the multipole model: pair (BWE per pair, the default), separate (the
+    !> configuration without overlaps) or relax (separate, and overlaps undone over overlap_time)
     character(len=name_len) :: overlap = overlap_pair
     !> relax: the time over which an overlap is undone
     real(wp) :: overlap_time = overlap_time_default
