@@ -197,11 +197,26 @@ def _check_with_knotflow_kf(tmp_path, r, core_end, closures=200):
     return study.confirmation(str(conf), "A1.40", 1)
 
 
-def test_constructed_slipknot_is_confirmed(tmp_path):
+class _Frames:
+    def __init__(self, r):
+        self.positions = np.stack([r, r])
+        self.knot_matrices = {1: np.zeros((len(r), len(r)))}
+
+
+def test_constructed_slipknot_is_confirmed_and_drawn(tmp_path):
     r, nt = _slipknot_chain()
     c = _check_with_knotflow_kf(tmp_path, r, nt - 1)
     assert c["core_kf"] > 0.85 and c["check_whole_kf"] < 0.03
     assert c["verdict"] == study.CONFIRMED
+    entry = {"frame": 1, "time": 10.0, "whole_kf": 0.0, "max_K": 0.9, "knot_core": [0, nt - 1],
+             "slipknot": True, **c}
+    rows = [{"case": "A1.40", "A": 1.4, "matrices": [entry], "_case": _Frames(r)}]
+    path = study.plot_slipknots(rows, str(tmp_path / "s.png"), str(tmp_path / "confirm"))
+    assert path and (tmp_path / "s.png").stat().st_size > 10000
+    assert study.slipknot_caption(rows).startswith("the 1 confirmed slipknot frame")
+    # the figure's matrix is the recomputed one (the screen's here is all zeros)
+    mat, core, source = study._shown_matrix(rows[0], entry, str(tmp_path / "confirm"))
+    assert source == "recomputed" and core == [0, nt - 1] and mat[0, nt - 1] == 0.9
 
 
 def test_trefoil_with_tails_is_a_knot_not_a_slipknot(tmp_path):

@@ -1185,7 +1185,7 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
     os.makedirs(out, exist_ok=True)
     md = ["# knotflow-study: generated results", "",
           f"Trefoil sweep: `{trefoil_dir}`; candy-cane sweep: `{candycane_dir}`.", ""]
-    result: dict = {}
+    result = {}
     comparison = {}
     files = {d: find_case_files(d) for d in (trefoil_dir, candycane_dir, ensemble_dir) if d}
     missing = [d for d, f in files.items() if not f]
