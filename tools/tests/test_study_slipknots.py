@@ -50,6 +50,7 @@ def test_binomial_tail_equals_the_exact_sum():
 def test_core_rule_at_its_boundary_with_1000_closures():
     x = _threshold_core(1000, ALPHA)
     assert x == 550                           # the number docs/analysis.md states
+    assert study.confirm_counts(1000)[0] == x
     assert study.kf_estimate(x / 1000, 1000)["lower"] > study.SLIP_K
     assert study.kf_estimate((x - 1) / 1000, 1000)["lower"] <= study.SLIP_K
     # 0.51 (the biased maximum seen at 100 closures per subchain) is far from enough
@@ -63,6 +64,7 @@ def test_whole_chain_rule_at_its_boundary_with_1000_closures():
     while 1 - _exact_tail(x + 2, 1000, Fraction(1, 10)) < a:
         x += 1
     assert x == 71
+    assert study.confirm_counts(1000)[1] == x
     assert study.kf_estimate(x / 1000, 1000)["upper"] < study.SLIP_WHOLE
     assert study.kf_estimate((x + 1) / 1000, 1000)["upper"] >= study.SLIP_WHOLE
 
@@ -72,6 +74,8 @@ def test_ten_closures_all_knotted_just_pass():
     assert study.kf_estimate(1.0, 10)["lower"] > 0.5
     assert study.kf_estimate(1.0, 9)["lower"] < 0.5
     assert study.kf_estimate(0.9, 10)["lower"] < 0.5
+    # and no whole chain is ever 'unknotted' at this level with 10 closures: 0.9^10 = 0.35
+    assert study.confirm_counts(10) == (10, -1)
 
 
 def test_estimate_standard_error_and_refusal():

@@ -250,6 +250,8 @@ def _max_and_core(mat):
 #: confirmation"): the core's k_f must exceed SLIP_K and the whole chain's stay below SLIP_WHOLE
 #: at this level (exact binomial, Clopper-Pearson bounds).
 CONFIRM_ALPHA = 1e-3
+#: Closures of the knot core and the whole chain in the check (scripts/reproduce.sh kf_confirm).
+CONFIRM_CLOSURES = 1000
 #: Verdicts of the slipknot search besides 'not confirmed: <why>' (`slip_verdict`).
 CONFIRMED, REJECTED, UNCHECKED = ("confirmed", "not a slipknot with more closures per subchain",
                                   "core not checked")
@@ -319,6 +321,18 @@ def kf_estimate(kf, closures, alpha=CONFIRM_ALPHA) -> dict:
     x = int(round(kf * n))
     return {"kf": x / n, "se": math.sqrt(x / n * (1 - x / n) / n), "knotted": x, "closures": n,
             "lower": lower_bound(x, n, alpha), "upper": upper_bound(x, n, alpha)}
+
+
+def confirm_counts(closures, alpha=CONFIRM_ALPHA) -> tuple:
+    """(fewest knotted closures of the core, most of the whole chain) that `confirmation_verdict`
+    accepts with `closures` closures: the smallest x with P_{SLIP_K}(X >= x) < alpha and the
+    largest with P_{SLIP_WHOLE}(X <= x) < alpha (-1 when none)."""
+    n = int(closures)
+    core = next((x for x in range(n + 1) if binomial_tail(x, n, SLIP_K) < alpha), n + 1)
+    whole = -1
+    while whole < n and 1.0 - binomial_tail(whole + 2, n, SLIP_WHOLE) < alpha:
+        whole += 1
+    return core, whole
 
 
 def confirmation_verdict(core, whole) -> tuple:
@@ -794,8 +808,9 @@ def slipknot_tables(rows) -> list:
            "(shortest subchain with K >= 0.5) and the whole chain are checked with 1000 "
            f"closures: confirmed when the core's k_f exceeds {SLIP_K} and the whole chain's is "
            f"below {SLIP_WHOLE}, each at the one-sided level {CONFIRM_ALPHA:g} (exact binomial "
-           "bounds; with 1000 closures: at least 550 knotted closures of the core, at most 71 "
-           "of the whole chain).", "",
+           "bounds, docs/analysis.md; with {1} closures: at least {0[0]} knotted closures of "
+           "the core, at most {0[1]} of the whole chain).".format(
+               confirm_counts(CONFIRM_CLOSURES), CONFIRM_CLOSURES), "",
            "| A | frames screened | frames with max K >= 0.5 | candidates (t) | "
            "largest K in the screen (t, whole k_f, core) | recomputed | still slipknots | "
            "confirmed |",
