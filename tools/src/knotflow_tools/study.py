@@ -23,6 +23,12 @@ knotflow-study run with RPY + excluded volume (its "trefoil" part, resp. its "ca
 `--select-frames CASE` prints the frames for the knot-matrix screen of CASE (every 50th frame,
 or with `--every-time T` the frames at the multiples of T time units, plus the last frame and
 the 5 frames with the most close pairs).
+
+Slipknots: the candidates of that screen are recomputed and checked by scripts/reproduce.sh
+(files in <out>/confirm: `confirm_path`); the rule that confirms one is `confirmation_verdict`
+(docs/analysis.md, "Slipknot confirmation"), and `candycane_slipknots.png` shows the confirmed
+frames or, without one, the frame that went furthest, labelled not confirmed. A sweep directory
+without case files is named in results.md ("no case files in DIR") and skipped.
 """
 
 from __future__ import annotations
