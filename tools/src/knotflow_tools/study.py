@@ -258,10 +258,10 @@ def _max_and_core(mat):
 CONFIRM_ALPHA = 1e-3
 #: Closures of the knot core and the whole chain in the check (scripts/reproduce.sh kf_confirm).
 CONFIRM_CLOSURES = 1000
-#: Verdicts of the slipknot search besides 'not confirmed: <why>' (`slip_verdict`).
+#: Verdicts of the slipknot search (`slip_verdict`); NOT_CONFIRMED is followed by the reason.
 CONFIRMED, REJECTED, UNCHECKED = ("confirmed", "not a slipknot with more closures per subchain",
                                   "core not checked")
-NOT_RECOMPUTED, NO_CANDIDATE = "not recomputed", "-"
+NOT_RECOMPUTED, NO_CANDIDATE, NOT_CONFIRMED = "not recomputed", "-", "not confirmed: "
 #: The parts of a candidate's confirmation in the confirm directory: `<case>_frame<k><suffix>`.
 #: "matrix": `knotflow-analyze FRAME.xyz --matrix --json` (100 closures per subchain); "core":
 #: `knotflow-analyze CORE.xyz --closures 1000 --json` of the knot core's beads; "whole": the same
@@ -395,7 +395,7 @@ def confirmation(confirm_dir, case_name, frame) -> dict:
     out["core_beads"] = core
     out.update({f"check_whole_{k}": v for k, v in w.items()})
     ok, why = confirmation_verdict(c, w)
-    out["confirmed_slipknot"], out["verdict"] = ok, CONFIRMED if ok else f"not confirmed: {why}"
+    out["confirmed_slipknot"], out["verdict"] = ok, CONFIRMED if ok else NOT_CONFIRMED + why
     return out
 
 
@@ -615,7 +615,11 @@ def plot_slipknots(rows, path, confirm_dir=None):
         ax.set_xlabel("end bead j", fontsize=8)
         ax.set_ylabel("start bead i", fontsize=8)
         verdict = slip_verdict(m)
-        head = "SLIPKNOT confirmed" if verdict == CONFIRMED else f"NOT CONFIRMED ({verdict})"
+        if verdict == NO_CANDIDATE:
+            verdict = (f"no candidate: max K = {m['max_K']:.2f}, whole k_f = "
+                       f"{m['whole_kf']:.2f}")
+        head = ("SLIPKNOT confirmed" if verdict == CONFIRMED else
+                f"NOT CONFIRMED ({verdict.removeprefix(NOT_CONFIRMED)})")
         ax.set_title(f"{r['case']} (A = {r['A']:g}), t = {m['time']:g}: knot matrix ({source})",
                      fontsize=8)
         fig.colorbar(im, ax=ax, shrink=0.8, label="K(i, j)")
