@@ -46,7 +46,9 @@
 # frames to t = 432 of the running A = 1 case; 2001 frames: 2.2 min a case, 7 cases 15 min); a
 # candy-cane knot matrix 3.8 s with 20 closures per subchain (the most entangled frame so far,
 # 44 close pairs) and 19 s with 100. About 206 matrices per candy-cane: 13 min a case, 40 min for
-# three. In all about 1.3 h of one core plus 19 s per slipknot candidate; knotflow-analyze
+# three. In all about 1.3 h of one core plus 19 s per slipknot candidate (and for one still a
+# slipknot at 100 per subchain, its core and whole chain with 1000 closures: 0.8 s wall for a
+# 65-bead subchain of the A = 1 run, load 2.3); knotflow-analyze
 # shares the closures of every frame and matrix among its ranks (RPY: docs/REPRODUCTION.md).
 #
 # Re-running continues: finished cases are skipped, killed ones resumed, and knotflow-analyze

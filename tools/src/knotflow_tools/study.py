@@ -605,7 +605,7 @@ def plot_slipknots(rows, path, confirm_dir=None):
     chosen = slipknot_figure_frames(rows)
     if not chosen:
         return None
-    fig = plt.figure(figsize=(9, 4.2 * len(chosen)), constrained_layout=True)
+    fig = plt.figure(figsize=(9.5, 4.8 * len(chosen)), constrained_layout=True)
     for k, (r, m) in enumerate(chosen):
         mat, core, source = _shown_matrix(r, m, confirm_dir)
         ax = fig.add_subplot(len(chosen), 2, 2 * k + 1)
@@ -624,7 +624,6 @@ def plot_slipknots(rows, path, confirm_dir=None):
                      fontsize=8)
         fig.colorbar(im, ax=ax, shrink=0.8, label="K(i, j)")
         ax3 = fig.add_subplot(len(chosen), 2, 2 * k + 2, projection="3d")
-        _draw_chain(ax3, r["_case"].positions[m["frame"]], core=core)
         lines = [head]
         if "core_kf" in m:
             lines.append(f"core {core[0]}-{core[1]}: k_f = {m['core_kf']:.3f} +- "
@@ -633,6 +632,12 @@ def plot_slipknots(rows, path, confirm_dir=None):
                          f"{m['check_whole_se']:.3f}")
         elif core is not None:
             lines.append(f"core {core[0]}-{core[1]} (red), whole k_f = {m['whole_kf']:.2f}")
+        elif m["knot_core"] is not None:     # recomputed without a core: the screen's
+            core = m["knot_core"]
+            ax.plot(core[1], core[0], "o", mfc="none", mec="tab:red", ms=9, mew=1.5)
+            lines.append(f"screen core {core[0]}-{core[1]} (red): K {m['max_K']:.2f}; "
+                         f"recomputed max K {m['recomputed_max_K']:.2f}")
+        _draw_chain(ax3, r["_case"].positions[m["frame"]], core=core)
         ax3.set_title("\n".join(lines), fontsize=8, color="k" if verdict == CONFIRMED
                       else "tab:red")
     fig.savefig(path, dpi=100)
