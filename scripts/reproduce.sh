@@ -21,9 +21,9 @@
 #   --results DIR      the sweeps' output directories are DIR/<sweep> (default results; a
 #                      shortened study of jobs/submit_study.sh has its own), the comparison goes
 #                      to DIR/reproduction[_multipole].
-#   --quick            a trial of the workflow (with a shortened study): 20 closures per frame
-#                      and 5 per subchain for knot matrices; the numbers are then too noisy to
-#                      compare with the study.
+#   --quick            a trial of the workflow (with a shortened study): 20 closures per frame,
+#                      5 per subchain for knot matrices and 100 for the slipknot check; the
+#                      numbers are then too noisy to compare with the study.
 #   --list-sweeps      print the sweeps of --hydro (and --no-extras), "ROLE SWEEP" a line, and exit.
 #
 # Analysis (knotflow-analyze fills /analysis of every case file; knotflow-study compares):
@@ -34,7 +34,9 @@
 #                      candy-canes: 20 per subchain at the frames of knotflow-study
 #                      --select-frames: every 50th   --every-time 10: every 10 time units
 #                      (and the last frame and the 5 most entangled frames, both)
-#   slipknots          candidates of the screen recomputed with 100 closures per subchain (both)
+#   slipknots          candidates of the screen recomputed with 100 closures per subchain; the
+#                      knot core of those still slipknots and the whole chain with 1000 closures
+#                      (seed 1973): confirmed by the rule of docs/analysis.md (both)
 #   comparison         results/reproduction[_multipole]/; multipole: the rotations as --ensemble,
 #                      and the RPY results beside it (--rpy-trefoil docs/reproduction_p24/results.json
 #                      --rpy-candycane docs/reproduction/results.json) when both files are there.
@@ -44,7 +46,9 @@
 # frames to t = 432 of the running A = 1 case; 2001 frames: 2.2 min a case, 7 cases 15 min); a
 # candy-cane knot matrix 3.8 s with 20 closures per subchain (the most entangled frame so far,
 # 44 close pairs) and 19 s with 100. About 206 matrices per candy-cane: 13 min a case, 40 min for
-# three. In all about 1.3 h of one core plus 19 s per slipknot candidate; knotflow-analyze
+# three. In all about 1.3 h of one core plus 19 s per slipknot candidate (and for one still a
+# slipknot at 100 per subchain, its core and whole chain with 1000 closures: 0.8 s wall for a
+# 65-bead subchain of the A = 1 run, load 2.3); knotflow-analyze
 # shares the closures of every frame and matrix among its ranks (RPY: docs/REPRODUCTION.md).
 #
 # Re-running continues: finished cases are skipped, killed ones resumed, and knotflow-analyze
@@ -86,14 +90,15 @@ if [ "$list" = 1 ]; then
 fi
 kf_study_arrays "$hydro" "$extras" || exit 1
 # Closures per frame (trefoils and candy-canes; the ensemble, with its frame stride), per
-# subchain of a knot matrix (trefoil last frame, candy-cane frames, slipknot confirmation), and
+# subchain of a knot matrix (trefoil last frame, candy-cane frames, slipknot candidates), of the
+# slipknot check (knot core and whole chain, with its own seed), and
 # the options of knotflow-study --select-frames (the candy-cane frames with knot matrices).
 case "$hydro" in
   rpy) suffix="" closures=200 ens_closures=100 ens_stride=2 select=() ;;
   multipole) suffix="_multipole" closures=1000 ens_closures=1000 ens_stride=1 select=(--every-time 10) ;;
 esac
-mat_trefoil=100 mat_cane=20 mat_confirm=100
-if [ "$quick" = 1 ]; then closures=20 ens_closures=20 mat_trefoil=5 mat_cane=5 mat_confirm=5; fi
+mat_trefoil=100 mat_cane=20 mat_confirm=100 kf_confirm=1000 seed_confirm=1973
+if [ "$quick" = 1 ]; then closures=20 ens_closures=20 mat_trefoil=5 mat_cane=5 mat_confirm=5 kf_confirm=100; fi
 np="$(kf_ranks)"
 
 cd "$KF_ROOT"
@@ -129,10 +134,15 @@ fi
 
 shopt -s nullglob
 declare -A dir_of=()   # role -> output directory, for the sweeps with case files
+declare -A empty_of=() # role -> output directory, for the sweeps there without case files
 for i in "${!KF_STUDY_SWEEPS[@]}"; do
   role="${KF_STUDY_ROLES[i]}" sweep="${KF_STUDY_SWEEPS[i]}"
   files=("$results/$sweep"/*.h5)
-  [ "${#files[@]}" -gt 0 ] || { kf_log "no case files in $results/$sweep: skipped"; continue; }
+  if [ "${#files[@]}" -eq 0 ]; then
+    kf_log "no case files in $results/$sweep: not analysed"
+    [ -d "$results/$sweep" ] && empty_of[$role]="$results/$sweep"
+    continue
+  fi
   dir_of[$role]="$results/$sweep"
   case "$role" in
     trefoil|trefoil_p24)
@@ -158,30 +168,54 @@ done
 
 out="$results/reproduction$suffix"
 # Slipknot candidates of the screen (20 closures per subchain: its largest K over ~10^4
-# subchains is biased upwards) are recomputed with 100 closures per subchain.
+# subchains is biased upwards) are recomputed with mat_confirm closures per subchain; where that
+# is still a slipknot, its knot core and the whole chain get kf_confirm closures, with a seed
+# other than the default so that the sample is independent of the one that selected them;
+# knotflow-study applies the rule (docs/analysis.md, "Slipknot confirmation"). Files in
+# $out/confirm, reused by a rerun: <case>_frame<k>.json (matrix), _core.json, _whole.json.
 mkdir -p "$out/confirm"
 for f in ${dir_of[candycane]:+"${dir_of[candycane]}"/*.h5}; do
   name="$(basename "$f" .h5)"
+  base="$out/confirm/$name"
   for k in $(knotflow-study --slip-candidates "$f"); do
-    json="$out/confirm/${name}_frame$k.json"
+    json="${base}_frame$k.json"
     [ -s "$json" ] && continue
     kf_log "slipknot candidate $name frame $k: knot matrix with $mat_confirm closures per subchain"
-    knotflow-study --write-frame "$f" "$k" "$out/confirm/${name}_frame$k.xyz"
-    "${mpi[@]}" "$analyze" "$out/confirm/${name}_frame$k.xyz" --matrix --matrix-closures "$mat_confirm" --json > "$json.tmp"
+    knotflow-study --write-frame "$f" "$k" "${base}_frame$k.xyz"
+    "${mpi[@]}" "$analyze" "${base}_frame$k.xyz" --matrix --matrix-closures "$mat_confirm" --json > "$json.tmp"
     mv "$json.tmp" "$json"
+  done
+  for k in $(knotflow-study --core-candidates "$f" --confirm-dir "$out/confirm"); do
+    [ -s "${base}_frame${k}_core.json" ] && [ -s "${base}_frame${k}_whole.json" ] && continue
+    kf_log "slipknot candidate $name frame $k: knot core and whole chain with $kf_confirm closures"
+    [ -s "${base}_frame$k.xyz" ] || knotflow-study --write-frame "$f" "$k" "${base}_frame$k.xyz"
+    knotflow-study --write-frame "$f" "$k" "${base}_frame${k}_core.xyz" --core-of "${base}_frame$k.json"
+    for part in core whole; do
+      xyz="${base}_frame${k}_core.xyz"
+      [ "$part" = whole ] && xyz="${base}_frame$k.xyz"
+      "${mpi[@]}" "$analyze" "$xyz" --closures "$kf_confirm" --seed "$seed_confirm" --json > "${base}_frame${k}_$part.json.tmp"
+      mv "${base}_frame${k}_$part.json.tmp" "${base}_frame${k}_$part.json"
+    done
   done
 done
 kf_log "knotflow-study -> $out"
-# (A sweep without case files is left out of the comparison.)
+# A sweep directory without case files goes to knotflow-study too: results.md says "no case
+# files in DIR" there (a sweep not started, without a directory, is left out).
+[ "${#dir_of[@]}" -gt 0 ] || kf_die "no case files in any sweep under $results: nothing to compare"
 args=(--closures "$closures")
 for role in trefoil candycane ensemble; do
-  [ -n "${dir_of[$role]:-}" ] && args+=("--$role" "${dir_of[$role]}")
+  dir="${dir_of[$role]:-${empty_of[$role]:-}}"
+  [ -n "$dir" ] && args+=("--$role" "$dir")
 done
-[ "${#args[@]}" -gt 2 ] || kf_die "no case files in any sweep under $results: nothing to compare"
 # The multipole study beside the RPY one (three columns: the study, multipole, RPY), when the
-# RPY comparisons are there: Table 2 with the same trefoil (k_f(0) = 0.98), and the candy-canes.
+# RPY comparisons are there: Table 2 with the same trefoil (k_f(0) = 0.98), and the candy-canes
+# (each only with its sweep: knotflow-study refuses a comparison without it).
 if [ "$hydro" = multipole ] && [ -f docs/reproduction_p24/results.json ] && [ -f docs/reproduction/results.json ]; then
-  args+=(--rpy-trefoil docs/reproduction_p24/results.json --rpy-candycane docs/reproduction/results.json)
+  for role in trefoil candycane; do
+    rpy=docs/reproduction_p24/results.json
+    [ "$role" = candycane ] && rpy=docs/reproduction/results.json
+    if [ -n "${dir_of[$role]:-}${empty_of[$role]:-}" ]; then args+=("--rpy-$role" "$rpy"); fi
+  done
 fi
 knotflow-study "${args[@]}" --out "$out"
 if [ -n "${dir_of[trefoil_p24]:-}" ]; then

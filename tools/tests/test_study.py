@@ -74,10 +74,11 @@ def test_confirmation_with_more_closures_replaces_the_screen(tmp_path):
     case = _FakeCase({4: screen}, np.arange(6) * 10.0)
     recomputed = np.where(np.isfinite(screen), 0.0, np.nan)
     recomputed[3, 25] = 0.35               # the same subchain with more closures
-    doc = {"kf": 0.0, "knot_core": None,
+    doc = {"kf": 0.0, "closures": 1000, "knot_core": None,
            "matrix": [[None if np.isnan(v) else v for v in row] for row in recomputed]}
     with open(study.confirm_path(str(tmp_path), "A1.40", 4), "w") as fh:
         json.dump(doc, fh)
     (m,) = study.slipknot_scan(case, np.array([0.0, 50.0]), np.zeros(2), str(tmp_path))
     assert m["slipknot"] and m["max_K"] == 0.6
-    assert m["confirmed_max_K"] == 0.35 and not m["confirmed_slipknot"]
+    assert m["recomputed_max_K"] == 0.35 and not m["recomputed_slipknot"]
+    assert study.slip_verdict(m) == study.REJECTED and "confirmed_slipknot" not in m

@@ -285,9 +285,27 @@ def _study(argv: Argv) -> int:
                    "the case's time axis instead of every 50th frame (issue 11: T = 10)")
     p.add_argument("--slip-candidates", metavar="CASE",
                    help="print the frames of CASE whose stored knot matrix looks like a slipknot")
+    p.add_argument("--core-candidates", metavar="CASE",
+                   help="print the candidates of CASE whose knot matrix recomputed in "
+                   "--confirm-dir (CASE_frameK.json) is still a slipknot: their knot core goes "
+                   "to the check with 1000 closures")
+    p.add_argument("--confirm-dir", metavar="DIR",
+                   help="with --core-candidates: the directory of the recomputed matrices "
+                   "(<out>/confirm)")
     p.add_argument("--write-frame", nargs=3, metavar=("CASE", "FRAME", "XYZ"),
                    help="write frame FRAME of CASE as a coordinate file and exit")
+    p.add_argument("--core-of", metavar="JSON",
+                   help="with --write-frame: only the beads of the knot core of JSON (the "
+                   "knotflow-analyze --matrix --json output of that frame)")
     args = p.parse_args(argv)
+    if bool(args.core_candidates) != bool(args.confirm_dir):
+        p.error("--core-candidates CASE and --confirm-dir DIR go together")
+    if args.core_of and not args.write_frame:
+        p.error("--core-of JSON needs --write-frame CASE FRAME XYZ")
+    if args.core_candidates:
+        print(" ".join(str(k) for k in study.core_candidates(args.core_candidates,
+                                                             args.confirm_dir)))
+        return 0
     if args.every_time is not None and not args.select_frames:
         p.error("--every-time T needs --select-frames CASE")
     if args.every_time is not None and not (math.isfinite(args.every_time) and args.every_time > 0):
@@ -297,7 +315,7 @@ def _study(argv: Argv) -> int:
         return 0
     if args.write_frame:
         path, frame, xyz = args.write_frame
-        study.write_frame(path, int(frame), xyz)
+        study.write_frame(path, int(frame), xyz, args.core_of)
         return 0
     if args.select_frames:
         print(",".join(str(k) for k in study.entangled_frames(args.select_frames,

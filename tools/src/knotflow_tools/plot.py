@@ -24,6 +24,7 @@ def mode_name(mode: int | None) -> str:
     return "?" if mode is None else MODE_NAMES.get(mode, "?")
 _COL_FIRST = "tab:blue"
 _COL_SECOND = "tab:orange"
+_COL_CORE = "tab:red"
 
 
 def _title(case: Case) -> str:
@@ -175,11 +176,16 @@ def plot_knot_matrix(mat: np.ndarray, path, title: str = "") -> str:
     return str(path)
 
 
-def _draw_chain(ax, r):
+def _draw_chain(ax, r, core=None):
+    """The chain in 3-D (first half blue, second half orange, first bead a black square); with
+    core = (i, j) the beads i..j drawn over it in thick red (a knot core)."""
     n = len(r)
     h = n // 2
     ax.plot(r[:h + 1, 0], r[:h + 1, 1], r[:h + 1, 2], "-o", ms=2.5, lw=1.5, color=_COL_FIRST)
     ax.plot(r[h:, 0], r[h:, 1], r[h:, 2], "-o", ms=2.5, lw=1.5, color=_COL_SECOND)
+    if core is not None:
+        c = r[core[0]:core[1] + 1]
+        ax.plot(c[:, 0], c[:, 1], c[:, 2], "-", lw=3.5, color=_COL_CORE)
     ax.scatter(*r[0], color="k", s=25, marker="s")
     ctr = 0.5 * (r.min(axis=0) + r.max(axis=0))
     half = max(np.ptp(r, axis=0).max() / 2, 1.0)
