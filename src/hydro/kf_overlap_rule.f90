@@ -112,27 +112,20 @@ contains
           ' out of range (0 < eps_lub < 0.5)')
         return
       end if
-      if (trim(name) == overlap_separate) then
-        block
-          type(overlap_separate_t), allocatable :: s
-          allocate (s)
-          s%target = 1.0_wp + eps_lub
-          call move_alloc(s, rule)
-        end block
-      else
+      if (trim(name) == overlap_relax) then
         if (.not. (overlap_time > 0.0_wp)) then
           call fatal_error(error, 'overlap rule relax: overlap_time = '//to_str(overlap_time, '(es12.4)')// &
             ' (must be > 0)')
           return
         end if
-        block
-          type(overlap_relax_t), allocatable :: s
-          allocate (s)
-          s%target = 1.0_wp + eps_lub
-          s%time = overlap_time
-          call move_alloc(s, rule)
-        end block
+        allocate (rule, source=overlap_relax_t(time=overlap_time))
+      else
+        allocate (overlap_separate_t :: rule)
       end if
+      select type (rule)
+      class is (overlap_separate_t)
+        rule%target = 1.0_wp + eps_lub
+      end select
     case default
       call fatal_error(error, 'overlap rule "'//trim(name)//'" unknown (one of '// &
         name_list(overlap_names)//')')
