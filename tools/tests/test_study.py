@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from knotflow_tools import study
+from knotflow_tools import study, study_reference, study_rows, study_slipknots
 
 
 class _FakeCase:
@@ -15,14 +15,14 @@ class _FakeCase:
 
 def _row(a, o, utk):
     return {"case": f"A{a}_or{o}", "A": a, "orientation": o, "unknot_then_knot": utk,
-            "study_transition": study._in_study(a, o), "kf0": 0.9, "final_kf": 1.0,
+            "study_transition": study_reference.in_study(a, o), "kf0": 0.9, "final_kf": 1.0,
             "final_state": "knotted", "mode": "I", "events": []}
 
 
 def test_study_table_marks_exactly_the_four_cases():
-    assert study._in_study(1.4, "b") and study._in_study(2.1, "c")
-    assert study._in_study(2.2, "c") and study._in_study(2.3, "c")
-    assert not study._in_study(1.4, "c") and not study._in_study(2.2, "b")
+    assert study_reference.in_study(1.4, "b") and study_reference.in_study(2.1, "c")
+    assert study_reference.in_study(2.2, "c") and study_reference.in_study(2.3, "c")
+    assert not study_reference.in_study(1.4, "c") and not study_reference.in_study(2.2, "b")
 
 
 def test_agreement_counts_matches_and_bolds_differences():
@@ -44,13 +44,13 @@ def test_slipknot_scan_finds_core_and_flags_slipknot():
         if i <= 10 and j >= 40 and not (i == 0 and j == n - 1):
             mat[i, j] = 1.0
     case = _FakeCase({5: mat, 7: np.where(np.isfinite(mat), 0.0, np.nan)}, np.arange(10) * 2.0)
-    scan = study.slipknot_scan(case, np.array([0.0, 18.0]), np.array([0.0, 0.0]))
+    scan = study_slipknots.slipknot_scan(case, np.array([0.0, 18.0]), np.array([0.0, 0.0]))
     by_frame = {m["frame"]: m for m in scan}
     assert by_frame[5]["slipknot"] and by_frame[5]["knot_core"] == [10, 40]
     assert by_frame[5]["time"] == 10.0 and by_frame[5]["max_K"] == 1.0
     assert not by_frame[7]["slipknot"] and by_frame[7]["knot_core"] is None
     # the same matrix with a knotted whole chain is a knot, not a slipknot
-    scan = study.slipknot_scan(case, np.array([0.0, 18.0]), np.array([1.0, 1.0]))
+    scan = study_slipknots.slipknot_scan(case, np.array([0.0, 18.0]), np.array([1.0, 1.0]))
     assert not any(m["slipknot"] for m in scan)
 
 
@@ -58,11 +58,11 @@ def test_history_counts_the_first_untying_of_a_trefoil():
     t = np.arange(6.0)
     kf = np.array([0.85, 0.5, 0.05, 0.5, 0.95, 0.97])
     # starting knotted: untied at t = 2, knotted again at t = 4
-    assert study.history(t, kf, knotted_at_start=True) == [("unknot", 2.0), ("knot", 4.0)]
+    assert study_rows.history(t, kf, knotted_at_start=True) == [("unknot", 2.0), ("knot", 4.0)]
     # the same series from an unknotted start: only the knotting
-    assert study.history(t, kf, knotted_at_start=False) == [("knot", 4.0)]
+    assert study_rows.history(t, kf, knotted_at_start=False) == [("knot", 4.0)]
     # inside the band throughout: nothing happens
-    assert study.history(t[:2], kf[:2], knotted_at_start=True) == []
+    assert study_rows.history(t[:2], kf[:2], knotted_at_start=True) == []
 
 
 def test_confirmation_with_more_closures_replaces_the_screen(tmp_path):
@@ -76,9 +76,9 @@ def test_confirmation_with_more_closures_replaces_the_screen(tmp_path):
     recomputed[3, 25] = 0.35               # the same subchain with more closures
     doc = {"kf": 0.0, "closures": 1000, "knot_core": None,
            "matrix": [[None if np.isnan(v) else v for v in row] for row in recomputed]}
-    with open(study.confirm_path(str(tmp_path), "A1.40", 4), "w") as fh:
+    with open(study_slipknots.confirm_path(str(tmp_path), "A1.40", 4), "w") as fh:
         json.dump(doc, fh)
-    (m,) = study.slipknot_scan(case, np.array([0.0, 50.0]), np.zeros(2), str(tmp_path))
+    (m,) = study_slipknots.slipknot_scan(case, np.array([0.0, 50.0]), np.zeros(2), str(tmp_path))
     assert m["slipknot"] and m["max_K"] == 0.6
     assert m["recomputed_max_K"] == 0.35 and not m["recomputed_slipknot"]
-    assert study.slip_verdict(m) == study.REJECTED and "confirmed_slipknot" not in m
+    assert study_slipknots.slip_verdict(m) == study_slipknots.REJECTED and "confirmed_slipknot" not in m

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from analysis_fixture import write_knots
 
-from knotflow_tools import io, study
+from knotflow_tools import io, study, study_compare, study_reference, study_rows
 from knotflow_tools.cli import EXIT_USAGE, main_study
 
 from conftest import write_case
@@ -28,32 +28,32 @@ def _straight(nframes, n=12):
 def test_reknottings_of_a_constructed_kf_series():
     t = np.arange(12.0)
     kf = np.array([0.95, 0.5, 0.05, 0.5, 0.95, 0.92, 0.05, 0.08, 0.93, 0.5, 0.95, 0.05])
-    events = study.history(t, kf, knotted_at_start=True)
+    events = study_rows.history(t, kf, knotted_at_start=True)
     # by hand: untied at 2, knotted at 4, untied at 6, knotted at 8, (0.95 at 10: still
     # knotted), untied at 11 -> two knot events after an untying
     assert events == [("unknot", 2.0), ("knot", 4.0), ("unknot", 6.0), ("knot", 8.0),
                       ("unknot", 11.0)]
-    assert study.reknottings(events) == 2
+    assert study_rows.reknottings(events) == 2
     # from an unknotted start the first knotting follows no untying
-    events = study.history(t[:4], np.array([0.05, 0.95, 0.05, 0.95]), knotted_at_start=False)
+    events = study_rows.history(t[:4], np.array([0.05, 0.95, 0.05, 0.95]), knotted_at_start=False)
     assert events == [("knot", 1.0), ("unknot", 2.0), ("knot", 3.0)]
-    assert study.reknottings(events) == 1
-    assert study.reknottings([]) == 0
+    assert study_rows.reknottings(events) == 1
+    assert study_rows.reknottings([]) == 0
 
 
 def _tref(a, o, events, status="finished", final="unknotted", mode="-"):
     return {"case": f"A{a:.2f}_or{o}", "A": a, "orientation": o, "status": status,
             "model": "multipole", "t_end": 1000.0, "t_reached": 1000.0 if status == "finished"
             else 400.0, "events": events, "final_state": final, "mode": mode,
-            "unknot_then_knot": study.reknottings(events) > 0, "kf0": 0.98, "final_kf": 0.0,
-            "study_transition": study._in_study(a, o)}
+            "unknot_then_knot": study_rows.reknottings(events) > 0, "kf0": 0.98, "final_kf": 0.0,
+            "study_transition": study_reference.in_study(a, o)}
 
 
 def test_reknot_totals_and_the_line_with_the_study():
     rows = [_tref(1.0, "a", [["unknot", 1], ["knot", 2], ["unknot", 3], ["knot", 4]]),
             _tref(1.0, "b", [["unknot", 1]]),
             _tref(1.0, "c", [["unknot", 1], ["knot", 2]], status="running")]
-    tot = study.reknot_totals(rows)
+    tot = study_rows.reknot_totals(rows)
     assert tot == {"events": 3, "simulations": 2, "cases": 3, "finished": 2}
     lines, agree, total = study.trefoil_tables(rows)
     text = "\n".join(lines)
@@ -77,7 +77,7 @@ def test_three_column_trefoil_cells_and_counts():
            _tref(0.8, "d", [], final="knotted")]
     for r in rpy:
         del r["t_reached"], r["model"]                  # as in an older results.json
-    lines, doc = study.trefoil_comparison(ours, rpy)
+    lines, doc = study_compare.trefoil_comparison(ours, rpy)
     text = "\n".join(lines)
     row = {ln.split(" | ")[0]: ln for ln in lines if ln.startswith("| ")}
     assert row["| 1.4"] == "| 1.4 |   | U->K / **-** / U->K |   |   |"
@@ -117,7 +117,7 @@ def test_three_column_candycane_ratios_modes_and_slipknots():
                          _cane(3.0, 2.0, 2.0, "-")],
            "ensemble": [_cane(1.0, 6.0, 5.0, "-"), _cane(1.0, 4.0, 3.0, "I"),
                         _cane(3.0, 2.0, 2.0, "II"), _cane(3.0, 4.0, 4.0, "-")]}
-    lines, doc = study.candycane_comparison(ours, [], rpy)
+    lines, doc = study_compare.candycane_comparison(ours, [], rpy)
     text = "\n".join(lines)
     r = doc["close_pair_ratio"]
     assert r["all_t"]["ours"] == pytest.approx(4.0) and r["all_t"]["rpy"] == pytest.approx(1.5)
@@ -140,7 +140,7 @@ def test_three_column_candycane_ratios_modes_and_slipknots():
         in text
     # with rotations of this run: A = 1 means (9 + 7) / 2 = 8, A = 3 one case of 2 -> 4
     ensemble = [_cane(1.0, 9.0, 1.0, "I"), _cane(1.0, 7.0, 1.0, "-"), _cane(3.0, 2.0, 1.0, "II")]
-    lines, doc = study.candycane_comparison(ours, ensemble, rpy)
+    lines, doc = study_compare.candycane_comparison(ours, ensemble, rpy)
     assert doc["close_pair_ratio"]["rotations_all_t"]["ours"] == pytest.approx(4.0)
     assert "| 1: rotations: case mode I / II / neither | - | 1 / 0 / 1 | 1 / 0 / 1 |" in lines
 
@@ -201,7 +201,7 @@ def test_overlap_statistics_of_a_running_case_come_from_its_checkpoint(tmp_path)
         g["counters"] = np.array([1, 7, 4, 3, 3], dtype=np.int64)
         g["values"] = np.array([12.5, 10.0, 6.0, 0.81, 0.05])
     case = io.read_case(running)
-    d = study.overlap_stats(case)
+    d = study_rows.overlap_stats(case)
     assert d["source"] == "checkpoint"
     assert d["overlap_episodes"] == 7 and d["strand_passages"] == 1
     assert d["overlap_mean_duration"] == pytest.approx(10.0 / 4)
@@ -209,11 +209,11 @@ def test_overlap_statistics_of_a_running_case_come_from_its_checkpoint(tmp_path)
     assert d["min_distance"] == pytest.approx(0.9) and d["first_passage_time"] == 12.5
     finished = write_case(tmp_path / "fin.h5", _straight(3))
     _diag_attrs(finished, 5)
-    d = study.overlap_stats(io.read_case(finished))
+    d = study_rows.overlap_stats(io.read_case(finished))
     assert d["source"] == "attributes" and d["overlap_episodes"] == 5
-    assert study.overlap_stats(io.read_case(write_case(tmp_path / "none.h5", _straight(3)))) is None
+    assert study_rows.overlap_stats(io.read_case(write_case(tmp_path / "none.h5", _straight(3)))) is None
     rows = [{"case": "run", "status": "running", "t_reached": 2.0, "t_end": 10.0,
-             "overlap": study.overlap_stats(case)},
+             "overlap": study_rows.overlap_stats(case)},
             {"case": "old", "status": "finished", "overlap": None}]
     text = "\n".join(study.overlap_table(rows))
     assert "| run | running, t = 2 of 10 | 7 | 2.50 | 6.00 | 3 | 0.9000 | 1 |" in text
@@ -248,17 +248,17 @@ def test_run_records_are_read_and_summed(tmp_path):
     assert case.runs[2]["host"] == "node1" and case.runs[1]["ranks"] == 2
     assert case.runs[1]["steps"] == 1000 and math.isnan(case.runs[1]["load_mean"])
     assert io.read_case(write_case(tmp_path / "c.h5", _straight(3))).runs == []
-    sa = study.runs_summary(case.runs)
+    sa = study_rows.runs_summary(case.runs)
     # by hand: 3600 + 1800 + 5400 = 10800 s; load (2 x 3600 + 1 x 5400) / 9000 = 1.4
     assert sa["commits"] == ["abc", "def"] and sa["wall_seconds"] == 10800.0
     assert sa["mean_load"] == pytest.approx(1.4) and sa["segments"] == 3
     assert (sa["t_start"], sa["t_end"]) == (0.0, 300.0) and sa["wall_unknown"] == 0
     # a segment without a wall time (NaN): left out of the sum and of the load weights
-    d = study.runs_summary([dict(case.runs[0], wall_seconds=math.nan), case.runs[2]])
+    d = study_rows.runs_summary([dict(case.runs[0], wall_seconds=math.nan), case.runs[2]])
     assert d["wall_seconds"] == 5400.0 and d["wall_unknown"] == 1 and d["mean_load"] == 1.0
     assert "| x | finished | abc, def | 1.50 h (+ 1 segment(s) not recorded) | 1.00 | 2 |" in \
         study.runs_table([{"case": "x", "status": "finished", "runs": d}])
-    sb = study.runs_summary(io.read_case(b).runs)
+    sb = study_rows.runs_summary(io.read_case(b).runs)
     rows = [{"case": "a", "status": "finished", "runs": sa},
             {"case": "b", "status": "finished", "runs": sb},
             {"case": "c", "status": "finished", "runs": None}]
@@ -312,7 +312,7 @@ def test_candycane_csv_has_every_frame_and_kf_where_computed(tmp_path):
     path = write_case(tmp_path / "A1.00.h5", _straight(6), time=np.arange(6) * 2.0)
     write_knots(path, [0, 2, 4, 5], [0.0, 4.0, 8.0, 10.0], [0.0, 0.25, 0.5, 0.0],
                 np.zeros((4, 10)), ["0_1"] * 4, closures=10, seed=1)
-    rows = study.candycane_rows([path], closures=5)
+    rows = study_rows.candycane_rows([path], closures=5)
     out = study.write_candycane_csv(rows, tmp_path / "candycane_shape.csv")
     lines = out.read_text().splitlines()
     assert lines[0] == "case,t,R_g,a,b,c,theta,phi,close_pairs,k_f"

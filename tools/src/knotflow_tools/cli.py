@@ -258,7 +258,7 @@ def main_study(argv: Argv = None) -> int:
 
 
 def _study(argv: Argv) -> int:
-    from . import study
+    from . import study, study_compare, study_slipknots
     p = make_parser("knotflow-study", (study.__doc__ or "").splitlines()[0])
     p.add_argument("--trefoil", help="output directory of inputs/trefoil_table2*.nml")
     p.add_argument("--candycane", help="output directory of inputs/candycane*.nml")
@@ -303,15 +303,15 @@ def _study(argv: Argv) -> int:
     if args.core_of and not args.write_frame:
         p.error("--core-of JSON needs --write-frame CASE FRAME XYZ")
     if args.core_candidates:
-        print(" ".join(str(k) for k in study.core_candidates(args.core_candidates,
-                                                             args.confirm_dir)))
+        frames = study_slipknots.core_candidates(args.core_candidates, args.confirm_dir)
+        print(" ".join(str(k) for k in frames))
         return 0
     if args.every_time is not None and not args.select_frames:
         p.error("--every-time T needs --select-frames CASE")
     if args.every_time is not None and not (math.isfinite(args.every_time) and args.every_time > 0):
         p.error(f"--every-time {args.every_time:g} is not allowed (a positive number)")
     if args.slip_candidates:
-        print(" ".join(str(k) for k in study.slip_candidates(args.slip_candidates)))
+        print(" ".join(str(k) for k in study_slipknots.slip_candidates(args.slip_candidates)))
         return 0
     if args.write_frame:
         path, frame, xyz = args.write_frame
@@ -331,8 +331,8 @@ def _study(argv: Argv) -> int:
     if args.rpy_candycane and not args.candycane:
         p.error("--rpy-candycane needs --candycane DIR (the run it is compared with)")
     # the earlier results are read before anything is written
-    rpy_trefoil = study.load_rpy(args.rpy_trefoil, ("trefoil",)) if args.rpy_trefoil else None
-    rpy_candycane = (study.load_rpy(args.rpy_candycane, ("candycane", "ensemble"))
+    rpy_trefoil = study_compare.load_rpy(args.rpy_trefoil, ("trefoil",)) if args.rpy_trefoil else None
+    rpy_candycane = (study_compare.load_rpy(args.rpy_candycane, ("candycane", "ensemble"))
                      if args.rpy_candycane else None)
     res = study.write_study(args.trefoil, args.candycane, args.out, args.closures, args.ensemble,
                             rpy_trefoil, rpy_candycane)
