@@ -15,19 +15,25 @@
 !>   refresh and reused at later stages, while the lubrication corrections are exact at every
 !>   call. The current configuration is rotated onto the reference by the best rigid rotation
 !>   Q (kf_rigid_fit; Stokes flow is covariant, so rigid tumbling costs no accuracy), forces and
-!>   strain with it, the velocities back. After two refreshes the part is extrapolated linearly
-!>   in time: zeta_L(ref) + w zeta_hist, w = (t - t_ref)/(t_ref - t_prev). The corrected system
-!>   is solved by conjugate gradients preconditioned with the Cholesky factor at the refresh
-!>   (re-factorised when CG needs more than `cg_refactor_iterations`), to a velocity error below
-!>   cg_fraction of the budget.
+!>   strain with it, the velocities back. With earlier refreshes in the history the part is
+!>   extrapolated in time by the polynomial through the last k + 1 refreshes (order k = 1:
+!>   linear through the last two, k = 2: quadratic through the last three):
+!>   zeta_L(ref) + w1 dzeta_1 + w2 dzeta_2, with dzeta_1 = zeta_ref - zeta_prev and dzeta_2 =
+!>   zeta_prev - zeta_prev2 seen from the reference frame and the Newton weights of
+!>   `extrapolation_weights`. The corrected system is solved by conjugate gradients
+!>   preconditioned with the Cholesky factor at the refresh (re-factorised when CG needs more
+!>   than `cg_refactor_iterations`), to a velocity error below cg_fraction of the budget.
 !>   Refresh rule: the budget on the velocity error of a stage is
 !>   budget_fraction * tolerance / h (h the stepper's trial step): it moves a bead by less than
-!>   budget_fraction of the tolerance in one step. The error is predicted as
-!>   coef1 |t - t_ref| (one refresh so far) or coef2 |t - t_ref| |t - t_prev| (extrapolated);
-!>   every refresh after the first also computes the reused velocities at the new
-!>   configuration and compares them with the exact ones, which recalibrates the coefficient
-!>   (max over beads). A call refreshes when the prediction exceeds the budget, |w| > 3, the
-!>   deformation after the rigid fit exceeds max_deformation, or CG does not converge.
+!>   budget_fraction of the tolerance in one step. The error of order k is predicted as
+!>   coef_k |t - t_ref| prod_j<=k |t - t_hist(j)| (the error of polynomial interpolation);
+!>   every refresh after the first also computes the reused velocities of the two candidate
+!>   orders (the highest the history allows and the one below) at the new configuration and
+!>   compares them with the exact ones, which recalibrates their coefficients (max over
+!>   beads, never below half the old value). A call uses the candidate with the smaller
+!>   prediction, and refreshes when that exceeds the budget, when a candidate is not calibrated
+!>   yet, when |t - t_ref| > 3 (t_ref - t_prev), when the deformation after the rigid fit
+!>   exceeds max_deformation, or when CG does not converge.
 !>   Without a step size or a time (calls outside a stepper) every call is exact.
 !>
 !> The stresslet (`stresslet`, MULTIPOLE.md 9, 11, 13.3) is exact at the configuration given,
@@ -58,6 +64,8 @@ module kf_hydro_multipole
   implicit none
   private
 
+  public :: extrapolation_weights
+
   !> Names of the update modes (`&hydro update`), in the order of their codes.
   !> Velocity error budget of a reused many-body part, as a fraction of tolerance / step size.
   real(wp), parameter :: budget_fraction = 0.25_wp
@@ -65,7 +73,7 @@ module kf_hydro_multipole
   real(wp), parameter :: cg_fraction = 0.05_wp
   !> Largest deformation D (units of d) over which a many-body part is reused.
   real(wp), parameter :: max_deformation = 0.5_wp
-  !> Largest extrapolation weight |t - t_ref| / (t_ref - t_prev).
+  !> Largest extrapolation ratio |t - t_ref| / (t_ref - t_prev).
   real(wp), parameter :: max_extrapolation = 3.0_wp
   integer, parameter :: cg_max_iterations = 60
   integer, parameter :: cg_refactor_iterations = 12
@@ -91,17 +99,20 @@ module kf_hydro_multipole
     logical, private :: has_ref = .false.
     real(wp), private :: c_ref(3) = 0.0_wp
     real(wp), private :: h = 0.0_wp               !< trial step size of the stepper (0: none)
-    logical, private :: has_prev = .false.         !< a history (two refreshes) exists
-    real(wp), private :: t_ref = 0.0_wp, t_prev = 0.0_wp !< times of the last two refreshes
-    real(wp), private :: w = 0.0_wp                !< extrapolation weight of the current solve
-    real(wp), private :: coef1 = -1.0_wp           !< error / |t - t_ref| (< 0: unknown)
-    real(wp), private :: coef2 = -1.0_wp           !< error / |t - t_ref||t - t_prev| (< 0: unknown)
+    integer, private :: n_hist = 0                 !< earlier refreshes in the history (0..2)
+    real(wp), private :: t_ref = 0.0_wp            !< time of the last refresh
+    real(wp), private :: t_hist(2) = 0.0_wp        !< times of the two before it (t_prev, t_prev2)
+    real(wp), private :: w(2) = 0.0_wp             !< extrapolation weights of the current solve
+    !> error / growth (< 0: unknown) with 0, 1 and 2 earlier refreshes in the history
+    real(wp), private :: coef(0:2) = -1.0_wp
     real(wp), allocatable, private :: r_ref(:, :) !< reference configuration
     real(wp), allocatable, private :: zl(:, :)    !< zeta_L(ref), full storage
     real(wp), allocatable, private :: xl(:, :)    !< x_L(ref), 6N x 5
     real(wp), allocatable, private :: zh(:, :), xh(:, :) !< their change since the previous refresh
+    real(wp), allocatable, private :: zh2(:, :), xh2(:, :) !< the change before that (same frame)
     real(wp), allocatable, private :: pf(:, :)    !< Cholesky factor of the preconditioner
-    real(wp), allocatable, private :: fp(:, :), us(:, :) !< rotated forces; velocities
+    real(wp), allocatable, private :: fp(:, :)    !< rotated forces
+    real(wp), allocatable, private :: us(:, :, :) !< reused velocities of the candidate orders
     real(wp), allocatable, private :: b(:), x(:), rs(:), z(:), p(:), q(:), xs(:) !< 6N work
     type(hydro_stats_t), private :: stats
   contains
@@ -169,9 +180,8 @@ contains
     this%tolerance = tol
     this%n = 0
     this%has_ref = .false.
-    this%has_prev = .false.
-    this%coef1 = -1.0_wp
-    this%coef2 = -1.0_wp
+    this%n_hist = 0
+    this%coef = -1.0_wp
     this%stats = hydro_stats_t()
     call this%sys%init(order, 1.0_wp + eps_lub, error)
   end subroutine multipole_init
@@ -183,20 +193,21 @@ contains
     if (allocated(this%zt)) then
       if (size(this%zt, 1) == 6*nb) return
       deallocate (this%mu, this%dist, this%zt, this%x6, this%v3, this%w3)
-      if (allocated(this%zl)) deallocate (this%zl, this%xl, this%zh, this%xh, this%pf, this%r_ref, this%fp, this%us, &
+      if (allocated(this%zl)) deallocate (this%zl, this%xl, this%zh, this%xh, this%zh2, this%xh2, this%pf, &
+                                          this%r_ref, this%fp, this%us, &
                                           this%b, this%x, this%rs, this%z, this%p, this%q, this%xs)
     end if
     allocate (this%mu(3*nb, 3*nb), this%dist(3*nb, 5), this%zt(6*nb, 6*nb), this%x6(6*nb, 5), &
               this%v3(3*nb), this%w3(3*nb))
     if (this%adaptive) then
       allocate (this%zl(6*nb, 6*nb), this%xl(6*nb, 5), this%zh(6*nb, 6*nb), this%xh(6*nb, 5), &
-                this%pf(6*nb, 6*nb), this%r_ref(3, nb), &
-                this%fp(3, nb), this%us(3, nb))
+                this%zh2(6*nb, 6*nb), this%xh2(6*nb, 5), this%pf(6*nb, 6*nb), this%r_ref(3, nb), &
+                this%fp(3, nb), this%us(3, nb, 2))
       allocate (this%b(6*nb), this%x(6*nb), this%rs(6*nb), this%z(6*nb), this%p(6*nb), this%q(6*nb), &
                 this%xs(6*nb))
     end if
     this%has_ref = .false.
-    this%has_prev = .false.
+    this%n_hist = 0
   end subroutine ensure_work
 
   !> Assemble and factorise for bead centres r(3, N); cache mu and the strain disturbances
@@ -381,8 +392,9 @@ contains
     type(error_t), allocatable, intent(out) :: error
     real(wp), intent(in), optional :: t
     type(pair_geometry_t), intent(in), optional :: pairs
-    real(wp) :: qrot(3, 3), deform, budget, err, predicted, w, g
-    logical :: converged, had_prev
+    real(wp) :: qrot(3, 3), deform, budget, err, predicted, w(2), g, ratio, gk(2)
+    logical :: converged, ok(2)
+    integer :: k, lo, hi, order
 
     call ensure_work(this, size(r, 2))
     budget = 0.0_wp
@@ -399,14 +411,28 @@ contains
     call best_rotation(this%r_ref, r, qrot, error)
     if (allocated(error)) return
     call measure_deformation(this, r, qrot, deform)
-    w = 0.0_wp
-    if (this%has_prev) w = (t - this%t_ref)/(this%t_ref - this%t_prev)
-    g = growth(this, t, this%has_prev)
-    predicted = -1.0_wp
-    if (this%has_prev .and. this%coef2 >= 0.0_wp) predicted = this%coef2*g
-    if (.not. this%has_prev .and. this%coef1 >= 0.0_wp) predicted = this%coef1*g
-    if (predicted >= 0.0_wp .and. predicted <= budget .and. deform <= max_deformation .and. &
-        abs(w) <= max_extrapolation) then
+    ! The candidate orders: the highest the history allows (n_hist) and the one below it; the
+    ! one with the smaller predicted error is used (an order not calibrated yet forces a
+    ! refresh, which calibrates it).
+    lo = max(this%n_hist - 1, 0)
+    ratio = 0.0_wp
+    if (this%n_hist > 0) ratio = abs(t - this%t_ref)/(this%t_ref - this%t_hist(1))
+    predicted = huge(1.0_wp)
+    order = -1
+    do k = lo, this%n_hist
+      g = growth(this, t, k)
+      if (this%coef(k) < 0.0_wp) then
+        order = -1
+        exit
+      end if
+      if (this%coef(k)*g < predicted) then
+        predicted = this%coef(k)*g
+        order = k
+      end if
+    end do
+    if (order >= 0 .and. predicted <= budget .and. deform <= max_deformation .and. &
+        ratio <= max_extrapolation) then
+      w = extrapolation_weights(t, this%t_ref, this%t_hist, order)
       call reused_solve(this, r, f, ez, qrot, w, budget, u, converged, pairs)
       if (converged) then
         this%stats%reused = this%stats%reused + 1
@@ -415,19 +441,23 @@ contains
       call refresh(this, r, f, ez, t, u, error, pairs)
       return
     end if
-    ! Refresh; measure first the error of the reused part here, to calibrate the rule.
-    call reused_solve(this, r, f, ez, qrot, w, budget, this%us, converged, pairs)
-    had_prev = this%has_prev
+    ! Refresh; measure first the error of the reused part of each candidate order here, to
+    ! calibrate the rule.
+    hi = this%n_hist
+    do k = lo, hi
+      w = extrapolation_weights(t, this%t_ref, this%t_hist, k)
+      call reused_solve(this, r, f, ez, qrot, w, budget, this%us(:, :, k - lo + 1), ok(k - lo + 1), pairs)
+      gk(k - lo + 1) = growth(this, t, k)
+    end do
     call refresh(this, r, f, ez, t, u, error, pairs)
     if (allocated(error)) return
-    if (.not. converged .or. g <= 0.0_wp) return
-    err = maxval(norm2(this%us - u, dim=1))
-    if (predicted > 0.0_wp) this%stats%max_error_ratio = max(this%stats%max_error_ratio, err/predicted)
-    if (had_prev) then
-      this%coef2 = max(err/g, 0.5_wp*this%coef2)
-    else
-      this%coef1 = max(err/g, 0.5_wp*this%coef1)
-    end if
+    do k = lo, hi
+      if (.not. ok(k - lo + 1) .or. gk(k - lo + 1) <= 0.0_wp) cycle
+      err = maxval(norm2(this%us(:, :, k - lo + 1) - u, dim=1))
+      if (k == order .and. predicted > 0.0_wp) &
+        this%stats%max_error_ratio = max(this%stats%max_error_ratio, err/predicted)
+      this%coef(k) = max(err/gk(k - lo + 1), 0.5_wp*this%coef(k))
+    end do
   end subroutine adaptive_velocities
 
   !> u from the many-body part of the last refresh as it is (no extrapolation, no refresh):
@@ -454,20 +484,38 @@ contains
     call best_rotation(this%r_ref, r, qrot, error)
     if (allocated(error)) return
     call measure_deformation(this, r, qrot, deform)
-    call reused_solve(this, r, f, ez, qrot, 0.0_wp, 1.0e-3_wp*this%tolerance, u, converged)
+    call reused_solve(this, r, f, ez, qrot, [0.0_wp, 0.0_wp], 1.0e-3_wp*this%tolerance, u, converged)
     if (.not. converged) call fatal_error(error, 'multipole: conjugate gradients did not converge')
   end subroutine multipole_reused_velocities
 
-  !> The growth factor of the reuse error at time t: |t - t_ref| for a reused many-body part,
-  !> |t - t_ref| |t - t_prev| for one extrapolated from the last two refreshes (the error of
-  !> linear interpolation).
-  pure real(wp) function growth(this, t, extrapolated) result(g)
+  !> The growth factor of the reuse error at time t for extrapolation order k (0..n_hist):
+  !> |t - t_ref| for a reused many-body part, times |t - t_prev| for one extrapolated from the
+  !> last two refreshes and |t - t_prev2| from the last three (the error of polynomial
+  !> interpolation through the refresh times).
+  pure real(wp) function growth(this, t, k) result(g)
     class(multipole_model_t), intent(in) :: this
     real(wp), intent(in) :: t
-    logical, intent(in) :: extrapolated
-    g = abs(t - this%t_ref)
-    if (extrapolated) g = g*abs(t - this%t_prev)
+    integer, intent(in) :: k
+    g = abs(t - this%t_ref)*product(abs(t - this%t_hist(1:k)))
   end function growth
+
+  !> Newton weights of the extrapolation in time through the last refresh (t_ref) and the
+  !> n_hist (0..2) before it (t_hist(1) = t_prev, t_hist(2) = t_prev2): a quantity z known at
+  !> those times is z(t) = z_ref + w(1) (z_ref - z_prev) + w(2) (z_prev - z_prev2), exactly
+  !> for a polynomial in t of degree n_hist. Times must differ.
+  pure function extrapolation_weights(t, t_ref, t_hist, n_hist) result(w)
+    real(wp), intent(in) :: t, t_ref, t_hist(2)
+    integer, intent(in) :: n_hist
+    real(wp) :: w(2), d1, d2
+    w = 0.0_wp
+    if (n_hist < 1) return
+    d1 = t_ref - t_hist(1)
+    w(1) = (t - t_ref)/d1
+    if (n_hist < 2) return
+    d2 = (t - t_ref)*(t - t_hist(1))/(t_ref - t_hist(2))
+    w(1) = w(1) + d2/d1
+    w(2) = -d2/(t_hist(1) - t_hist(2))
+  end function extrapolation_weights
 
   !> The deformation D = max_i |rp_i - r_ref,i| of r since the reference, with
   !> rp = Q^T (r - c) + c_ref the configuration r rotated onto the reference.
@@ -502,18 +550,25 @@ contains
     this%n_overlaps = this%sys%n_clamped
     call this%sys%friction_coupling(this%zt, this%x6, error)
     if (allocated(error)) return
-    this%has_prev = .false.
     if (this%has_ref .and. t /= this%t_ref) then
-      ! history: the new part minus the old one seen from the new frame (two refreshes at
-      ! the same time, e.g. the last two stages of a step, give none)
+      ! history: the new part minus the old one seen from the new frame, and the old change
+      ! seen from the new frame (two refreshes at the same time, e.g. the last two stages of
+      ! a step, give none)
       call best_rotation(this%r_ref, r, qrot, error)
       if (allocated(error)) return
+      if (this%n_hist > 0) then
+        call rotate_friction(qrot, this%zh, this%zh2)
+        call rotate_coupling(qrot, this%xh, this%xh2)
+        this%t_hist(2) = this%t_hist(1)
+      end if
       call rotate_friction(qrot, this%zl, this%zh)
       call rotate_coupling(qrot, this%xl, this%xh)
       this%zh = this%zt - this%zh
       this%xh = this%x6 - this%xh
-      this%has_prev = .true.
-      this%t_prev = this%t_ref
+      this%n_hist = min(this%n_hist + 1, 2)
+      this%t_hist(1) = this%t_ref
+    else
+      this%n_hist = 0
     end if
     this%has_ref = .false.   ! until the new reference is complete
     this%t_ref = t
@@ -521,9 +576,9 @@ contains
     this%xl = this%x6
     this%r_ref = r
     this%c_ref = centroid(r)
-    call factor_preconditioner(this, r, 0.0_wp, error, pairs)
+    call factor_preconditioner(this, r, [0.0_wp, 0.0_wp], error, pairs)
     if (allocated(error)) return
-    call right_hand_side(this, f, e, 0.0_wp)
+    call right_hand_side(this, f, e, [0.0_wp, 0.0_wp])
     this%x = this%b
     call cholesky_solve(this%pf, this%x)
     do i = 1, size(r, 2)
@@ -563,19 +618,17 @@ contains
     end do
   end subroutine rotate_coupling
 
-  !> pf = Cholesky factor of zeta_L(ref) + w zeta_hist + sum dzeta(Q rr), Q = rotation or 1;
+  !> pf = Cholesky factor of zeta_L(ref) + w1 zh + w2 zh2 + sum dzeta(Q rr), Q = rotation or 1;
   !> the pair list is left at Q rr. `pairs`: the close pairs of rr if the caller has them.
   subroutine factor_preconditioner(this, rr, w, error, pairs, rotation)
     class(multipole_model_t), intent(inout) :: this
-    real(wp), intent(in) :: rr(:, :), w
+    real(wp), intent(in) :: rr(:, :), w(2)
     type(error_t), allocatable, intent(out) :: error
     type(pair_geometry_t), intent(in), optional :: pairs
     real(wp), intent(in), optional :: rotation(3, 3)
-    if (w /= 0.0_wp) then
-      this%pf = this%zl + w*this%zh
-    else
-      this%pf = this%zl
-    end if
+    this%pf = this%zl
+    if (w(1) /= 0.0_wp) this%pf = this%pf + w(1)*this%zh
+    if (w(2) /= 0.0_wp) this%pf = this%pf + w(2)*this%zh2
     if (this%lubrication) then
       call this%lub%pair_blocks(rr, this%pairs, pairs, rotation)
       call this%pairs%add_friction(this%pf)
@@ -584,11 +637,11 @@ contains
     call cholesky_factor(this%pf, error, 'lubrication-corrected friction')
   end subroutine factor_preconditioner
 
-  !> b = [f_i; 0] + (x_L(ref) + w x_hist) : e + sum dx : e (the pair list at the current
+  !> b = [f_i; 0] + (x_L(ref) + w1 xh + w2 xh2) : e + sum dx : e (the pair list at the current
   !> configuration).
   subroutine right_hand_side(this, f, e, w)
     class(multipole_model_t), intent(inout) :: this
-    real(wp), intent(in) :: f(:, :), e(3, 3), w
+    real(wp), intent(in) :: f(:, :), e(3, 3), w(2)
     real(wp) :: c(5)
     integer :: i, nb
     nb = size(f, 2)
@@ -598,18 +651,19 @@ contains
     end do
     c = strain_coefficients(e)
     call dgemv('N', 6*nb, 5, 1.0_wp, this%xl, 6*nb, c, 1, 1.0_wp, this%b, 1)
-    if (w /= 0.0_wp) call dgemv('N', 6*nb, 5, w, this%xh, 6*nb, c, 1, 1.0_wp, this%b, 1)
+    if (w(1) /= 0.0_wp) call dgemv('N', 6*nb, 5, w(1), this%xh, 6*nb, c, 1, 1.0_wp, this%b, 1)
+    if (w(2) /= 0.0_wp) call dgemv('N', 6*nb, 5, w(2), this%xh2, 6*nb, c, 1, 1.0_wp, this%b, 1)
     if (this%lubrication) call this%pairs%add_strain(e, this%b)
   end subroutine right_hand_side
 
-  !> Velocities from the reused many-body part (extrapolated with weight w) at r seen in the
+  !> Velocities from the reused many-body part (extrapolated with the weights w) at r seen in the
   !> reference frame (rotation qrot: the aligned configuration rp of `measure_deformation`): lubrication of the
-  !> rotated pairs, conjugate gradients on (zeta_L(ref) + w zeta_hist + sum dzeta) U = b.
+  !> rotated pairs, conjugate gradients on (zeta_L(ref) + w1 zh + w2 zh2 + sum dzeta) U = b.
   !> `converged` is false when CG did not reach the stopping error. `pairs`: the close pairs
   !> of r if the caller has them.
   subroutine reused_solve(this, r, f, e, qrot, w, budget, u, converged, pairs)
     class(multipole_model_t), intent(inout) :: this
-    real(wp), intent(in) :: r(:, :), f(:, :), e(3, 3), qrot(3, 3), w, budget
+    real(wp), intent(in) :: r(:, :), f(:, :), e(3, 3), qrot(3, 3), w(2), budget
     real(wp), intent(inout) :: u(:, :)
     logical, intent(out) :: converged
     type(pair_geometry_t), intent(in), optional :: pairs
@@ -661,7 +715,7 @@ contains
     end if
   end subroutine reused_solve
 
-  !> y = (zeta_L(ref) + w zeta_hist + sum dzeta) x.
+  !> y = (zeta_L(ref) + w1 zh + w2 zh2 + sum dzeta) x.
   subroutine operator_apply(this, xv, y)
     class(multipole_model_t), intent(inout) :: this
     real(wp), intent(in) :: xv(:)
@@ -669,7 +723,8 @@ contains
     integer :: n6
     n6 = size(xv)
     call dsymv('L', n6, 1.0_wp, this%zl, n6, xv, 1, 0.0_wp, y, 1)
-    if (this%w /= 0.0_wp) call dsymv('L', n6, this%w, this%zh, n6, xv, 1, 1.0_wp, y, 1)
+    if (this%w(1) /= 0.0_wp) call dsymv('L', n6, this%w(1), this%zh, n6, xv, 1, 1.0_wp, y, 1)
+    if (this%w(2) /= 0.0_wp) call dsymv('L', n6, this%w(2), this%zh2, n6, xv, 1, 1.0_wp, y, 1)
     if (this%lubrication) call this%pairs%apply(xv, y)
   end subroutine operator_apply
 
