@@ -8,9 +8,9 @@
 !> - run diagnostics (`&output diagnostics`): kf_run_diagnostics' own `diagnostics_memory`
 !>   (O(N): the close pairs of a chain no denser than close packing, about 2.4 KiB per bead);
 !> - hydrodynamic model: 'rpy' keeps 7 float64 pair tables (kf_hydro_rpy: 56 P); 'multipole'
-!>   the dense 3N x 3N mobility and 6N x 6N friction (360 N^2), three more 6N x 6N matrices
-!>   with update = 'adaptive' (864 N^2), one more (288 N^2) for the stresslet with lubrication
-!>   (`&output stresslet`): a lower bound (the many-body system comes on top); 'none' nothing.
+!>   the dense 3N x 3N mobility and 6N x 6N friction (360 N^2), four more 6N x 6N matrices
+!>   with update = 'adaptive' (1152 N^2: the reference, two differences, the preconditioner),
+!>   one more (288 N^2) for the stresslet with lubrication (`&output stresslet`): a lower bound (the many-body system comes on top); 'none' nothing.
 !> The estimate is compared with the machine's physical memory (/proc/meminfo MemTotal; no
 !> check where that cannot be read).
 module kf_resources
@@ -62,7 +62,7 @@ contains
       res%hydro_bytes = 56_i8*res%pairs + 72_i8*n
     case ('multipole')
       res%hydro_bytes = 360_i8*n*n
-      if (sc%hydro%update == 'adaptive') res%hydro_bytes = res%hydro_bytes + 864_i8*n*n
+      if (sc%hydro%update == 'adaptive') res%hydro_bytes = res%hydro_bytes + 1152_i8*n*n
       ! the stresslet's own grand friction with lubrication (kf_hydro_multipole `stresslet`)
       if (sc%output%stresslet .and. sc%hydro%lubrication) res%hydro_bytes = res%hydro_bytes + 288_i8*n*n
     case default
