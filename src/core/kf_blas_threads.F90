@@ -9,8 +9,8 @@
 !> Linux; 1 where unknown) less those busy at start-up (the 1-minute load average of
 !> kf_platform, rounded), at least 1. Threads that must share a busy CPU slow a BLAS call down
 !> several-fold (measured: 4x for a 2-thread factorisation with the other core busy), hence the
-!> load. A sweep that keeps every core busy keeps 1 thread per rank. An explicit OPENBLAS_NUM_THREADS (any count >= 1) in
-!> the environment is the user's choice and is left alone: `OPENBLAS_NUM_THREADS=1 knotflow ...`
+!> load. A sweep that keeps every core busy keeps 1 thread per rank. An explicit
+!> OPENBLAS_NUM_THREADS (any count >= 1) in the environment is the user's choice and is left alone: `OPENBLAS_NUM_THREADS=1 knotflow ...`
 !> really runs on one core (scripts/lib.sh sets 1 unless the caller set it).
 module kf_blas_threads
 #ifdef KNOTFLOW_HAVE_OPENBLAS_THREADS

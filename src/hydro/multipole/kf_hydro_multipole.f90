@@ -392,7 +392,7 @@ contains
     type(error_t), allocatable, intent(out) :: error
     real(wp), intent(in), optional :: t
     type(pair_geometry_t), intent(in), optional :: pairs
-    real(wp) :: qrot(3, 3), deform, budget, err, predicted, w(2), g, ratio, gk(2)
+    real(wp) :: qrot(3, 3), deform, budget, err, predicted, w(2), ratio, gk(2)
     logical :: converged, ok(2)
     integer :: k, lo, hi, order
 
@@ -415,21 +415,19 @@ contains
     ! one with the smaller predicted error is used (an order not calibrated yet forces a
     ! refresh, which calibrates it).
     lo = max(this%n_hist - 1, 0)
+    hi = this%n_hist
     ratio = 0.0_wp
-    if (this%n_hist > 0) ratio = abs(t - this%t_ref)/(this%t_ref - this%t_hist(1))
+    if (hi > 0) ratio = abs(t - this%t_ref)/(this%t_ref - this%t_hist(1))
     predicted = huge(1.0_wp)
     order = -1
-    do k = lo, this%n_hist
-      g = growth(this, t, k)
-      if (this%coef(k) < 0.0_wp) then
-        order = -1
-        exit
-      end if
-      if (this%coef(k)*g < predicted) then
-        predicted = this%coef(k)*g
+    do k = lo, hi
+      gk(k - lo + 1) = growth(this, t, k)
+      if (this%coef(k) >= 0.0_wp .and. this%coef(k)*gk(k - lo + 1) < predicted) then
+        predicted = this%coef(k)*gk(k - lo + 1)
         order = k
       end if
     end do
+    if (any(this%coef(lo:hi) < 0.0_wp)) order = -1
     if (order >= 0 .and. predicted <= budget .and. deform <= max_deformation .and. &
         ratio <= max_extrapolation) then
       w = extrapolation_weights(t, this%t_ref, this%t_hist, order)
@@ -443,11 +441,9 @@ contains
     end if
     ! Refresh; measure first the error of the reused part of each candidate order here, to
     ! calibrate the rule.
-    hi = this%n_hist
     do k = lo, hi
       w = extrapolation_weights(t, this%t_ref, this%t_hist, k)
       call reused_solve(this, r, f, ez, qrot, w, budget, this%us(:, :, k - lo + 1), ok(k - lo + 1), pairs)
-      gk(k - lo + 1) = growth(this, t, k)
     end do
     call refresh(this, r, f, ez, t, u, error, pairs)
     if (allocated(error)) return
