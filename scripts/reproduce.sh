@@ -89,14 +89,17 @@ if [ "$list" = 1 ]; then
   exit
 fi
 kf_study_arrays "$hydro" "$extras" || exit 1
-# Closures per frame (trefoils and candy-canes; the ensemble, with its frame stride), per
+# Closures per frame (trefoils and candy-canes; the ensemble, with its frame stride:
+# scripts/study_sweeps.sh, kf_study_closures), per
 # subchain of a knot matrix (trefoil last frame, candy-cane frames, slipknot candidates), of the
 # slipknot check (knot core and whole chain, with its own seed), and
 # the options of knotflow-study --select-frames (the candy-cane frames with knot matrices).
 case "$hydro" in
-  rpy) suffix="" closures=200 ens_closures=100 ens_stride=2 select=() ;;
-  multipole) suffix="_multipole" closures=1000 ens_closures=1000 ens_stride=1 select=(--every-time 10) ;;
+  rpy) suffix="" select=() ;;
+  multipole) suffix="_multipole" select=(--every-time 10) ;;
 esac
+read -r closures _ < <(kf_study_closures "$hydro" trefoil)
+read -r ens_closures ens_stride < <(kf_study_closures "$hydro" ensemble)
 mat_trefoil=100 mat_cane=20 mat_confirm=100 kf_confirm=1000 seed_confirm=1973
 if [ "$quick" = 1 ]; then closures=20 ens_closures=20 mat_trefoil=5 mat_cane=5 mat_confirm=5 kf_confirm=100; fi
 np="$(kf_ranks)"

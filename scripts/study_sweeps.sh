@@ -9,6 +9,9 @@
 #   kf_study_arrays HYDRO EXTRAS   the same list in the arrays KF_STUDY_ROLES and KF_STUDY_SWEEPS
 #                                  (loop over these: a loop reading the lines from stdin would
 #                                  lose them to mpirun or srun inside it, which read stdin)
+#   kf_study_closures HYDRO ROLE   prints "CLOSURES STRIDE": the closures per frame of k_f and
+#                                  the frame stride knotflow-analyze uses for a sweep of ROLE
+#                                  (scripts/reproduce.sh, scripts/campaign.sh)
 #
 # SWEEP names both the input, inputs/SWEEP.nml, and the output directory, <results>/SWEEP.
 # ROLE says how the sweep is analysed and compared with the study:
@@ -52,4 +55,16 @@ kf_study_arrays() {
     KF_STUDY_ROLES+=("$role")
     KF_STUDY_SWEEPS+=("$sweep")
   done <<<"$list"
+}
+
+kf_study_closures() {
+  case "$1:$2" in
+    rpy:ensemble) printf '100 2\n' ;;
+    rpy:trefoil|rpy:candycane|rpy:trefoil_p24) printf '200 1\n' ;;
+    multipole:trefoil|multipole:candycane|multipole:ensemble) printf '1000 1\n' ;;
+    *)
+      printf 'ERROR: no closures for hydro %s, role %s\n' "$1" "$2" >&2
+      return 2
+      ;;
+  esac
 }

@@ -1,5 +1,5 @@
 !> Program knotflow: run a scene or a sweep of scenes over MPI ranks.
-!>   mpirun -n P knotflow SCENE.nml [--dry-run]
+!>   mpirun -n P knotflow SCENE.nml [--dry-run | --write-scenes DIR]
 !> Every rank computes; cases are handed out dynamically. Built without MPI
 !> (-DKNOTFLOW_WITH_MPI=OFF), `knotflow SCENE.nml` runs every case in one process. Finished
 !> cases are skipped and interrupted ones resume from their checkpoint when the same command is
@@ -9,8 +9,9 @@ program knotflow
   use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
   use kf_strings, only: to_str
   use kf_memory, only: keep_freed_heap
-  use kf_error, only: error_t
+  use kf_error, only: error_t, fatal_error
   use kf_scene, only: scene_t
+  use kf_scene_items, only: scene_text
   use kf_sweep, only: sweep_t, read_sweep
   use kf_fs, only: make_directory, check_writable_directory, lock_directory, rename_file, &
                    ignore_file_size_signal
@@ -32,17 +33,19 @@ program knotflow
   implicit none
 
   character(len=*), parameter :: program_name = 'knotflow'
-  character(len=*), parameter :: usage = 'usage: mpirun -n P knotflow SCENE.nml [--dry-run]'// &
+  character(len=*), parameter :: usage = 'usage: mpirun -n P knotflow SCENE.nml [--dry-run | --write-scenes DIR]'// &
     new_line('a')//'  Runs every case of the scene''s &sweep (or the single scene).'// &
-    new_line('a')//'  --dry-run  validate the input and list the cases without running them'// &
-    new_line('a')//'  --version  print the version'
+    new_line('a')//'  --dry-run            validate the input and list the cases without running them'// &
+    new_line('a')//'  --write-scenes DIR   as --dry-run, and write each case''s scene, a single-case input that'// &
+    new_line('a')//'                       runs (or resumes, or skips) that case alone, to DIR/<case>.nml'// &
+    new_line('a')//'  --version            print the version'
 
   type(comm_t) :: comm
   type(error_t), allocatable :: error
   type(sweep_t) :: sw
   type(sweep_tasks_t) :: tasks
   type(task_result_t), allocatable :: results(:)
-  character(len=:), allocatable :: scene_file, directory
+  character(len=:), allocatable :: scene_file, directory, scenes_dir
   logical :: dry_run
   logical :: summary_failed = .false.
   integer :: me = 0, nfailed, threads, k
@@ -58,7 +61,7 @@ program knotflow
   call keep_freed_heap()   ! after MPI start-up, which sets its own allocator options
   call ignore_file_size_signal()   ! a write past `ulimit -f` fails (EFBIG) and is reported
   me = comm%rank()
-  call parse_arguments(scene_file, dry_run)
+  call parse_arguments(scene_file, dry_run, scenes_dir)
   call h5_initialize(error)
   if (allocated(error)) call stop_all(error%message, 2)
 
@@ -92,6 +95,9 @@ program knotflow
     flush (output_unit)
   end if
   if (dry_run) then
+    if (len(scenes_dir) > 0 .and. me == 0) call write_case_scenes(error)
+    call agree(error)
+    if (allocated(error)) call stop_all(error%message, 2)
     call h5_finalize()
     call comm_finalize(error)
     stop
@@ -138,6 +144,46 @@ contains
         trim(sc%hydro%model)//', t_end = '//to_str(sc%integrator%t_end, '(g0.6)')//')'
     end do
   end subroutine list_cases
+
+  !> Each case's scene as a single-case input, DIR/<case>.nml (kf_scene_items: scene_text, the
+  !> text that reads back to the same scene; its output directory and case name are the sweep's,
+  !> so it runs, resumes or skips the very file the sweep would). Each is written to
+  !> '<name>.tmp' and renamed, so a scene file is either complete or absent.
+  subroutine write_case_scenes(err)
+    type(error_t), allocatable, intent(out) :: err
+    type(scene_t) :: sc
+    character(len=:), allocatable :: name, path
+    character(len=256) :: msg
+    integer :: k, u, ios, iosc
+    call make_directory(scenes_dir, err)
+    if (.not. allocated(err)) call check_writable_directory(scenes_dir, err)
+    if (allocated(err)) then
+      err%message = '--write-scenes '''//scenes_dir//''': '//err%message
+      return
+    end if
+    do k = 1, sw%n_cases()
+      call sw%case_scene(k, sc, name)
+      path = scenes_dir//'/'//name//'.nml'
+      msg = ''
+      open (newunit=u, file=path//'.tmp', status='replace', action='write', iostat=ios, iomsg=msg)
+      if (ios == 0) then
+        write (u, '(a)', iostat=ios, iomsg=msg) '! case '//name//' of '//scene_file//' (knotflow --write-scenes)'
+        if (ios == 0) write (u, '(a)', advance='no', iostat=ios, iomsg=msg) scene_text(sc)
+        close (u, iostat=iosc)
+        if (ios == 0 .and. iosc /= 0) then
+          ios = iosc
+          msg = 'close failed'
+        end if
+      end if
+      if (ios /= 0) then
+        call fatal_error(err, '--write-scenes: cannot write '''//path//'.tmp'': '//trim(msg))
+        return
+      end if
+      call rename_file(path//'.tmp', path, err)
+      if (allocated(err)) return
+    end do
+    write (output_unit, '(a)') 'knotflow: '//to_str(sw%n_cases())//' scene(s) written to '//scenes_dir
+  end subroutine write_case_scenes
 
   !> The resources of one case (kf_resources), and the models built once for it (they refuse
   !> what they cannot compute): the listed parameters of a sweep (A,
@@ -290,26 +336,35 @@ contains
     end if
   end subroutine agree
 
-  subroutine parse_arguments(path, dry)
-    character(len=:), allocatable, intent(out) :: path
+  subroutine parse_arguments(path, dry, scenes)
+    character(len=:), allocatable, intent(out) :: path, scenes
     logical, intent(out) :: dry
     integer :: k
     character(len=:), allocatable :: arg
     dry = .false.
     path = ''
-    do k = 1, command_argument_count()
+    scenes = ''
+    k = 0
+    do while (k < command_argument_count())
+      k = k + 1
       arg = argument(k)
       if (arg == '--dry-run') then
         dry = .true.
+      else if (arg == '--write-scenes') then
+        if (k == command_argument_count()) call stop_all('--write-scenes needs a directory (--write-scenes DIR)', 2)
+        k = k + 1
+        scenes = argument(k)
+        if (len(scenes) == 0) call stop_all('--write-scenes needs a directory, not an empty name', 2)
+        dry = .true.
       else if (index(arg, '-') == 1) then
-        call stop_all('unknown option '''//arg//''' (allowed: --dry-run, --help, --version)', 2)
+        call stop_all('unknown option '''//arg//''' (allowed: --dry-run, --write-scenes DIR, --help, --version)', 2)
       else if (len(path) > 0) then
         call stop_all('more than one scene file given ('''//path//''' and '''//arg//''')', 2)
       else
         path = arg
       end if
     end do
-    if (len(path) == 0) call stop_all('no scene file given (usage: knotflow SCENE.nml [--dry-run])', 2)
+    if (len(path) == 0) call stop_all('no scene file given (usage: knotflow SCENE.nml [--dry-run | --write-scenes DIR])', 2)
   end subroutine parse_arguments
 
   !> MPI finalised on every rank, then one error line on stderr (from rank 0) and a non-zero

@@ -499,5 +499,55 @@ def _rheology(argv: Argv) -> int:
     return 0
 
 
+# ------------------------------------------------------------------------ knotflow-campaign
+
+def main_campaign(argv: Argv = None) -> int:
+    """knotflow-campaign entry point."""
+    return run_reporting_errors("knotflow-campaign", _campaign, argv)
+
+
+def _campaign(argv: Argv) -> int:
+    from . import campaign
+    p = make_parser("knotflow-campaign",
+                    "The case ledger of a campaign that outlives its machine: small committed "
+                    "files per case (frame rows, newest frame, run records) and what to run "
+                    "next from them (scripts/campaign.sh, docs/analysis.md).")
+    sub = p.add_subparsers(dest="command", required=True)
+    pl = sub.add_parser("plan", help="print 'case action scene' for each case of a sweep")
+    pl.add_argument("--scenes", required=True, help="the sweep's scenes (knotflow --write-scenes)")
+    dg = sub.add_parser("digest", help="add analysed case files (copies) to the ledger")
+    dg.add_argument("files", nargs="+", metavar="CASE.h5")
+    dg.add_argument("--copies", required=True,
+                    help="the directory the files are copied into, mirroring --results")
+    dg.add_argument("--closures", type=int, required=True,
+                    help="closures per frame the files were analysed with")
+    dg.add_argument("--positions-every", type=float, default=0.0, metavar="T",
+                    help="keep the positions of the frames at multiples of T (0: only the newest)")
+    st = sub.add_parser("status", help="one line per case of the ledger's sweeps")
+    for q in (pl, dg, st):
+        q.add_argument("--ledger", required=True, help="the ledger directory")
+    for q in (pl, dg):
+        q.add_argument("--sweep", required=True, help="the sweep's name (inputs/<sweep>.nml)")
+        q.add_argument("--results", required=True, help="the sweep outputs' parent directory")
+    args = p.parse_args(argv)
+    if args.command == "plan":
+        for name, action, scene in campaign.plan(args.scenes, args.results, args.ledger,
+                                                 args.sweep):
+            print(name, action, scene or "-")
+    elif args.command == "digest":
+        if args.closures < 1 or not args.positions_every >= 0.0:
+            p.error("--closures needs a positive integer, --positions-every T >= 0")
+        for f in args.files:
+            source = os.path.join(args.results, os.path.relpath(f, args.copies))
+            e = campaign.digest(f, args.ledger, args.sweep, args.closures,
+                                args.positions_every, source)
+            print(f"{args.sweep}/{e['case']}: {e['status']}, t = {e['t_reached']:g} of "
+                  f"{e['t_end']:g}, {len(e['segments'])} segment(s)")
+    else:
+        for line in campaign.status_lines(args.ledger):
+            print(line)
+    return 0
+
+
 if __name__ == "__main__":
     sys.exit(main_kf())

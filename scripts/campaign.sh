@@ -1,0 +1,121 @@
+#!/usr/bin/env bash
+# The multipole campaign of the study (scripts/study_sweeps.sh) on a machine that may not last:
+# what each case needs is kept in the case ledger (docs/reproduction_multipole/ledger, small
+# committed text files: knotflow-campaign, docs/analysis.md "The case ledger"), and the next
+# machine goes on from it.
+#   scripts/campaign.sh [--workers N] [--digest] [--no-run] [--results DIR] [--ledger DIR]
+#
+#   (default)   run: each case of every sweep as a single-case scene (knotflow --write-scenes),
+#               N processes of one rank each (default KNOTFLOW_NP, 2) taking the cases in
+#               turn: first those with progress (a case file here, or the ledger), then the
+#               others with the sweeps interleaved. A case whose file is here resumes it; a case
+#               the ledger has but this machine does not is continued from the ledger's newest
+#               frame (results/<sweep>/continued/<case>_from<T>). Runs until every case has
+#               finished; killing it loses nothing but the frames since the last digest.
+#   --digest    then (with --no-run: only) add every case file here to the ledger: a copy,
+#               k_f of every frame (knotflow-analyze, closures of scripts/study_sweeps.sh),
+#               knotflow-campaign digest. Run it before the machine goes (it may run beside
+#               the campaign: it reads copies), then commit the ledger.
+#   --results   where the case files go (default results); --ledger: default
+#               docs/reproduction_multipole/ledger.
+# Positions kept in the ledger: the candy-canes every 10 time units (the knot matrices of the
+# slipknot search, snapshots), the further rotations every 50, the trefoils every 100; every
+# case's newest frame at full precision.
+# Needs a build (scripts/build.sh; KNOTFLOW_BUILD_DIR) and its Python tools; installs nothing.
+set -euo pipefail
+# shellcheck source=scripts/lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
+# shellcheck source=scripts/study_sweeps.sh
+source "$KF_ROOT/scripts/study_sweeps.sh"
+
+run=1
+digest=0
+results=results
+ledger=docs/reproduction_multipole/ledger
+workers="$(kf_ranks)"
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --workers)
+      if [ $# -lt 2 ] || ! [[ "$2" =~ ^[1-9][0-9]*$ ]]; then kf_die "--workers needs a positive integer"; fi
+      workers="$2"; shift 2 ;;
+    --digest) digest=1; shift ;;
+    --no-run) run=0; shift ;;
+    --results) [ $# -ge 2 ] || kf_die "--results needs a directory"; results="$2"; shift 2 ;;
+    --ledger) [ $# -ge 2 ] || kf_die "--ledger needs a directory"; ledger="$2"; shift 2 ;;
+    *) kf_die "unknown argument '$1' (allowed: --workers N, --digest, --no-run, --results DIR, --ledger DIR)" ;;
+  esac
+done
+cd "$KF_ROOT"
+[ -d "$KF_BUILD_DIR/venv/bin" ] && PATH="$KF_BUILD_DIR/venv/bin:$PATH"
+knotflow="$KF_BUILD_DIR/bin/knotflow"
+analyze="$KF_BUILD_DIR/bin/knotflow-analyze"
+for exe in "$knotflow" "$analyze"; do
+  [ -x "$exe" ] || kf_die "$exe not found (build first: bash scripts/build.sh)"
+done
+command -v knotflow-campaign >/dev/null 2>&1 || kf_die "knotflow-campaign not found (bash scripts/build.sh installs it)"
+kf_study_arrays multipole 1 || exit 1
+mkdir -p "$results" "$ledger"
+
+# One line "sweep case action scene" per case still to run, cases with progress first.
+queue() {
+  local i sweep
+  for i in "${!KF_STUDY_SWEEPS[@]}"; do
+    sweep="${KF_STUDY_SWEEPS[i]}"
+    "$knotflow" "inputs/$sweep.nml" --write-scenes "$results/scenes/$sweep" >/dev/null
+    knotflow-campaign plan --scenes "$results/scenes/$sweep" --results "$results" \
+      --ledger "$ledger" --sweep "$sweep" | awk -v s="$sweep" '$2 != "finished" {print NR, s, $0}'
+  done | while read -r rank sweep case action scene; do
+    progress=1
+    [ "$action" = continue ] || [ -e "$results/$sweep/$case.h5" ] || [ -e "$ledger/$sweep/$case.json" ] || progress=2
+    printf '%s %s %s %s %s %s\n' "$progress" "$rank" "$sweep" "$case" "$action" "$scene"
+  done | sort -k1,1n -k2,2n -s | cut -d' ' -f3-
+}
+
+worker() {
+  local id="$1" sweep case action scene
+  while read -r sweep case action scene; do
+    mkdir "$results/claims/$sweep.$case" 2>/dev/null || continue
+    kf_log "worker $id: $sweep/$case ($action: $scene)"
+    "$knotflow" "$scene" >>"$results/campaign_$sweep.$case.log" 2>&1 \
+      || kf_log "worker $id: $sweep/$case exited with status $? (see $results/campaign_$sweep.$case.log)"
+  done <"$results/queue.txt"
+}
+
+if [ "$run" = 1 ]; then
+  export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
+  rm -rf "$results/claims"
+  mkdir -p "$results/claims"
+  queue >"$results/queue.txt"
+  kf_log "$(wc -l <"$results/queue.txt") case(s) to run, $workers worker(s); queue in $results/queue.txt"
+  pids=()
+  for w in $(seq 1 "$workers"); do
+    worker "$w" &
+    pids+=($!)
+  done
+  for p in "${pids[@]}"; do wait "$p"; done
+fi
+
+if [ "$digest" = 1 ]; then
+  shopt -s nullglob
+  copies="$results/ledger_copies"
+  for i in "${!KF_STUDY_SWEEPS[@]}"; do
+    role="${KF_STUDY_ROLES[i]}" sweep="${KF_STUDY_SWEEPS[i]}"
+    read -r closures stride < <(kf_study_closures multipole "$role")
+    [ "$stride" = 1 ] || kf_die "$sweep: the ledger takes k_f of every frame (stride $stride)"
+    case "$role" in
+      candycane) every=10 ;;
+      ensemble) every=50 ;;
+      *) every=100 ;;
+    esac
+    for f in "$results/$sweep"/*.h5 "$results/$sweep"/continued/*.h5; do
+      rel="${f#"$results"/}"
+      mkdir -p "$copies/$(dirname "$rel")"
+      cp "$f" "$copies/$rel.tmp" && mv "$copies/$rel.tmp" "$copies/$rel"
+      "$analyze" "$copies/$rel" --closures "$closures" --stride 1 >/dev/null
+      knotflow-campaign digest "$copies/$rel" --copies "$copies" --results "$results" \
+        --ledger "$ledger" --sweep "$sweep" --closures "$closures" --positions-every "$every" \
+        || kf_log "not digested: $f (above)"
+    done
+  done
+  knotflow-campaign status --ledger "$ledger"
+fi

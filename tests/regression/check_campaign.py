@@ -1,0 +1,183 @@
+"""A campaign that outlives its machine: the case ledger (knotflow_tools.campaign).
+
+A sweep of two trefoils (RPY + excluded volume, t_end = 40) is run twice:
+1. uninterrupted, analysed (knotflow-analyze, every frame) and digested into a reference ledger;
+2. as a campaign: `knotflow --write-scenes` writes each case's scene; case A1.40 is run from its
+   own scene (which writes the very file the sweep would: the sweep's dry run accepts it),
+   killed after t = 15, its copy analysed and digested; then the machine is "lost" (results deleted). `plan` must say
+   'continue' for A (from the ledger's newest frame) and 'run' for B; each planned scene is run,
+   analysed and digested.
+Checked: the ledger rows of A are the frames 0, 1, ..., 40 exactly once; before the kill they
+equal the reference rows (same file, same frames, same k_f); after it the continuation is the
+same physics restarted (step size, overlap monitor): the chain at t = 40 within 0.05 d of the
+uninterrupted one and R_g within 1 %. A has two segments, B one; both finished; `plan` then says
+'finished'. `--write-scenes` without a directory, or into one that cannot be made, exits with
+status 2. Refused, leaving the ledger as it was: a file analysed with other closures, the old
+segment again after its continuation (a rewind), a gap.
+Usage: check_campaign.py KNOTFLOW KNOTFLOW_ANALYZE WORKDIR   (Python with knotflow_tools)
+"""
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import h5py
+import numpy as np
+from knotflow_tools import campaign
+
+exe, analyze, work = (os.path.abspath(a) for a in sys.argv[1:4])
+shutil.rmtree(work, ignore_errors=True)
+os.makedirs(work)
+os.chdir(work)
+CLOSURES = 30
+SWEEP = "sw"
+
+
+def write(path, text):
+    with open(path, "w") as fh:
+        fh.write(text)
+
+
+write("sw.nml", """&chain shape = 'trefoil', orientation = 'c' /
+&forces excluded_volume = .true. /
+&integrator t_end = 40.0 /
+&output directory = 'results/sw', frame_interval = 1.0, progress_interval = 0.0,
+  stresslet = .true., diagnostics = .true. /
+&sweep bending_a = 1.4, 2.2 /
+""")
+
+
+def run(*args, **kw):
+    return subprocess.run(list(args), check=True, capture_output=True, text=True, timeout=600, **kw)
+
+
+def analyse_copy(src, copies):
+    """Copy `src` (under results/) into `copies`, mirroring, and analyse the copy."""
+    dst = os.path.join(copies, os.path.relpath(src, "results"))
+    os.makedirs(os.path.dirname(dst), exist_ok=True)
+    shutil.copy(src, dst)
+    run(analyze, dst, "--closures", str(CLOSURES), "--stride", "1")
+    return dst
+
+
+def digest(src, ledger, closures=CLOSURES):
+    dst = analyse_copy(src, "copies")
+    return campaign.digest(dst, ledger, SWEEP, closures, 10.0,
+                           os.path.join("results", os.path.relpath(dst, "copies")))
+
+
+def snapshot(ledger):
+    return {f: open(os.path.join(ledger, SWEEP, f), "rb").read()
+            for f in sorted(os.listdir(os.path.join(ledger, SWEEP)))}
+
+
+def refused(fn, text):
+    try:
+        fn()
+    except ValueError as exc:
+        assert text in str(exc), f"refusal without '{text}': {exc}"
+        return
+    raise AssertionError(f"not refused (expected '{text}')")
+
+
+# 1. The reference: the sweep uninterrupted.
+run(exe, "sw.nml")
+for c in ("A1.40", "A2.20"):
+    digest(f"results/sw/{c}.h5", "ledger_ref")
+ref = campaign.read_rows("ledger_ref", SWEEP, "A1.40")
+ref_last = campaign.read_xyz("ledger_ref/sw/A1.40.last.xyz")
+shutil.move("results", "results_ref")
+
+# 2. The campaign: scenes, A killed part-way.
+for bad, text in ((["--write-scenes"], "--write-scenes needs a directory"),
+                  (["--write-scenes", "sw.nml/x"], "--write-scenes 'sw.nml/x'")):
+    r = subprocess.run([exe, "sw.nml"] + bad, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and text in r.stderr, (bad, r.returncode, r.stderr)
+run(exe, "sw.nml", "--write-scenes", "scenes")
+assert sorted(os.listdir("scenes")) == ["A1.40.nml", "A2.20.nml"], os.listdir("scenes")
+proc = subprocess.Popen([exe, "scenes/A1.40.nml"], stdout=subprocess.DEVNULL,
+                        stderr=subprocess.DEVNULL)
+t_kill = 0.0
+deadline = time.time() + 300
+while time.time() < deadline and proc.poll() is None:
+    time.sleep(0.2)
+    try:
+        with h5py.File("results/sw/A1.40.h5", "r", locking=False) as h:
+            t_kill = float(h["frames/time"][-1]) if "frames/time" in h else 0.0
+    except (OSError, KeyError):
+        continue
+    if t_kill >= 15.0:
+        break
+proc.send_signal(signal.SIGKILL)
+proc.wait()
+assert 15.0 <= t_kill < 40.0, f"killed at t = {t_kill}"
+# The single-case scene wrote the sweep's own file: the sweep accepts it (dry run: no refusal).
+run(exe, "sw.nml", "--dry-run")
+e = digest("results/sw/A1.40.h5", "ledger")
+T = e["t_reached"]
+assert e["status"] == "running" and T >= 14.0, e
+kept = snapshot("ledger")
+refused(lambda: digest("results/sw/A1.40.h5", "ledger", closures=CLOSURES + 1),
+        "closures per frame")
+assert snapshot("ledger") == kept
+shutil.rmtree("results")          # the machine is lost; the ledger is what was committed
+shutil.rmtree("copies")
+
+out = run(sys.executable, "-c", "import sys; from knotflow_tools.cli import main_campaign; "
+          "sys.exit(main_campaign(sys.argv[1:]))", "plan", "--scenes", "scenes", "--results",
+          "results", "--ledger", "ledger", "--sweep", SWEEP).stdout.split("\n")
+plan = [ln.split() for ln in out if ln.strip()]
+assert [p[:2] for p in plan] == [["A1.40", "continue"], ["A2.20", "run"]], plan
+assert plan[0][2].endswith(f"continued/A1.40_from{T:g}.nml"), plan
+for name, _action, scene in plan:
+    run(exe, scene)
+cont = f"results/sw/continued/A1.40_from{T:g}.h5"
+with h5py.File(cont, "r") as h:
+    assert abs(h["frames/time"][-1] - (40.0 - T)) < 1e-9, h["frames/time"][-1]
+e = digest(cont, "ledger")
+digest("results/sw/A2.20.h5", "ledger")
+
+rows = campaign.read_rows("ledger", SWEEP, "A1.40")
+t = rows[:, 0]
+assert np.array_equal(t, np.arange(41.0)), t
+before = t < T - 1e-9
+col = {c: k for k, c in enumerate(campaign.FRAME_COLUMNS)}
+for c in ("rg", "a", "theta", "close_pairs", "min_distance", "viscosity"):
+    assert np.array_equal(rows[before, col[c]], ref[before, col[c]]), c
+assert np.array_equal(rows[before, col["kf"]], ref[before, col["kf"]])
+assert np.all(np.isfinite(rows[:, col["kf"]]))
+last = campaign.read_xyz("ledger/sw/A1.40.last.xyz")
+dev = np.max(np.linalg.norm(last - ref_last, axis=1))
+assert dev < 0.05, f"continued chain at t = 40 is {dev:.3g} d from the uninterrupted one"
+assert abs(rows[-1, col["rg"]] / ref[-1, col["rg"]] - 1) < 0.01, (rows[-1], ref[-1])
+assert e["status"] == "finished" and len(e["segments"]) == 2, e
+assert e["segments"][1]["t_offset"] == T and e["segments"][1]["case_name"] == f"A1.40_from{T:g}"
+b = campaign.load("ledger", SWEEP, "A2.20")
+assert b["status"] == "finished" and len(b["segments"]) == 1
+assert np.array_equal(campaign.read_rows("ledger", SWEEP, "A2.20"),
+                      campaign.read_rows("ledger_ref", SWEEP, "A2.20"))
+pt, pos = campaign.read_positions("ledger", SWEEP, "A1.40")
+assert np.array_equal(pt, [0.0, 10.0, 20.0, 30.0, 40.0]), pt
+assert np.max(np.abs(pos[-1] - last)) <= 5e-5 + 1e-12
+assert [p[1] for p in campaign.plan("scenes", "results", "ledger", SWEEP)] == ["finished"] * 2
+
+# Refusals: the old segment after its continuation (rewind), a gap; nothing changes.
+kept = snapshot("ledger")
+shutil.copytree("results_ref", "results_old")
+old = "copies_old/sw/A1.40.h5"
+os.makedirs("copies_old/sw")
+shutil.copy("results_old/sw/A1.40.h5", old)
+run(analyze, old, "--closures", str(CLOSURES), "--stride", "1")
+refused(lambda: campaign.digest(old, "ledger", SWEEP, CLOSURES, 10.0, "results_old/sw/A1.40.h5"),
+        "a segment must go on where it ends")
+gap = f"copies_old/sw/A1.40_from{T + 5:g}.h5"
+shutil.copy(old, gap)
+with h5py.File(gap, "r+") as h:
+    h.attrs["case_name"] = f"A1.40_from{T + 5:g}"
+refused(lambda: campaign.digest(gap, "ledger", SWEEP, CLOSURES, 10.0, gap),
+        "a segment must go on where it ends")
+assert snapshot("ledger") == kept
+print(f"campaign ledger: A killed at t = {T:g}, continued to 40, {dev:.2e} d from the "
+      "uninterrupted chain")

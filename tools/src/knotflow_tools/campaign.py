@@ -1,0 +1,341 @@
+"""A long campaign that outlives the machine it runs on: the case ledger.
+
+A sweep whose cases run for longer than a machine is kept (a session, a cluster allocation, a
+scratch file system that is purged) loses its case files with the machine. The ledger keeps what
+the study needs of each case in small text files that are committed, and what is needed to go on:
+
+    LEDGER/<sweep>/<case>.json            status, time reached, the case's scene, its segments
+                                          (file, time offset, run records, overlap totals)
+    LEDGER/<sweep>/<case>.csv             one row per frame: FRAME_COLUMNS (time of the whole
+                                          case, k_f of knotflow-analyze, shape, mode, overlaps,
+                                          stresslet; 7 significant digits)
+    LEDGER/<sweep>/<case>.last.xyz        the newest frame at full precision: where to go on
+    LEDGER/<sweep>/<case>.positions.gz    frames every `positions_every` time units (4 decimals;
+                                          columns t x y z, a frame's beads in order): snapshots,
+                                          knot matrices, slipknot confirmation
+
+`digest` adds an analysed case file (a copy, after knotflow-analyze) to the ledger. `plan`
+says for each case of a sweep what to run next: nothing (finished), the case's own scene
+(`knotflow --write-scenes`; it starts the case or resumes its file on this machine), or, when
+the ledger is ahead of this machine, a continuation: the case's scene started from
+`<case>.last.xyz` for the time still to run, written as `<case>_from<T>` (T: the time reached).
+Simple shear v0 = (z, 0, 0) does not depend on time, so a continuation computes what a resume
+would, except that the step size and the adaptive multipole path start afresh, as after any
+resume, and an overlap episode open at T is counted as two. The rows of a continuation are the
+ledger's rows from T on, at time T + t.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+
+import numpy as np
+
+from .io import RUN_FIELDS, read_case, read_xyz, write_xyz
+
+LEDGER_VERSION = 1
+FRAME_COLUMNS = ("t", "kf", "rg", "a", "b", "c", "theta", "phi", "close_pairs", "mode",
+                 "overlapping_pairs", "min_distance", "strand_passages",
+                 "viscosity", "psi1", "psi2")
+#: Times of two segments closer than this (in units of 1/shear rate) are the same time.
+TIME_TOLERANCE = 1e-6
+_CONTINUATION = re.compile(r"^(?P<case>.+)_from(?P<t>[0-9]+(?:\.[0-9]+)?)$")
+
+
+def continuation_name(case: str, t: float) -> str:
+    """Case name of the continuation of `case` from time `t` (e.g. A1.00_from1200)."""
+    return f"{case}_from{t:g}"
+
+
+def split_name(name: str) -> tuple[str, float]:
+    """(case, time offset) of a case file's name: a continuation's or (name, 0)."""
+    m = _CONTINUATION.match(name)
+    return (m["case"], float(m["t"])) if m else (name, 0.0)
+
+
+def _paths(ledger: str, sweep: str, case: str) -> dict:
+    base = os.path.join(ledger, sweep, case)
+    return {k: base + ext for k, ext in (("json", ".json"), ("csv", ".csv"),
+                                         ("last", ".last.xyz"), ("positions", ".positions.gz"))}
+
+
+def load(ledger: str, sweep: str, case: str) -> dict | None:
+    """The ledger entry of a case (its JSON), None when the ledger has none."""
+    path = _paths(ledger, sweep, case)["json"]
+    if not os.path.exists(path):
+        return None
+    with open(path, encoding="utf-8") as fh:
+        entry = json.load(fh)
+    if entry.get("ledger_version") != LEDGER_VERSION:
+        raise ValueError(f"{path}: ledger_version {entry.get('ledger_version')!r} "
+                         f"(this tool reads {LEDGER_VERSION})")
+    return entry
+
+
+def read_rows(ledger: str, sweep: str, case: str) -> np.ndarray:
+    """The frame rows (frames, len(FRAME_COLUMNS)) of a case; empty without any."""
+    path = _paths(ledger, sweep, case)["csv"]
+    if not os.path.exists(path):
+        return np.zeros((0, len(FRAME_COLUMNS)))
+    with open(path, encoding="utf-8") as fh:
+        header = fh.readline().strip().split(",")
+    if tuple(header) != FRAME_COLUMNS:
+        raise ValueError(f"{path}: columns {header}, expected {list(FRAME_COLUMNS)}")
+    return np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+
+
+def read_positions(ledger: str, sweep: str, case: str) -> tuple[np.ndarray, np.ndarray]:
+    """Times (k,) and positions (k, N, 3) of the frames the ledger keeps."""
+    entry = load(ledger, sweep, case)
+    path = _paths(ledger, sweep, case)["positions"]
+    if entry is None or not os.path.exists(path):
+        return np.zeros(0), np.zeros((0, 0, 3))
+    data = np.loadtxt(path, ndmin=2)
+    n = int(entry["n_beads"])
+    if data.shape[1] != 4 or len(data) % n:
+        raise ValueError(f"{path}: {data.shape} is not rows of t x y z, {n} beads per frame")
+    data = data.reshape(-1, n, 4)
+    return data[:, 0, 0], data[:, :, 1:]
+
+
+def _column(values, n) -> np.ndarray:
+    return np.full(n, np.nan) if values is None else np.asarray(values, dtype=float)[:n]
+
+
+def frame_rows(case, offset: float) -> np.ndarray:
+    """FRAME_COLUMNS of every frame of an analysed case (k_f and modes from /analysis; NaN
+    where the file has none), at time offset + t."""
+    n = case.nframes
+    if case.knots is None:
+        raise ValueError(f"{case.path}: no /analysis/knots (run knotflow-analyze first)")
+    kf = np.full(n, np.nan)
+    kf[np.asarray(case.knots["frame_index"], dtype=int)] = case.knots["kf"]
+    obs = case.observables
+    diag = case.diagnostics or {}
+    st = case.stresslet or {}
+    modes = case.modes if case.modes is not None and len(case.modes) == n else None
+    cols = [offset + case.time, kf] + [_column(obs.get(k), n) for k in FRAME_COLUMNS[2:9]]
+    cols.append(_column(modes, n))
+    cols += [_column(diag.get(k), n) for k in ("overlapping_pairs", "min_distance",
+                                               "strand_passages")]
+    cols += [_column(st.get(k), n) for k in ("viscosity", "psi1", "psi2")]
+    return np.column_stack(cols)
+
+
+def _write_text(path: str, text: str) -> None:
+    """Write whole or not at all (temporary file renamed)."""
+    with open(path + ".tmp", "w", encoding="utf-8") as fh:
+        fh.write(text)
+    os.replace(path + ".tmp", path)
+
+
+def _rows_text(rows: np.ndarray) -> str:
+    lines = [",".join(FRAME_COLUMNS)]
+    for r in rows:
+        lines.append(",".join("nan" if not math.isfinite(v) else f"{v:.7g}" for v in r))
+    return "\n".join(lines) + "\n"
+
+
+def _json_value(v):
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    if isinstance(v, (np.floating, np.integer)):
+        return _json_value(v.item())
+    return v
+
+
+def digest(path: str, ledger: str, sweep: str, closures: int, positions_every: float = 0.0,
+           source: str | None = None) -> dict:
+    """Add an analysed case file (`path`; `source`: where the file it copies runs, recorded
+    as the segment's file) to the ledger and return the case's entry.
+
+    Refused (ValueError, nothing written): k_f not from `closures` closures per frame, a file
+    that would leave a gap or rewrite an earlier segment than the newest, another scene."""
+    case = read_case(path)
+    name, offset = split_name(case.name)
+    entry = load(ledger, sweep, name)
+    if case.knots is None:
+        raise ValueError(f"{path}: no /analysis/knots (run knotflow-analyze first)")
+    got = case.knots["attrs"].get("closures")
+    if got is None or int(got) != closures:
+        raise ValueError(f"{path}: k_f from {got} closures per frame, the ledger takes {closures} "
+                         "(knotflow-analyze --closures)")
+    if len(case.knots["frame_index"]) != case.nframes:
+        raise ValueError(f"{path}: k_f of {len(case.knots['frame_index'])} of "
+                         f"{case.nframes} frames (knotflow-analyze --stride 1)")
+    runs = case.runs or []
+    ident = {"file": source or path, "case_name": case.name,
+             "started": runs[0]["started"] if runs else ""}
+    segments = [] if entry is None else entry["segments"]
+    same = [k for k, s in enumerate(segments)
+            if s["case_name"] == ident["case_name"] and s["started"] == ident["started"]]
+    if same and same[0] != len(segments) - 1:
+        raise ValueError(f"{path}: segment {same[0] + 1} of {len(segments)} in the ledger; only "
+                         "the newest segment can be extended")
+    if not same:
+        reached = 0.0 if entry is None else float(entry["t_reached"])
+        if abs(offset - reached) > TIME_TOLERANCE or (entry is None and offset != 0.0):
+            raise ValueError(f"{path}: starts at t = {offset:g}, the ledger of {sweep}/{name} "
+                             f"reaches t = {reached:g}: a segment must go on where it ends")
+    if entry is not None and segments and not same:
+        if _scene_core(entry["scene"]) != _scene_core(str(case.attrs.get("scene", ""))):
+            raise ValueError(f"{path}: another scene than the ledger's {sweep}/{name}")
+    p = _paths(ledger, sweep, name)
+    os.makedirs(os.path.dirname(p["json"]), exist_ok=True)
+    old = read_rows(ledger, sweep, name)
+    new = frame_rows(case, offset)
+    rows = np.vstack([old[old[:, 0] < new[0, 0] - TIME_TOLERANCE], new])
+    t_end_case = float(case.attrs.get("integrator.t_end", math.nan)) + offset
+    segment = {**ident, "t_offset": offset, "t_first": float(new[0, 0]),
+               "t_last": float(new[-1, 0]), "status": case.status,
+               "git_hash": str(case.attrs.get("git_hash", "")),
+               "runs": [{k: _json_value(r.get(k)) for k in RUN_FIELDS} for r in runs],
+               "diagnostic_totals": {k: _json_value(v)
+                                     for k, v in (case.diagnostic_totals or {}).items()}}
+    segments = segments[:same[0]] if same else list(segments)
+    segments.append(segment)
+    finished = case.status == "finished"
+    scene = entry["scene"] if entry is not None else str(case.attrs.get("scene", ""))
+    entry = {"ledger_version": LEDGER_VERSION, "sweep": sweep, "case": name,
+             "status": "finished" if finished else "running",
+             "t_end": entry["t_end"] if entry is not None else t_end_case,
+             "t_reached": float(rows[-1, 0]), "n_beads": int(case.positions.shape[1]),
+             "kf_closures": closures, "positions_every": positions_every,
+             "scene": scene, "segments": segments}
+    # Positions: the kept frames before this segment, then this segment's.
+    kept_t, kept = read_positions(ledger, sweep, name)
+    chosen = _every(new[:, 0], positions_every) if positions_every > 0 else []
+    keep = kept_t < new[0, 0] - TIME_TOLERANCE
+    blocks = [np.column_stack([np.full(len(kept[0]), t), r]) for t, r in
+              zip(kept_t[keep], kept[keep])]
+    blocks += [np.column_stack([np.full(case.positions.shape[1], new[k, 0]), case.positions[k]])
+               for k in chosen]
+    if blocks:
+        np.savetxt(p["positions"] + ".tmp.gz", np.vstack(blocks), fmt="%.4f")
+        os.replace(p["positions"] + ".tmp.gz", p["positions"])
+    write_xyz(p["last"] + ".tmp", case.positions[-1],
+              comment=f"{sweep}/{name}: the frame at t = {new[-1, 0]:.17g} (knotflow-campaign)")
+    os.replace(p["last"] + ".tmp", p["last"])
+    _write_text(p["csv"], _rows_text(rows))
+    _write_text(p["json"], json.dumps(entry, indent=1) + "\n")
+    return entry
+
+
+def _every(times: np.ndarray, every: float) -> list:
+    """Indices of the frames at the multiples of `every` (and the last frame)."""
+    ratio = times / every
+    idx = [k for k, r in enumerate(ratio) if abs(r - round(r)) < TIME_TOLERANCE / every]
+    if len(times) and (not idx or idx[-1] != len(times) - 1):
+        idx.append(len(times) - 1)
+    return idx
+
+
+def _scene_core(text: str) -> str:
+    """A scene without what a continuation changes (&chain, t_end, dt_initial, &output)."""
+    groups = re.findall(r"&(\w+)\n(.*?)\n/", text, flags=re.S)
+    keep = []
+    for g, body in groups:
+        if g in ("chain", "output"):
+            continue
+        lines = [ln for ln in body.splitlines()
+                 if not re.match(r"\s*(t_end|dt_initial)\s*=", ln)]
+        keep.append(g + ":" + "\n".join(lines))
+    return "\n".join(keep)
+
+
+def continuation_scene(entry: dict, coordinate_file: str, directory: str) -> str:
+    """The scene that continues a ledger case from its newest frame (`coordinate_file`, a copy
+    of <case>.last.xyz) for the time still to run, into `directory`."""
+    text = entry["scene"]
+    t_reached, t_end = float(entry["t_reached"]), float(entry["t_end"])
+    if not t_end - t_reached > TIME_TOLERANCE:
+        raise ValueError(f"{entry['sweep']}/{entry['case']}: nothing left to run "
+                         f"(t = {t_reached:g} of {t_end:g})")
+
+    def setting(txt, group, var, value):
+        pat = re.compile(rf"(&{group}\n(?:(?!/\n).*\n)*?)\s*{var} = [^\n]*\n")
+        if not pat.search(txt):
+            raise ValueError(f"{entry['case']}: the ledger's scene has no &{group} {var}")
+        return pat.sub(lambda m: m.group(1) + f"  {var} = {value}\n", txt, count=1)
+
+    text = setting(text, "chain", "shape", "'file'")
+    text = setting(text, "chain", "coordinate_file", f"'{coordinate_file}'")
+    text = setting(text, "integrator", "t_end", f"{t_end - t_reached:.17g}")
+    text = setting(text, "output", "directory", f"'{directory}'")
+    text = setting(text, "output", "case_name",
+                   f"'{continuation_name(entry['case'], t_reached)}'")
+    return (f"! {entry['sweep']}/{entry['case']} from t = {t_reached:g} to {t_end:g} "
+            "(knotflow-campaign plan)\n" + text)
+
+
+def plan(scenes_dir: str, results: str, ledger: str, sweep: str) -> list:
+    """What to run next for each case of a sweep, in the order of its scenes
+    (`knotflow --write-scenes` into scenes_dir): a list of (case, action, scene path or None),
+    action 'finished', 'run' (the case's scene: starts it, or resumes its file here) or
+    'continue' (a continuation scene, written to results/<sweep>/continued/)."""
+    names = sorted(f[:-4] for f in os.listdir(scenes_dir) if f.endswith(".nml"))
+    out: list[tuple[str, str, str | None]] = []
+    for name in names:
+        scene = os.path.join(scenes_dir, name + ".nml")
+        entry = load(ledger, sweep, name)
+        if entry is None:
+            out.append((name, "run", scene))
+            continue
+        if entry["status"] == "finished":
+            out.append((name, "finished", None))
+            continue
+        here = [s for s in entry["segments"][-1:]
+                if os.path.exists(s["file"]) and _started(s["file"]) == s["started"]]
+        if here:   # the newest segment's file is on this machine: resume it
+            last = entry["segments"][-1]
+            own = last["case_name"] == name
+            out.append((name, "run", scene if own else _continuation_path(results, sweep, last)))
+            continue
+        cdir = os.path.join(results, sweep, "continued")
+        os.makedirs(cdir, exist_ok=True)
+        cname = continuation_name(name, float(entry["t_reached"]))
+        xyz = os.path.abspath(os.path.join(cdir, cname + ".xyz"))
+        write_xyz(xyz, read_xyz(_paths(ledger, sweep, name)["last"]))
+        path = os.path.join(cdir, cname + ".nml")
+        _write_text(path, continuation_scene(entry, xyz, cdir))
+        out.append((name, "continue", path))
+    return out
+
+
+def _continuation_path(results: str, sweep: str, segment: dict) -> str:
+    return os.path.join(results, sweep, "continued", segment["case_name"] + ".nml")
+
+
+def _started(path: str) -> str:
+    try:
+        runs = read_case(path).runs
+    except (OSError, ValueError):
+        return ""
+    return runs[0]["started"] if runs else ""
+
+
+def status_lines(ledger: str) -> list:
+    """One line per case of the ledger: sweep/case, status, time reached of t_end, segments,
+    wall time and mean load of its runs (weighted by wall time), commits."""
+    lines = []
+    for sweep in sorted(d for d in os.listdir(ledger) if os.path.isdir(os.path.join(ledger, d))):
+        for f in sorted(os.listdir(os.path.join(ledger, sweep))):
+            if not f.endswith(".json"):
+                continue
+            e = load(ledger, sweep, f[:-5])
+            if e is None:
+                continue
+            runs = [r for s in e["segments"] for r in s["runs"]]
+            wall = sum(r["wall_seconds"] or 0.0 for r in runs)
+            loaded = [(r["wall_seconds"], r["load_mean"]) for r in runs
+                      if r["wall_seconds"] and r["load_mean"] is not None]
+            load_mean = (sum(w * x for w, x in loaded) / sum(w for w, _ in loaded)
+                         if loaded else math.nan)
+            commits = ",".join(dict.fromkeys(str(r["commit"])[:7] for r in runs))
+            lines.append(f"{sweep}/{e['case']}: {e['status']}, t = {e['t_reached']:g} of "
+                         f"{e['t_end']:g}, {len(e['segments'])} segment(s), wall "
+                         f"{wall / 3600:.2f} h, load {load_mean:.1f}, commits {commits}")
+    return lines

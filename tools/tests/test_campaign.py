@@ -1,0 +1,95 @@
+"""The case ledger (knotflow_tools.campaign): names, the continuation scene, frame rows and the
+refusals of digest. The whole cycle with the real programs (a case killed, its machine lost,
+continued from the ledger) is tests/regression/check_campaign.py."""
+
+import h5py
+import numpy as np
+import pytest
+
+from knotflow_tools import campaign
+from knotflow_tools.io import read_case
+
+from conftest import unknotting_trefoil_frames, write_case
+
+SCENE = """&chain
+  shape = 'candycane'
+  n_beads = 152
+  coordinate_file = ''
+  seed = 1
+/
+&forces
+  bending_a = 1.0000000000000000
+/
+&integrator
+  method = 'dopri45'
+  t_end = 2000.0000000000000
+  dt_initial = 0.10000000000000000E-2
+/
+&output
+  directory = 'results/cc'
+  case_name = 'A1.00'
+  frame_interval = 1.0000000000000000
+/
+"""
+
+
+def entry(t_reached=1234.5, t_end=2000.0):
+    return {"sweep": "cc", "case": "A1.00", "scene": SCENE, "t_reached": t_reached,
+            "t_end": t_end}
+
+
+def test_names_round_trip():
+    assert campaign.continuation_name("A1.00", 1200.0) == "A1.00_from1200"
+    assert campaign.split_name(campaign.continuation_name("A1.00_s2", 12.5)) == ("A1.00_s2", 12.5)
+    assert campaign.split_name("A0.80_ora") == ("A0.80_ora", 0.0)
+
+
+def test_continuation_scene_changes_only_what_it_must():
+    text = campaign.continuation_scene(entry(), "/x/A1.00_from1234.5.xyz", "results/cc/continued")
+    body = [ln for ln in text.splitlines() if not ln.startswith("!")]
+    changed = {a: b for a, b in zip(SCENE.splitlines(), body) if a != b}
+    assert len(body) == len(SCENE.splitlines())
+    assert changed == {
+        "  shape = 'candycane'": "  shape = 'file'",
+        "  coordinate_file = ''": "  coordinate_file = '/x/A1.00_from1234.5.xyz'",
+        "  t_end = 2000.0000000000000": "  t_end = 765.5",
+        "  directory = 'results/cc'": "  directory = 'results/cc/continued'",
+        "  case_name = 'A1.00'": "  case_name = 'A1.00_from1234.5'",
+    }
+    # The core of the scene (what a continuation must not change) is the same.
+    assert campaign._scene_core(text) == campaign._scene_core(SCENE)
+
+
+def test_continuation_refused_when_nothing_is_left():
+    with pytest.raises(ValueError, match="nothing left to run"):
+        campaign.continuation_scene(entry(t_reached=2000.0), "a.xyz", "d")
+
+
+def test_positions_every():
+    t = np.arange(26.0) + 0.0
+    assert campaign._every(t, 10.0) == [0, 10, 20, 25]
+    assert campaign._every(np.arange(1200.0, 1221.0), 10.0) == [0, 10, 20]
+
+
+def test_frame_rows_and_refusals(tmp_path):
+    path = str(write_case(tmp_path / "A1.00.h5", unknotting_trefoil_frames(6), status="running"))
+    with pytest.raises(ValueError, match="run knotflow-analyze first"):
+        campaign.digest(path, str(tmp_path / "ledger"), "cc", 10)
+    with h5py.File(path, "r+") as f:
+        g = f.create_group("analysis/knots")
+        g.attrs["closures"] = np.int64(10)
+        g["frame_index"] = np.array([0, 2, 4], dtype=np.int64)
+        g["time"] = np.array([0.0, 2.0, 4.0])
+        g["kf"] = np.array([0.9, 0.5, 0.1])
+    case = read_case(path)
+    rows = campaign.frame_rows(case, 100.0)
+    col = {c: k for k, c in enumerate(campaign.FRAME_COLUMNS)}
+    assert np.array_equal(rows[:, col["t"]], 100.0 + np.arange(6.0))
+    assert np.array_equal(rows[[0, 2, 4], col["kf"]], [0.9, 0.5, 0.1])
+    assert np.all(np.isnan(rows[[1, 3, 5], col["kf"]]))
+    assert np.array_equal(rows[:, col["rg"]], case.observables["rg"])
+    with pytest.raises(ValueError, match="from 10 closures per frame, the ledger takes 20"):
+        campaign.digest(path, str(tmp_path / "ledger"), "cc", 20)
+    with pytest.raises(ValueError, match="k_f of 3 of 6 frames"):
+        campaign.digest(path, str(tmp_path / "ledger"), "cc", 10)
+    assert not (tmp_path / "ledger").exists()
