@@ -13,7 +13,7 @@ program knotflow
   use kf_scene, only: scene_t
   use kf_scene_items, only: scene_text
   use kf_sweep, only: sweep_t, read_sweep
-  use kf_fs, only: make_directory, check_writable_directory, lock_directory, rename_file, &
+  use kf_fs, only: make_directory, check_writable_directory, lock_directory, lock_case, rename_file, &
                    ignore_file_size_signal
   use kf_h5, only: h5_initialize, h5_finalize
   use kf_case_runner, only: case_path
@@ -76,7 +76,14 @@ program knotflow
   if (me == 0) then
     call make_directory(directory, error)
     if (.not. allocated(error)) call check_writable_directory(directory, error)
-    if (.not. (allocated(error) .or. dry_run)) call lock_directory(directory, error)
+    if (.not. (allocated(error) .or. dry_run)) then
+      ! One case: other single cases may share the directory (kf_fs: lock_case).
+      if (sw%n_cases() == 1) then
+        call lock_case(directory, single_case_name(), error)
+      else
+        call lock_directory(directory, error)
+      end if
+    end if
   end if
   call agree(error)
   if (allocated(error)) call stop_all(trim(scene_file)//': &output: directory = '''//directory// &
@@ -185,6 +192,13 @@ contains
     write (output_unit, '(a)') 'knotflow: '//to_str(sw%n_cases())//' scene(s) written to '//scenes_dir
   end subroutine write_case_scenes
 
+  !> The name of case 1: the case of a scene without &sweep.
+  function single_case_name() result(name)
+    character(len=:), allocatable :: name
+    type(scene_t) :: sc
+    call sw%case_scene(1, sc, name)
+  end function single_case_name
+
   !> The resources of one case (kf_resources), and the models built once for it (they refuse
   !> what they cannot compute): the listed parameters of a sweep (A,
   !> orientation, seed) change neither the number of beads nor the sizes, so case 1 stands for
@@ -240,14 +254,17 @@ contains
   !> stderr and counts as a failure (exit status 3).
   subroutine write_summary()
     type(scene_t) :: sc
-    character(len=:), allocatable :: name, line
+    character(len=:), allocatable :: name, line, tmp
     character(len=256) :: msg
     integer :: k, ut, uj, ios, iosj
     logical :: ok
     ok = .false.
     msg = ''
-    open (newunit=ut, file=directory//'/summary.txt.tmp', status='replace', action='write', iostat=ios, iomsg=msg)
-    if (ios == 0) open (newunit=uj, file=directory//'/summary.json.tmp', status='replace', action='write', &
+    ! Temporary names of their own for single-case runs, which may share the directory.
+    tmp = '.tmp'
+    if (sw%n_cases() == 1) tmp = '.'//single_case_name()//'.tmp'
+    open (newunit=ut, file=directory//'/summary.txt'//tmp, status='replace', action='write', iostat=ios, iomsg=msg)
+    if (ios == 0) open (newunit=uj, file=directory//'/summary.json'//tmp, status='replace', action='write', &
                         iostat=ios, iomsg=msg)
     if (ios == 0) then
       iosj = 0
@@ -270,20 +287,20 @@ contains
       close (ut, iostat=iosj)
       if (ios == 0 .and. iosj /= 0) then
         ios = iosj
-        msg = 'closing summary.txt.tmp failed'
+        msg = 'closing summary.txt'//tmp//' failed'
       end if
       close (uj, iostat=iosj)
       if (ios == 0 .and. iosj /= 0) then
         ios = iosj
-        msg = 'closing summary.json.tmp failed'
+        msg = 'closing summary.json'//tmp//' failed'
       end if
       ok = ios == 0
     end if
     if (ok) then
       block
         type(error_t), allocatable :: err
-        call rename_file(directory//'/summary.txt.tmp', directory//'/summary.txt', err)
-        if (.not. allocated(err)) call rename_file(directory//'/summary.json.tmp', directory//'/summary.json', err)
+        call rename_file(directory//'/summary.txt'//tmp, directory//'/summary.txt', err)
+        if (.not. allocated(err)) call rename_file(directory//'/summary.json'//tmp, directory//'/summary.json', err)
         if (allocated(err)) then
           ok = .false.
           msg = err%message

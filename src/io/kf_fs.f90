@@ -8,7 +8,7 @@ module kf_fs
   implicit none
   private
 
-  public :: make_directory, check_writable_directory, file_exists, remove_file, lock_directory
+  public :: make_directory, check_writable_directory, file_exists, remove_file, lock_directory, lock_case
   public :: rename_file, move_aside, clear_os_error, os_error_text, ignore_file_size_signal
 
   interface
@@ -60,7 +60,7 @@ module kf_fs
 
   integer(c_int), parameter :: w_ok = 2, x_ok = 1, f_ok = 0
   ! open(2) and flock(2) constants of Linux (and the BSDs for these values).
-  integer(c_int), parameter :: o_rdwr = 2, o_creat = 64, lock_ex = 2, lock_nb = 4
+  integer(c_int), parameter :: o_rdwr = 2, o_creat = 64, lock_sh = 1, lock_ex = 2, lock_nb = 4
 
 contains
 
@@ -122,20 +122,40 @@ contains
   subroutine lock_directory(dir, error)
     character(len=*), intent(in) :: dir
     type(error_t), allocatable, intent(out) :: error
-    character(len=:), allocatable :: path
+    call take_lock(trim(dir)//'/.knotflow.lock', lock_ex, 'another knotflow run is writing into this directory', &
+      error)
+  end subroutine lock_directory
+
+  !> The locks of a run of one case (a scene without &sweep, e.g. from knotflow --write-scenes),
+  !> held for the rest of the process: `<dir>/.knotflow.lock` shared, so that runs of other
+  !> single cases may write into the directory at the same time while a sweep or an analysis of
+  !> it (which lock it exclusively) may not, and `<dir>/.knotflow.<case>.lock` exclusive, so
+  !> that the same case is not run twice at once.
+  subroutine lock_case(dir, case_name, error)
+    character(len=*), intent(in) :: dir, case_name
+    type(error_t), allocatable, intent(out) :: error
+    call take_lock(trim(dir)//'/.knotflow.lock', lock_sh, 'a knotflow sweep or analysis is using this directory', &
+      error)
+    if (.not. allocated(error)) call take_lock(trim(dir)//'/.knotflow.'//trim(case_name)//'.lock', lock_ex, &
+                                               'another knotflow run is computing case '//trim(case_name)//' here', error)
+  end subroutine lock_case
+
+  !> flock(2) `operation` (without blocking) on `path`, created if missing; the descriptor
+  !> stays open on purpose: closing it would release the lock.
+  subroutine take_lock(path, operation, held_by, error)
+    character(len=*), intent(in) :: path, held_by
+    integer(c_int), intent(in) :: operation
+    type(error_t), allocatable, intent(out) :: error
     integer(c_int) :: fd
-    path = trim(dir)//'/.knotflow.lock'
     fd = c_open(path//c_null_char, ior(o_rdwr, o_creat), int(o'644', c_int))
     if (fd < 0) then
       call fatal_error(error, "cannot create the lock file '"//path//"'")
       return
     end if
-    ! The descriptor stays open on purpose: closing it would release the lock.
-    if (c_flock(fd, ior(lock_ex, lock_nb)) /= 0) then
-      call fatal_error(error, 'another knotflow run is writing into this directory (it holds '''// &
-        path//'''): wait for it to end, or choose another output directory')
+    if (c_flock(fd, ior(operation, lock_nb)) /= 0) then
+      call fatal_error(error, held_by//' (it holds '''//path//'''): wait for it to end, or choose another output directory')
     end if
-  end subroutine lock_directory
+  end subroutine take_lock
 
   !> Ignore SIGXFSZ (Linux: 25), which the kernel sends when a write passes the file size limit
   !> (`ulimit -f`) and which otherwise kills the program (the Fortran runtime even installs a

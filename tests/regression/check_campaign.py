@@ -4,9 +4,10 @@ A sweep of two trefoils (RPY + excluded volume, t_end = 40) is run twice:
 1. uninterrupted, analysed (knotflow-analyze, every frame) and digested into a reference ledger;
 2. as a campaign: `knotflow --write-scenes` writes each case's scene; case A1.40 is run from its
    own scene (which writes the very file the sweep would: the sweep's dry run accepts it),
-   killed after t = 15, its copy analysed and digested; then the machine is "lost" (results deleted). `plan` must say
-   'continue' for A (from the ledger's newest frame) and 'run' for B; each planned scene is run,
-   analysed and digested.
+   killed after t = 15 (while it runs, A again and the sweep are refused by the locks, and B
+   runs beside it from its own scene), its copy analysed and digested; then the machine is
+   "lost" (results deleted). `plan` must say 'continue' for A (from the ledger's newest frame)
+   and 'run' for B; each planned scene is run, analysed and digested.
 Checked: the ledger rows of A are the frames 0, 1, ..., 40 exactly once; before the kill they
 equal the reference rows (same file, same frames, same k_f); after it the continuation is the
 same physics restarted (step size, overlap monitor): the chain at t = 40 within 0.05 d of the
@@ -99,6 +100,16 @@ run(exe, "sw.nml", "--write-scenes", "scenes")
 assert sorted(os.listdir("scenes")) == ["A1.40.nml", "A2.20.nml"], os.listdir("scenes")
 proc = subprocess.Popen([exe, "scenes/A1.40.nml"], stdout=subprocess.DEVNULL,
                         stderr=subprocess.DEVNULL)
+# Locks while A runs alone in the sweep's directory: A again and the sweep are refused, B runs
+# beside it (a single case takes the directory lock shared and its own case lock).
+while proc.poll() is None and not os.path.exists("results/sw/A1.40.h5"):
+    time.sleep(0.05)
+for args, text in ((["scenes/A1.40.nml"], "computing case A1.40 here"),
+                   (["sw.nml"], "another knotflow run is writing into this directory")):
+    r = subprocess.run([exe] + args, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and text in r.stderr, (args, r.returncode, r.stderr)
+beside = subprocess.Popen([exe, "scenes/A2.20.nml"], stdout=subprocess.DEVNULL,
+                          stderr=subprocess.PIPE, text=True)
 t_kill = 0.0
 deadline = time.time() + 300
 while time.time() < deadline and proc.poll() is None:
@@ -113,6 +124,8 @@ while time.time() < deadline and proc.poll() is None:
 proc.send_signal(signal.SIGKILL)
 proc.wait()
 assert 15.0 <= t_kill < 40.0, f"killed at t = {t_kill}"
+assert beside.wait(timeout=600) == 0, beside.stderr.read()
+os.remove("results/sw/A2.20.h5")
 # The single-case scene wrote the sweep's own file: the sweep accepts it (dry run: no refusal).
 run(exe, "sw.nml", "--dry-run")
 e = digest("results/sw/A1.40.h5", "ledger")

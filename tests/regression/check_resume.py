@@ -69,7 +69,8 @@ def kill_and_rerun(name):
     # take it for a corrupt one and delete it).
     second = subprocess.run([exe, killed], capture_output=True, text=True, timeout=120)
     assert second.returncode == 2, (second.returncode, second.stdout, second.stderr)
-    assert "another knotflow run" in second.stderr and ".knotflow.lock" in second.stderr, second.stderr
+    # (a single case: its case lock, kf_fs lock_case)
+    assert "computing case c here" in second.stderr and ".knotflow.c.lock" in second.stderr, second.stderr
     assert os.path.exists(path)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
