@@ -3,7 +3,7 @@
 # what each case needs is kept in the case ledger (docs/reproduction_multipole/ledger, small
 # committed text files: knotflow-campaign, docs/analysis.md "The case ledger"), and the next
 # machine goes on from it.
-#   scripts/campaign.sh [--workers N] [--digest] [--no-run] [--results DIR] [--ledger DIR]
+#   scripts/campaign.sh [--workers N] [--digest] [--no-run] [--workdir DIR] [--ledger DIR]
 #
 #   (default)   run: each case of every sweep as a single-case scene (knotflow --write-scenes),
 #               N processes of one rank each (default KNOTFLOW_NP, 2) taking the cases in
@@ -16,8 +16,9 @@
 #               k_f of every frame (knotflow-analyze, closures of scripts/study_sweeps.sh),
 #               knotflow-campaign digest. Run it before the machine goes (it may run beside
 #               the campaign: it reads copies), then commit the ledger.
-#   --results   where the case files go (default results); --ledger: default
-#               docs/reproduction_multipole/ledger.
+#   --workdir   where knotflow runs (default: the repository): the case files go where the
+#               inputs say, DIR/results/<sweep>/; --ledger: default
+#               docs/reproduction_multipole/ledger of the repository.
 # Positions kept in the ledger: the candy-canes every 10 time units (the knot matrices of the
 # slipknot search, snapshots), the further rotations every 50, the trefoils every 100; every
 # case's newest frame at full precision.
@@ -30,8 +31,8 @@ source "$KF_ROOT/scripts/study_sweeps.sh"
 
 run=1
 digest=0
-results=results
-ledger=docs/reproduction_multipole/ledger
+workdir="$KF_ROOT"
+ledger="$KF_ROOT/docs/reproduction_multipole/ledger"
 workers="$(kf_ranks)"
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -40,28 +41,31 @@ while [ $# -gt 0 ]; do
       workers="$2"; shift 2 ;;
     --digest) digest=1; shift ;;
     --no-run) run=0; shift ;;
-    --results) [ $# -ge 2 ] || kf_die "--results needs a directory"; results="$2"; shift 2 ;;
+    --workdir) [ $# -ge 2 ] || kf_die "--workdir needs a directory"; workdir="$2"; shift 2 ;;
     --ledger) [ $# -ge 2 ] || kf_die "--ledger needs a directory"; ledger="$2"; shift 2 ;;
-    *) kf_die "unknown argument '$1' (allowed: --workers N, --digest, --no-run, --results DIR, --ledger DIR)" ;;
+    *) kf_die "unknown argument '$1' (allowed: --workers N, --digest, --no-run, --workdir DIR, --ledger DIR)" ;;
   esac
 done
-cd "$KF_ROOT"
 [ -d "$KF_BUILD_DIR/venv/bin" ] && PATH="$KF_BUILD_DIR/venv/bin:$PATH"
-knotflow="$KF_BUILD_DIR/bin/knotflow"
-analyze="$KF_BUILD_DIR/bin/knotflow-analyze"
+knotflow="$(cd "$KF_BUILD_DIR" && pwd)/bin/knotflow"
+analyze="$(cd "$KF_BUILD_DIR" && pwd)/bin/knotflow-analyze"
 for exe in "$knotflow" "$analyze"; do
   [ -x "$exe" ] || kf_die "$exe not found (build first: bash scripts/build.sh)"
 done
 command -v knotflow-campaign >/dev/null 2>&1 || kf_die "knotflow-campaign not found (bash scripts/build.sh installs it)"
 kf_study_arrays multipole 1 || exit 1
-mkdir -p "$results" "$ledger"
+mkdir -p "$workdir/results" "$ledger"
+ledger="$(cd "$ledger" && pwd)"
+# Everything from here on in the work directory: the inputs' output directories are relative.
+cd "$workdir"
+results=results
 
 # One line "sweep case action scene" per case still to run, cases with progress first.
 queue() {
   local i sweep
   for i in "${!KF_STUDY_SWEEPS[@]}"; do
     sweep="${KF_STUDY_SWEEPS[i]}"
-    "$knotflow" "inputs/$sweep.nml" --write-scenes "$results/scenes/$sweep" >/dev/null
+    "$knotflow" "$KF_ROOT/inputs/$sweep.nml" --write-scenes "$results/scenes/$sweep" >/dev/null
     knotflow-campaign plan --scenes "$results/scenes/$sweep" --results "$results" \
       --ledger "$ledger" --sweep "$sweep" | awk -v s="$sweep" '$2 != "finished" {print NR, s, $0}'
   done | while read -r rank sweep case action scene; do
@@ -111,7 +115,12 @@ if [ "$digest" = 1 ]; then
       rel="${f#"$results"/}"
       mkdir -p "$copies/$(dirname "$rel")"
       cp "$f" "$copies/$rel.tmp" && mv "$copies/$rel.tmp" "$copies/$rel"
-      "$analyze" "$copies/$rel" --closures "$closures" --stride 1 >/dev/null
+      # A file killed before its first frame was whole has nothing to digest (the next run
+      # starts it again).
+      if ! "$analyze" "$copies/$rel" --closures "$closures" --stride 1 >/dev/null; then
+        kf_log "not digested: $f (knotflow-analyze refused it, above)"
+        continue
+      fi
       knotflow-campaign digest "$copies/$rel" --copies "$copies" --results "$results" \
         --ledger "$ledger" --sweep "$sweep" --closures "$closures" --positions-every "$every" \
         || kf_log "not digested: $f (above)"

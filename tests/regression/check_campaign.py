@@ -98,31 +98,28 @@ for bad, text in ((["--write-scenes"], "--write-scenes needs a directory"),
     assert r.returncode == 2 and text in r.stderr, (bad, r.returncode, r.stderr)
 run(exe, "sw.nml", "--write-scenes", "scenes")
 assert sorted(os.listdir("scenes")) == ["A1.40.nml", "A2.20.nml"], os.listdir("scenes")
-proc = subprocess.Popen([exe, "scenes/A1.40.nml"], stdout=subprocess.DEVNULL,
-                        stderr=subprocess.DEVNULL)
-# Locks while A runs alone in the sweep's directory: A again and the sweep are refused, B runs
-# beside it (a single case takes the directory lock shared and its own case lock).
+proc = subprocess.Popen([exe, "scenes/A1.40.nml"], stdout=subprocess.PIPE,
+                        stderr=subprocess.DEVNULL, text=True)
+# Locks while A runs (stopped meanwhile, holding them) in the sweep's directory: A again and the
+# sweep are refused, B runs beside it (a single case takes the directory lock shared and its own
+# case lock).
 while proc.poll() is None and not os.path.exists("results/sw/A1.40.h5"):
-    time.sleep(0.05)
+    time.sleep(0.01)
+proc.send_signal(signal.SIGSTOP)
 for args, text in ((["scenes/A1.40.nml"], "computing case A1.40 here"),
                    (["sw.nml"], "another knotflow run is writing into this directory")):
     r = subprocess.run([exe] + args, capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and text in r.stderr, (args, r.returncode, r.stderr)
 beside = subprocess.Popen([exe, "scenes/A2.20.nml"], stdout=subprocess.DEVNULL,
                           stderr=subprocess.PIPE, text=True)
-t_kill = 0.0
-deadline = time.time() + 300
-while time.time() < deadline and proc.poll() is None:
-    time.sleep(0.2)
-    try:
-        with h5py.File("results/sw/A1.40.h5", "r", locking=False) as h:
-            t_kill = float(h["frames/time"][-1]) if "frames/time" in h else 0.0
-    except (OSError, KeyError):
-        continue
-    if t_kill >= 15.0:
+proc.send_signal(signal.SIGCONT)
+for line in proc.stdout:          # one progress line per frame (progress_interval = 0)
+    if ": t = 15.000 /" in line:
         break
 proc.send_signal(signal.SIGKILL)
 proc.wait()
+with h5py.File("results/sw/A1.40.h5", "r") as h:
+    t_kill = float(h["frames/time"][-1])
 assert 15.0 <= t_kill < 40.0, f"killed at t = {t_kill}"
 assert beside.wait(timeout=600) == 0, beside.stderr.read()
 os.remove("results/sw/A2.20.h5")
@@ -185,10 +182,10 @@ shutil.copy("results_old/sw/A1.40.h5", old)
 run(analyze, old, "--closures", str(CLOSURES), "--stride", "1")
 refused(lambda: campaign.digest(old, "ledger", SWEEP, CLOSURES, 10.0, "results_old/sw/A1.40.h5"),
         "a segment must go on where it ends")
-gap = f"copies_old/sw/A1.40_from{T + 5:g}.h5"
+gap = "copies_old/sw/A1.40_from45.h5"     # the ledger ends at t = 40
 shutil.copy(old, gap)
 with h5py.File(gap, "r+") as h:
-    h.attrs["case_name"] = f"A1.40_from{T + 5:g}"
+    h.attrs["case_name"] = "A1.40_from45"
 refused(lambda: campaign.digest(gap, "ledger", SWEEP, CLOSURES, 10.0, gap),
         "a segment must go on where it ends")
 assert snapshot("ledger") == kept

@@ -1,0 +1,103 @@
+#!/bin/bash
+# scripts/campaign.sh end to end on small sweeps put where the multipole study's inputs are
+# (RPY + excluded volume, seconds; the script does not depend on the model):
+#   1. the campaign with 2 workers is killed (its process group) once the candy-cane A1.00 has
+#      passed t = 8; `--no-run --digest` puts every case file into the ledger (k_f of every
+#      frame with the study's 1000 closures);
+#   2. the machine is lost (results/ deleted); the campaign runs again with --digest: its queue
+#      continues A1.00 from the ledger (the other cases: those the ledger has finished are not
+#      run again, the rest start), every case finishes, and the ledger holds every frame of
+#      every case once (A1.00 in two segments, the second one `A1.00_from<T>`);
+#   3. a third run has nothing to do and changes no ledger row.
+# Exit status 77 (ctest: skipped) without the system's numpy/h5py/matplotlib for the tools.
+# Usage: check_campaign_script.sh SOURCE_DIR BUILD_DIR WORKDIR
+set -uo pipefail
+src="$(cd "$1" && pwd)" build="$(cd "$2" && pwd)" work="$3"
+fail() { echo "FAIL: $*" >&2; exit 1; }
+rm -rf "${work}"
+proj="${work}/project"
+mkdir -p "${proj}/build/bin" "${proj}/inputs" "${proj}/tools"
+cp -r "${src}/scripts" "${proj}/"
+cp -r "${src}/tools/pyproject.toml" "${src}/tools/src" "${proj}/tools/"
+ln -s "${build}/bin/knotflow" "${proj}/build/bin/knotflow"
+ln -s "${build}/bin/knotflow-analyze" "${proj}/build/bin/knotflow-analyze"
+if ! { /usr/bin/python3 -m venv --system-site-packages "${proj}/build/venv" \
+       && "${proj}/build/venv/bin/python" -m pip install -q --no-deps --no-build-isolation --no-index -e "${proj}/tools" \
+       && "${proj}/build/venv/bin/knotflow-campaign" --help; } >"${work}/venv.log" 2>&1; then
+  echo "SKIP: no Python tools (system python3 without numpy/h5py/matplotlib?): $(tail -n 2 "${work}/venv.log")"
+  exit 77
+fi
+py="${proj}/build/venv/bin/python"
+cd "${proj}" || fail "no project directory"
+scene() {   # scene SWEEP "chain" "sweep line" T_END
+  cat >"inputs/$1.nml" <<NML
+&chain $2 /
+&forces excluded_volume = .true. /
+&integrator t_end = $4 /
+&output directory = 'results/$1', frame_interval = 1.0, progress_interval = 0.0 /
+$3
+NML
+}
+scene trefoil_table2_multipole "shape = 'trefoil'" "&sweep orientation = 'a', 'c' /" 3.0
+scene candycane_multipole "shape = 'candycane'" "&sweep bending_a = 1.0 /" 20.0
+scene candycane_seeds_multipole "shape = 'candycane'" "&sweep bending_a = 1.0, 3.0, seed = 1 /" 2.0
+ledger="docs/reproduction_multipole/ledger"
+
+# 1. Killed part-way, digested.
+setsid bash scripts/campaign.sh --workers 2 >"${work}/run1.log" 2>&1 &
+pgid=$!
+reached() {   # the time of the newest frame of a case file, 0 without one
+  "$py" - "$1" <<'PY' 2>/dev/null || echo 0
+import sys, h5py
+with h5py.File(sys.argv[1], "r", locking=False) as h:
+    print(float(h["frames/time"][-1]) if "frames/time" in h else 0.0)
+PY
+}
+# Its progress lines (one per frame) say when it has passed t = 8.
+for _ in $(seq 1 1200); do
+  grep -Eq "case A1.00: t = ([89]|1[0-9])\.000 " results/campaign_candycane_multipole.A1.00.log 2>/dev/null && break
+  sleep 0.1
+done
+kill -KILL -- "-${pgid}" 2>/dev/null
+wait "${pgid}" 2>/dev/null
+t_kill="$(reached results/candycane_multipole/A1.00.h5)"
+"$py" -c "import sys; sys.exit(0 if 8 <= float('$t_kill') < 20 else 1)" \
+  || fail "the campaign was not killed part-way (A1.00 at t = $t_kill): $(tail -n 5 "${work}/run1.log")"
+bash scripts/campaign.sh --no-run --digest >"${work}/digest1.log" 2>&1 \
+  || fail "campaign.sh --no-run --digest: $(tail -n 5 "${work}/digest1.log")"
+grep -q "candycane_multipole/A1.00: running" "${work}/digest1.log" || fail "A1.00 not in the ledger as running: $(cat "${work}/digest1.log")"
+
+# 2. The machine is lost: go on from the ledger.
+rm -rf results
+bash scripts/campaign.sh --workers 2 --digest >"${work}/run2.log" 2>&1 \
+  || fail "campaign.sh --digest after the loss: $(tail -n 10 "${work}/run2.log")"
+grep -q "candycane_multipole/A1.00 (continue: results/candycane_multipole/continued/A1.00_from" "${work}/run2.log" \
+  || fail "A1.00 was not continued from the ledger: $(cat "${work}/run2.log")"
+"$py" - "$ledger" <<'PY' || fail "the ledger after the loss is not the whole campaign"
+import sys
+import numpy as np
+from knotflow_tools import campaign
+ledger = sys.argv[1]
+cases = {"trefoil_table2_multipole": {"ora": 3.0, "orc": 3.0},
+         "candycane_multipole": {"A1.00": 20.0},
+         "candycane_seeds_multipole": {"A1.00_s1": 2.0, "A3.00_s1": 2.0}}
+for sweep, names in cases.items():
+    for name, t_end in names.items():
+        e = campaign.load(ledger, sweep, name)
+        assert e is not None and e["status"] == "finished", (sweep, name, e)
+        rows = campaign.read_rows(ledger, sweep, name)
+        assert np.array_equal(rows[:, 0], np.arange(t_end + 1)), (sweep, name, rows[:, 0])
+        assert np.all(np.isfinite(rows[:, 1])) and e["kf_closures"] == 1000, (sweep, name)
+e = campaign.load(ledger, "candycane_multipole", "A1.00")
+assert len(e["segments"]) == 2 and e["segments"][1]["case_name"].startswith("A1.00_from"), e
+assert e["segments"][1]["t_offset"] == e["segments"][0]["t_last"] >= 8, e["segments"]
+t, pos = campaign.read_positions(ledger, "candycane_multipole", "A1.00")
+assert np.array_equal(t, [0.0, 10.0, 20.0]) and pos.shape == (3, 152, 3), (t, pos.shape)
+PY
+
+# 3. Nothing left to do; the ledger stays as it is.
+before="$(cat "${ledger}"/*/*.csv | md5sum)"
+bash scripts/campaign.sh --workers 2 >"${work}/run3.log" 2>&1 || fail "a third campaign.sh: $(tail -n 5 "${work}/run3.log")"
+grep -q "^==> 0 case(s) to run" "${work}/run3.log" || fail "a finished campaign ran again: $(cat "${work}/run3.log")"
+[ "$(cat "${ledger}"/*/*.csv | md5sum)" = "${before}" ] || fail "the ledger changed without a run"
+echo "campaign.sh: killed at t = ${t_kill}, continued from the ledger on a new results directory, every case finished once"
