@@ -1,5 +1,6 @@
 !> Program knotflow-analyze: knot analysis of a coordinate file (text + --json), or of HDF5 case files
-!> (the /analysis group). A thin program: parse and validate options, run the library, report.
+!> (the /analysis group), or the case mode (kf_modes) of a table of frame rows (a case ledger's
+!> CSV, docs/analysis.md). A thin program: parse and validate options, run the library, report.
 !> Errors become one line on stderr and a non-zero exit: 2 for a usage error or a refused directory
 !> (nothing written), 1 for a failure while analysing.
 !> With several MPI ranks every decision (an error, what is already stored) is taken once and
@@ -18,6 +19,8 @@ program knotflow_analyze
   use kf_knot_matrix, only: knot_matrix, knot_core, is_slipknot, default_min_length, &
     default_matrix_closures, for_max_merge, after_max_merge
   use kf_text_coords, only: read_coordinates
+  use kf_frame_table, only: read_table_columns
+  use kf_modes, only: case_mode, mode_none, mode_one, mode_two
   use kf_analysis_farm, only: analysis_farm_t, farm_start, farm_stop, farm_max, farm_sum, farm_any, &
     farm_share
   use kf_fs, only: lock_directory
@@ -35,6 +38,8 @@ program knotflow_analyze
     '                        [--min-length M] [--closure-points FILE] [--json] [--per-closure]'//new_line('a')// &
     '       knotflow-analyze CASE.h5 [CASE2.h5 ...] [--closures N] [--seed S] [--stride K]'//new_line('a')// &
     '                        [--matrix-frames k1,k2|last] [--min-length M] [--force]'//new_line('a')// &
+    '       knotflow-analyze ROWS.csv [--json]   (the case mode of frame rows with columns mode, phi)'// &
+    new_line('a')// &
     '       knotflow-analyze --help | --version'
   integer, parameter :: max_files = 4096
   integer, parameter :: path_len = 1024
@@ -71,6 +76,9 @@ program knotflow_analyze
   status = status_failed
   if (is_case_file(opt%files(1))) then
     call analyse_case_files(opt, farm, status, error)
+  else if (is_table(opt%files(1))) then
+    status = status_refused
+    call analyse_table(opt, farm, error)
   else
     call analyse_coordinates(opt, farm, error)
   end if
@@ -88,6 +96,44 @@ contains
     if (n >= 3) is_case_file = path(n - 2:n) == '.h5'
     if (n >= 5) is_case_file = is_case_file .or. path(n - 4:n) == '.hdf5'
   end function is_case_file
+
+  logical function is_table(path)
+    character(len=*), intent(in) :: path
+    integer :: n
+    n = len_trim(path)
+    is_table = .false.
+    if (n >= 4) is_table = path(n - 3:n) == '.csv'
+  end function is_table
+
+  !> Mode 3: the case mode of frame rows (columns `mode`, the mode of each frame, and `phi`;
+  !> every frame in time order), by the one rule of kf_modes: the whole case's long-time mode
+  !> when its frames come from several runs (the case ledger). Every rank reads; rank 0 prints.
+  subroutine analyse_table(opt, farm, error)
+    type(options_t), intent(in) :: opt
+    type(analysis_farm_t), intent(in) :: farm
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: v(:, :)
+    integer :: mode, k
+    call read_table_columns(opt%files(1), [character(len=4) :: 'mode', 'phi'], v, error)
+    if (allocated(error)) return
+    do k = 1, size(v, 1)
+      if (ieee_is_nan(v(k, 1)) .or. ieee_is_nan(v(k, 2)) .or. &
+          .not. any(v(k, 1) == [real(wp) :: mode_none, mode_one, mode_two])) then
+        call fatal_error(error, "table '"//trim(opt%files(1))//"' row "//to_str(k)//': mode '// &
+          to_str(v(k, 1), '(g0.6)')//', phi '//to_str(v(k, 2), '(g0.6)')// &
+          ' (allowed: mode 0, 1 or 2 and a number for phi)')
+        return
+      end if
+    end do
+    mode = case_mode(nint(v(:, 1)), v(:, 2))
+    if (farm%rank /= 0) return
+    if (opt%json) then
+      write (output_unit, '(a)') '{"file": "'//trim(opt%files(1))//'", "frames": '//to_str(size(v, 1))// &
+        ', "case_mode": '//to_str(mode)//'}'
+    else
+      write (output_unit, '(a)') trim(opt%files(1))//': '//to_str(size(v, 1))//' frames, case mode '//to_str(mode)
+    end if
+  end subroutine analyse_table
 
   !> True on every rank when `error` is set on any rank (a collective call: every rank makes it
   !> at the same point); a rank without an error of its own gets one naming `what`.
@@ -183,7 +229,13 @@ contains
       call fatal_error(error, 'no input file given')
       return
     end if
-    if (is_case_file(opt%files(1))) then
+    if (is_table(opt%files(1))) then
+      if (opt%nfiles > 1 .or. opt%matrix .or. opt%per_closure .or. len_trim(opt%closure_points) > 0 .or. &
+          opt%stride /= 1 .or. opt%force .or. len_trim(opt%matrix_frames) > 0) then
+        call fatal_error(error, 'a table of frame rows (.csv) is read alone, with --json at most')
+        return
+      end if
+    else if (is_case_file(opt%files(1))) then
       if (opt%matrix .or. opt%json .or. opt%per_closure .or. len_trim(opt%closure_points) > 0) then
         call fatal_error(error, 'options --matrix, --json, --per-closure and --closure-points apply to '// &
           'coordinate files, not to case files (use --matrix-frames for knot matrices)')

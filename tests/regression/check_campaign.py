@@ -12,11 +12,13 @@ Checked: the ledger rows of A are the frames 0, 1, ..., 40 exactly once; before 
 equal the reference rows (same file, same frames, same k_f); after it the continuation is the
 same physics restarted (step size, overlap monitor): the chain at t = 40 within 0.05 d of the
 uninterrupted one and R_g within 1 %. A has two segments, B one; both finished; `plan` then says
-'finished'. `--write-scenes` without a directory, or into one that cannot be made, exits with
+'finished'. The case mode of a one-segment case's rows (knotflow-analyze ROWS.csv) is the
+file's. `--write-scenes` without a directory, or into one that cannot be made, exits with
 status 2. Refused, leaving the ledger as it was: a file analysed with other closures, the old
 segment again after its continuation (a rewind), a gap.
 Usage: check_campaign.py KNOTFLOW KNOTFLOW_ANALYZE WORKDIR   (Python with knotflow_tools)
 """
+import json
 import os
 import shutil
 import signal
@@ -87,6 +89,13 @@ def refused(fn, text):
 run(exe, "sw.nml")
 for c in ("A1.40", "A2.20"):
     digest(f"results/sw/{c}.h5", "ledger_ref")
+# The case mode of the ledger's rows (knotflow-analyze ROWS.csv) is that of the whole file
+# (/analysis/shape) for a case of one segment.
+for c in ("A1.40", "A2.20"):
+    with h5py.File(f"copies/sw/{c}.h5", "r") as h:
+        stored = int(h["analysis/shape"].attrs["case_mode"])
+    out = run(analyze, f"ledger_ref/sw/{c}.csv", "--json").stdout
+    assert json.loads(out)["case_mode"] == stored, (c, out, stored)
 ref = campaign.read_rows("ledger_ref", SWEEP, "A1.40")
 ref_last = campaign.read_xyz("ledger_ref/sw/A1.40.last.xyz")
 shutil.move("results", "results_ref")

@@ -1,4 +1,5 @@
-"""Regression checks of the knotflow-analyze command line (coordinate-file mode).
+"""Regression checks of the knotflow-analyze command line (coordinate-file mode; the case mode
+of a table of frame rows, by the rule of docs/analysis.md "Modes").
 
 usage: check_knotflow_analyze_cli.py <knotflow-analyze executable> <work dir>
 """
@@ -191,5 +192,50 @@ def check_bad_frames(exe, work, pos):
     assert "/frames/positions" in lines[0] and 'damaged.h5' in lines[0] and 'checksum mismatch' in lines[0], lines[0]
 
 
+def check_case_mode_table(exe, work):
+    """The case mode of frame rows (a case ledger's CSV): only the second half of the frames
+    counts; at least half of them (integer half) must be classified; the more frequent mode wins,
+    I on a tie; mode I only if phi, unwrapped, ends higher than it starts over that half."""
+    header = "t,kf,rg,mode,close_pairs,phi"
+
+    def table(name, modes, phis, extra=None):
+        path = os.path.join(work, name + ".csv")
+        with open(path, "w") as f:
+            f.write(header + "\n")
+            for k, (m, p) in enumerate(zip(modes, phis)):
+                f.write(f"{k},nan,3.5,{m},4,{p!r}\n")
+            if extra:
+                f.write(extra)
+        return path
+
+    up = [0.3 * k for k in range(10)]
+    down = [-x for x in up]
+    cases = [("rolling", [1] * 10, up, 1), ("against_shear", [1] * 10, down, 0),
+             ("tumbling", [0] * 5 + [2] * 5, [1.5] * 10, 2),
+             ("too_few", [0] * 8 + [1, 0], up, 0), ("tie", [0] * 6 + [1, 2, 1, 2], up, 1),
+             ("early_only", [2] * 5 + [0] * 5, [1.5] * 10, 0),
+             ("wrapped", [1] * 10, [(0.9 * k + math.pi) % (2 * math.pi) - math.pi for k in range(10)], 1)]
+    for name, modes, phis, expected in cases:
+        p = run(exe, table(name, modes, phis), "--json")
+        assert p.returncode == 0, (name, p.stderr)
+        d = json.loads(p.stdout)
+        assert d["case_mode"] == expected and d["frames"] == 10, (name, d)
+    for name, extra, text in (("nan_mode", "10,nan,3.5,nan,4,0.1\n", "row 11: mode NaN"),
+                              ("mode_3", "10,nan,3.5,3,4,0.1\n", "allowed: mode 0, 1 or 2"),
+                              ("short_row", "10,nan,3.5,1\n", "line 12: 4 fields, the header has 6"),
+                              ("not_number", "10,nan,3.5,1,4,x\n", "column 'phi': 'x' is not a number")):
+        p = run(exe, table(name, [1] * 10, up, extra))
+        lines = p.stderr.strip().splitlines()
+        assert p.returncode == 2 and len(lines) == 1 and text in lines[0], (name, p.stderr)
+    path = os.path.join(work, "no_phi.csv")
+    with open(path, "w") as f:
+        f.write("t,mode\n0,1\n")
+    p = run(exe, path)
+    assert p.returncode == 2 and "no column 'phi'" in p.stderr, p.stderr
+    p = run(exe, table("extra_option", [1] * 10, up), "--stride", "2")
+    assert p.returncode == 2 and "read alone" in p.stderr, p.stderr
+
+
 if __name__ == '__main__':
     main()
+    check_case_mode_table(sys.argv[1], sys.argv[2])
