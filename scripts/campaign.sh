@@ -121,9 +121,16 @@ if [ "$digest" = 1 ]; then
         kf_log "not digested: $f (knotflow-analyze refused it, above)"
         continue
       fi
-      knotflow-campaign digest "$copies/$rel" --copies "$copies" --results "$results" \
-        --ledger "$ledger" --sweep "$sweep" --closures "$closures" --positions-every "$every" \
-        || kf_log "not digested: $f (above)"
+      if ! knotflow-campaign digest "$copies/$rel" --copies "$copies" --results "$results" \
+          --ledger "$ledger" --sweep "$sweep" --closures "$closures" --positions-every "$every"; then
+        kf_log "not digested: $f (above)"
+        continue
+      fi
+      # The case mode of all its rows (a continuation's file holds only its own frames).
+      base="$(basename "$f" .h5)"
+      name="${base%_from*}"
+      knotflow-campaign mode --ledger "$ledger" --sweep "$sweep" --case "$name" \
+        --analyze-json "$("$analyze" "$ledger/$sweep/$name.csv" --json)"
     done
   done
   knotflow-campaign status --ledger "$ledger"

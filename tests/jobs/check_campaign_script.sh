@@ -8,6 +8,7 @@
 #      continues A1.00 from the ledger (the other cases: those the ledger has finished are not
 #      run again, the rest start), every case finishes, and the ledger holds every frame of
 #      every case once (A1.00 in two segments, the second one `A1.00_from<T>`);
+#      knotflow-study reads the ledger's sweep directories as it reads case files;
 #   3. a third run has nothing to do and changes no ledger row.
 # Exit status 77 (ctest: skipped) without the system's numpy/h5py/matplotlib for the tools.
 # Usage: check_campaign_script.sh SOURCE_DIR BUILD_DIR WORKDIR
@@ -88,11 +89,26 @@ for sweep, names in cases.items():
         rows = campaign.read_rows(ledger, sweep, name)
         assert np.array_equal(rows[:, 0], np.arange(t_end + 1)), (sweep, name, rows[:, 0])
         assert np.all(np.isfinite(rows[:, 1])) and e["kf_closures"] == 1000, (sweep, name)
+        assert e["case_mode"]["frames"] == len(rows), (sweep, name, e.get("case_mode"))
 e = campaign.load(ledger, "candycane_multipole", "A1.00")
 assert len(e["segments"]) == 2 and e["segments"][1]["case_name"].startswith("A1.00_from"), e
 assert e["segments"][1]["t_offset"] == e["segments"][0]["t_last"] >= 8, e["segments"]
 t, pos = campaign.read_positions(ledger, "candycane_multipole", "A1.00")
 assert np.array_equal(t, [0.0, 10.0, 20.0]) and pos.shape == (3, 152, 3), (t, pos.shape)
+PY
+
+# The study's comparison straight from the ledger (knotflow-study on its sweep directories).
+"${proj}/build/venv/bin/knotflow-study" --trefoil "${ledger}/trefoil_table2_multipole" \
+  --candycane "${ledger}/candycane_multipole" --ensemble "${ledger}/candycane_seeds_multipole" \
+  --closures 1000 --out "${work}/study" >"${work}/study.log" 2>&1 \
+  || fail "knotflow-study on the ledger: $(tail -n 5 "${work}/study.log")"
+"$py" - "${work}/study/results.json" <<'PY' || fail "knotflow-study's results from the ledger"
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert [c["case"] for c in r["trefoil"]["cases"]] == ["ora", "orc"], r["trefoil"]["cases"]
+assert all(c["status"] == "finished" and c["t_reached"] == 3.0 for c in r["trefoil"]["cases"])
+assert [c["case"] for c in r["candycane"]] == ["A1.00"] and r["candycane"][0]["t_reached"] == 20.0
+assert [c["case"] for c in r["ensemble"]] == ["A1.00_s1", "A3.00_s1"], r["ensemble"]
 PY
 
 # 3. Nothing left to do; the ledger stays as it is.

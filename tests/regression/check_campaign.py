@@ -13,7 +13,8 @@ equal the reference rows (same file, same frames, same k_f); after it the contin
 same physics restarted (step size, overlap monitor): the chain at t = 40 within 0.05 d of the
 uninterrupted one and R_g within 1 %. A has two segments, B one; both finished; `plan` then says
 'finished'. The case mode of a one-segment case's rows (knotflow-analyze ROWS.csv) is the
-file's. `--write-scenes` without a directory, or into one that cannot be made, exits with
+file's, and the study's rows (knotflow-study) of its ledger entry equal those of its file; the
+two-segment case's row has both runs at the case's time and the overlap episodes summed. `--write-scenes` without a directory, or into one that cannot be made, exits with
 status 2. Refused, leaving the ledger as it was: a file analysed with other closures, the old
 segment again after its continuation (a rewind), a gap.
 Usage: check_campaign.py KNOTFLOW KNOTFLOW_ANALYZE WORKDIR   (Python with knotflow_tools)
@@ -28,7 +29,7 @@ import time
 
 import h5py
 import numpy as np
-from knotflow_tools import campaign
+from knotflow_tools import campaign, study_rows
 
 exe, analyze, work = (os.path.abspath(a) for a in sys.argv[1:4])
 shutil.rmtree(work, ignore_errors=True)
@@ -71,6 +72,17 @@ def digest(src, ledger, closures=CLOSURES):
                            os.path.join("results", os.path.relpath(dst, "copies")))
 
 
+def close(x, y):
+    """Equal, numbers to what 7 significant digits of the ledger leave (recursively)."""
+    if isinstance(x, dict):
+        return isinstance(y, dict) and x.keys() == y.keys() and all(close(x[k], y[k]) for k in x)
+    if isinstance(x, (list, tuple)):
+        return isinstance(y, (list, tuple)) and len(x) == len(y) and all(map(close, x, y))
+    if isinstance(x, float) and isinstance(y, (int, float)):
+        return bool(np.isclose(x, y, rtol=1e-6, atol=1e-6, equal_nan=True))
+    return x == y
+
+
 def snapshot(ledger):
     return {f: open(os.path.join(ledger, SWEEP, f), "rb").read()
             for f in sorted(os.listdir(os.path.join(ledger, SWEEP)))}
@@ -96,6 +108,16 @@ for c in ("A1.40", "A2.20"):
         stored = int(h["analysis/shape"].attrs["case_mode"])
     out = run(analyze, f"ledger_ref/sw/{c}.csv", "--json").stdout
     assert json.loads(out)["case_mode"] == stored, (c, out, stored)
+    campaign.set_case_mode("ledger_ref", SWEEP, c, out)
+    # The study's rows of the ledger entry are those of the case file (the slower exact path),
+    # but for where the overlap totals come from.
+    for rows_of in (study_rows.trefoil_rows, study_rows.candycane_rows):
+        a = rows_of([f"copies/sw/{c}.h5"], CLOSURES)[0]
+        b = rows_of([f"ledger_ref/sw/{c}.json"], CLOSURES)[0]
+        assert a["overlap"].pop("source") == "attributes" and b["overlap"].pop("source") == "ledger"
+        for k in a:
+            if not k.startswith("_"):
+                assert close(a[k], b[k]), (c, k, a[k], b[k])
 ref = campaign.read_rows("ledger_ref", SWEEP, "A1.40")
 ref_last = campaign.read_xyz("ledger_ref/sw/A1.40.last.xyz")
 shutil.move("results", "results_ref")
@@ -173,6 +195,13 @@ assert dev < 0.05, f"continued chain at t = 40 is {dev:.3g} d from the uninterru
 assert abs(rows[-1, col["rg"]] / ref[-1, col["rg"]] - 1) < 0.01, (rows[-1], ref[-1])
 assert e["status"] == "finished" and len(e["segments"]) == 2, e
 assert e["segments"][1]["t_offset"] == T and e["segments"][1]["case_name"] == f"A1.40_from{T:g}"
+# The study's row of the case in two segments: its runs at the case's time, totals summed.
+campaign.set_case_mode("ledger", SWEEP, "A1.40", run(analyze, "ledger/sw/A1.40.csv", "--json").stdout)
+row = study_rows.trefoil_rows(["ledger/sw/A1.40.json"], CLOSURES)[0]
+assert row["status"] == "finished" and row["t_reached"] == 40.0, row
+assert row["runs"]["segments"] == 2 and row["runs"]["t_start"] == 0.0 and row["runs"]["t_end"] == 40.0
+episodes = sum(s["diagnostic_totals"]["overlap_episodes"] for s in e["segments"])
+assert row["overlap"]["overlap_episodes"] == episodes, (row["overlap"], episodes)
 b = campaign.load("ledger", SWEEP, "A2.20")
 assert b["status"] == "finished" and len(b["segments"]) == 1
 assert np.array_equal(campaign.read_rows("ledger", SWEEP, "A2.20"),

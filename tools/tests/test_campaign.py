@@ -93,3 +93,20 @@ def test_frame_rows_and_refusals(tmp_path):
     with pytest.raises(ValueError, match="k_f of 3 of 6 frames"):
         campaign.digest(path, str(tmp_path / "ledger"), "cc", 10)
     assert not (tmp_path / "ledger").exists()
+
+
+def test_combined_totals_of_segments():
+    seg = [{"t_offset": 0.0, "diagnostic_totals": {
+               "strand_passages": 0, "first_passage_time": -1.0, "overlap_episodes": 3,
+               "overlap_mean_duration": 0.2, "overlap_max_duration": 0.5,
+               "max_overlapping_pairs": 4, "min_distance": 0.99, "max_bond_strain": 0.01}},
+           {"t_offset": 700.0, "diagnostic_totals": {
+               "strand_passages": 2, "first_passage_time": 12.5, "overlap_episodes": 1,
+               "overlap_mean_duration": 1.0, "overlap_max_duration": 1.0,
+               "max_overlapping_pairs": 2, "min_distance": 0.95, "max_bond_strain": 0.02}}]
+    t = campaign.combined_totals(seg)
+    assert t["strand_passages"] == 2 and t["first_passage_time"] == 712.5
+    assert t["overlap_episodes"] == 4 and t["overlap_mean_duration"] == pytest.approx(0.4)
+    assert t["overlap_max_duration"] == 1.0 and t["max_overlapping_pairs"] == 4
+    assert t["min_distance"] == 0.95 and t["max_bond_strain"] == 0.02
+    assert campaign.combined_totals([{"t_offset": 0.0, "diagnostic_totals": {}}]) is None

@@ -339,3 +339,120 @@ def status_lines(ledger: str) -> list:
                          f"{e['t_end']:g}, {len(e['segments'])} segment(s), wall "
                          f"{wall / 3600:.2f} h, load {load_mean:.1f}, commits {commits}")
     return lines
+
+
+def set_case_mode(ledger: str, sweep: str, case: str, analyze_json: str) -> dict:
+    """Record the case mode of a case's frame rows, as `knotflow-analyze <case>.csv --json`
+    printed it (the one implementation of the rule), with the number of rows it saw; a mode
+    of other rows than the ledger's now is refused."""
+    entry = load(ledger, sweep, case)
+    if entry is None:
+        raise ValueError(f"{ledger}/{sweep}/{case}: no ledger entry")
+    got = json.loads(analyze_json)
+    rows = len(read_rows(ledger, sweep, case))
+    if got.get("frames") != rows or got.get("case_mode") not in (0, 1, 2):
+        raise ValueError(f"{sweep}/{case}: case mode {got.get('case_mode')!r} of "
+                         f"{got.get('frames')} frames; the ledger has {rows} rows")
+    entry["case_mode"] = {"mode": got["case_mode"], "frames": rows}
+    _write_text(_paths(ledger, sweep, case)["json"], json.dumps(entry, indent=1) + "\n")
+    return entry
+
+
+def find_ledger_cases(sweep_dir: str) -> list:
+    """The ledger entries (<case>.json) of a ledger's sweep directory."""
+    if not os.path.isdir(sweep_dir):
+        return []
+    return sorted(os.path.join(sweep_dir, f) for f in os.listdir(sweep_dir) if f.endswith(".json"))
+
+
+def _scene_value(scene: str, group: str, var: str):
+    m = re.search(rf"&{group}\n(?:(?!/\n).*\n)*?\s*{var} = ([^\n]*)\n", scene)
+    if m is None:
+        return None
+    v = m.group(1).strip()
+    if v.startswith("'"):
+        return v.strip("'")
+    try:
+        return float(v) if any(c in v for c in ".eE") else int(v)
+    except ValueError:
+        return v
+
+
+def combined_totals(segments: list) -> dict | None:
+    """The overlap and passage totals of a case run in segments: sums, extremes, the mean
+    duration weighted by episodes, the first passage at the case's time (None without any)."""
+    tots = [(s["t_offset"], s["diagnostic_totals"]) for s in segments if s["diagnostic_totals"]]
+    if not tots:
+        return None
+    out = {"strand_passages": sum(d.get("strand_passages") or 0 for _, d in tots),
+           "overlap_episodes": sum(d.get("overlap_episodes") or 0 for _, d in tots),
+           "overlap_max_duration": max(d.get("overlap_max_duration") or 0.0 for _, d in tots),
+           "max_overlapping_pairs": max(d.get("max_overlapping_pairs") or 0 for _, d in tots),
+           "max_bond_strain": max(d.get("max_bond_strain") or 0.0 for _, d in tots)}
+    eps = out["overlap_episodes"]
+    out["overlap_mean_duration"] = (sum((d.get("overlap_mean_duration") or 0.0)
+                                        * (d.get("overlap_episodes") or 0) for _, d in tots) / eps
+                                    if eps else 0.0)
+    dists = [d["min_distance"] for _, d in tots if (d.get("min_distance") or -1.0) >= 0.0]
+    out["min_distance"] = min(dists) if dists else -1.0
+    first = [o + d["first_passage_time"] for o, d in tots if (d.get("strand_passages") or 0) > 0]
+    out["first_passage_time"] = first[0] if first else tots[0][1].get("first_passage_time")
+    return out
+
+
+def ledger_case(path: str):
+    """A case of the ledger (`<case>.json`) as an io.Case for the study's analysis: the frame
+    rows as time, observables, k_f (/analysis/knots), modes, diagnostics and stresslet; the run
+    records of every segment at the case's time; overlap totals combined over the segments;
+    the case mode recorded by `set_case_mode` when it saw the rows there are now (else none).
+    Positions exist only for the frames the ledger keeps (the multiples of `positions_every`
+    and the newest frame, full precision); the others are NaN."""
+    from .io import Case
+    sweep_dir, name = os.path.split(path[:-5])
+    ledger, sweep = os.path.split(sweep_dir)
+    entry = load(ledger, sweep, name)
+    if entry is None:
+        raise ValueError(f"{path}: no ledger entry")
+    rows = read_rows(ledger, sweep, name)
+    col = {c: k for k, c in enumerate(FRAME_COLUMNS)}
+    t = rows[:, 0]
+    n = int(entry["n_beads"])
+    pos = np.full((len(t), n, 3), np.nan)
+    kept_t, kept = read_positions(ledger, sweep, name)
+    for tk, r in zip(kept_t, kept):
+        k = int(np.argmin(np.abs(t - tk)))
+        if abs(t[k] - tk) <= TIME_TOLERANCE:
+            pos[k] = r
+    pos[-1] = read_xyz(_paths(ledger, sweep, name)["last"])
+    scene = entry["scene"]
+    attrs = {"case_name": name, "status": entry["status"], "n_beads": n, "scene": scene,
+             "integrator.t_end": float(entry["t_end"]), "ledger": path}
+    for key, group, var in (("forces.bending_a", "forces", "bending_a"),
+                            ("chain.orientation", "chain", "orientation"),
+                            ("chain.seed", "chain", "seed"), ("chain.shape", "chain", "shape"),
+                            ("hydro.model", "hydro", "model")):
+        attrs[key] = _scene_value(scene, group, var)
+    case = Case(path=path, attrs=attrs, time=t, positions=pos,
+                observables={k: rows[:, col[k]] for k in FRAME_COLUMNS[2:9]})
+    case.knots = {"frame_index": np.arange(len(t), dtype=np.int64), "time": t,
+                  "kf": rows[:, col["kf"]], "spectrum": None, "types": None, "dominant": None,
+                  "attrs": {"closures": entry["kf_closures"], "tool": "knotflow-campaign"}}
+    modes = rows[:, col["mode"]]
+    if np.all(np.isfinite(modes)):
+        case.modes = modes.astype(np.int32)
+    cm = entry.get("case_mode")
+    if cm and cm.get("frames") == len(t):
+        case.case_mode = int(cm["mode"])
+    case.diagnostics = {k: rows[:, col[k]] for k in ("overlapping_pairs", "min_distance",
+                                                     "strand_passages")}
+    case.stresslet = {k: rows[:, col[k]] for k in ("viscosity", "psi1", "psi2")}
+    case.diagnostic_totals = combined_totals(entry["segments"])
+    case.diagnostic_totals_source = "ledger"
+    case.runs = []
+    for s in entry["segments"]:
+        for r in s["runs"]:
+            rr = {k: (math.nan if v is None and RUN_FIELDS[k] == "f" else v) for k, v in r.items()}
+            rr["t_start"] += s["t_offset"]
+            rr["t_end"] += s["t_offset"]
+            case.runs.append(rr)
+    return case

@@ -524,7 +524,12 @@ def _campaign(argv: Argv) -> int:
     dg.add_argument("--positions-every", type=float, default=0.0, metavar="T",
                     help="keep the positions of the frames at multiples of T (0: only the newest)")
     st = sub.add_parser("status", help="one line per case of the ledger's sweeps")
-    for q in (pl, dg, st):
+    md = sub.add_parser("mode", help="record a case's mode: knotflow-analyze <case>.csv --json")
+    md.add_argument("--case", required=True)
+    md.add_argument("--analyze-json", required=True, metavar="TEXT",
+                    help="what knotflow-analyze LEDGER/SWEEP/CASE.csv --json printed")
+    md.add_argument("--sweep", required=True, help="the sweep's name")
+    for q in (pl, dg, st, md):
         q.add_argument("--ledger", required=True, help="the ledger directory")
     for q in (pl, dg):
         q.add_argument("--sweep", required=True, help="the sweep's name (inputs/<sweep>.nml)")
@@ -543,6 +548,10 @@ def _campaign(argv: Argv) -> int:
                                 args.positions_every, source)
             print(f"{args.sweep}/{e['case']}: {e['status']}, t = {e['t_reached']:g} of "
                   f"{e['t_end']:g}, {len(e['segments'])} segment(s)")
+    elif args.command == "mode":
+        e = campaign.set_case_mode(args.ledger, args.sweep, args.case, args.analyze_json)
+        print(f"{args.sweep}/{args.case}: case mode {e['case_mode']['mode']} of "
+              f"{e['case_mode']['frames']} frames")
     else:
         for line in campaign.status_lines(args.ledger):
             print(line)

@@ -48,6 +48,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from .campaign import find_ledger_cases  # noqa: E402
 from .io import read_case, write_xyz  # noqa: E402
 from .plot import _draw_chain  # noqa: E402
 from .report import find_case_files  # noqa: E402
@@ -413,7 +414,9 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
           f"Trefoil sweep: `{trefoil_dir}`; candy-cane sweep: `{candycane_dir}`.", ""]
     result = {}
     comparison = {}
-    files = {d: find_case_files(d) for d in (trefoil_dir, candycane_dir, ensemble_dir) if d}
+    # A directory of case files, or one sweep of a case ledger (campaign.py).
+    files = {d: find_case_files(d) or find_ledger_cases(d)
+             for d in (trefoil_dir, candycane_dir, ensemble_dir) if d}
     missing = [d for d, f in files.items() if not f]
     if missing:
         result["missing"] = [no_case_files(d) for d in missing]

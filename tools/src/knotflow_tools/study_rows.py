@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from .analysis import analyze_case
+from .campaign import ledger_case
 from .io import read_case
 from .plot import mode_name
 from .study_reference import in_study
@@ -103,9 +104,10 @@ def late_mask(t, frac=0.5):
 
 
 def _analysed(files, closures):
-    """(case, its analysis) of every case file of `files` with frames."""
+    """(case, its analysis) of every case of `files` with frames: case files, or the entries of
+    a case ledger (`<case>.json`, campaign.ledger_case)."""
     for path in files:
-        case = read_case(path)
+        case = ledger_case(path) if str(path).endswith(".json") else read_case(path)
         if case.nframes:
             yield case, analyze_case(case, closures=closures)
 
