@@ -3,7 +3,7 @@
 # cases, N = 99; the candy-cane, A = 1, 1.4, 3, N = 152; and more below), analyse them, and
 # write the comparison.
 #   scripts/reproduce.sh [--hydro rpy|multipole] [--no-run] [--no-extras] [--no-build]
-#                        [--results DIR] [--quick] [--list-sweeps]
+#                        [--results DIR] [--ledger DIR] [--quick] [--list-sweeps]
 #
 #   --hydro rpy        (default) inputs/trefoil_table2.nml and inputs/candycane.nml:
 #                      RPY + excluded volume, about 30 s per trefoil case on one core.
@@ -16,6 +16,12 @@
 #   --no-extras        (rpy) skip the two checks beyond the study's inputs: the candy-cane with 5
 #                      random rotations (inputs/candycane_seeds.nml) and Table 2 with the open
 #                      trefoil whose k_f(0) = 0.98 (inputs/trefoil_table2_p24.nml).
+#   --ledger DIR       (multipole) analyse the case ledger DIR (scripts/campaign.sh:
+#                      docs/reproduction_multipole/ledger) instead of case files: its rows hold
+#                      k_f of every frame and the shapes; here only the knot matrices of the
+#                      candy-canes' kept frames (every 10 time units) and the slipknot check
+#                      are computed, into results/reproduction_multipole/ledger_matrices.
+#                      Implies --no-run.
 #   --no-build         install and build nothing: use the existing build (KNOTFLOW_BUILD_DIR,
 #                      default build/) and its Python tools (<build>/venv); a batch job's way.
 #   --results DIR      the sweeps' output directories are DIR/<sweep> (default results; a
@@ -68,6 +74,7 @@ run=1
 extras=1
 build=1
 results=results
+ledger=""
 quick=0
 list=0
 while [ $# -gt 0 ]; do
@@ -79,7 +86,8 @@ while [ $# -gt 0 ]; do
     --quick) quick=1; shift ;;
     --list-sweeps) list=1; shift ;;
     --results) [ $# -ge 2 ] || kf_die "--results needs a directory"; results="$2"; shift 2 ;;
-    *) kf_die "unknown argument '$1' (allowed: --hydro rpy|multipole, --no-run, --no-extras, --no-build, --results DIR, --quick, --list-sweeps)" ;;
+    --ledger) [ $# -ge 2 ] || kf_die "--ledger needs a directory"; ledger="$2"; run=0; shift 2 ;;
+    *) kf_die "unknown argument '$1' (allowed: --hydro rpy|multipole, --no-run, --no-extras, --no-build, --results DIR, --ledger DIR, --quick, --list-sweeps)" ;;
   esac
 done
 # The study's sweeps and their roles (scripts/study_sweeps.sh: the list jobs/submit_study.sh
@@ -89,6 +97,10 @@ if [ "$list" = 1 ]; then
   exit
 fi
 kf_study_arrays "$hydro" "$extras" || exit 1
+if [ -n "$ledger" ]; then
+  [ "$hydro" = multipole ] || kf_die "--ledger DIR is the multipole campaign's (give --hydro multipole)"
+  [ -d "$ledger" ] || kf_die "--ledger $ledger: no such directory"
+fi
 # Closures per frame (trefoils and candy-canes; the ensemble, with its frame stride:
 # scripts/study_sweeps.sh, kf_study_closures), per
 # subchain of a knot matrix (trefoil last frame, candy-cane frames, slipknot candidates), of the
@@ -138,8 +150,34 @@ fi
 shopt -s nullglob
 declare -A dir_of=()   # role -> output directory, for the sweeps with case files
 declare -A empty_of=() # role -> output directory, for the sweeps there without case files
+out="$results/reproduction$suffix"
+mats="$out/ledger_matrices"
 for i in "${!KF_STUDY_SWEEPS[@]}"; do
   role="${KF_STUDY_ROLES[i]}" sweep="${KF_STUDY_SWEEPS[i]}"
+  if [ -n "$ledger" ]; then
+    # The ledger's rows hold k_f of every frame and the shapes; the candy-canes' knot matrices
+    # are computed from the frames it keeps.
+    files=("$ledger/$sweep"/*.json)
+    if [ "${#files[@]}" -eq 0 ]; then
+      kf_log "no ledger entries in $ledger/$sweep: not analysed"
+      continue
+    fi
+    dir_of[$role]="$ledger/$sweep"
+    [ "$role" = candycane ] || continue
+    mkdir -p "$mats"
+    for f in "${files[@]}"; do
+      name="$(basename "$f" .json)"
+      frames="$(knotflow-study --select-frames "$f" "${select[@]}")"
+      kf_log "knotflow-analyze: knot matrices of $name (ledger), frames $frames"
+      for k in ${frames//,/ }; do
+        [ -s "$mats/${name}_frame$k.json" ] && continue
+        knotflow-study --write-frame "$f" "$k" "$mats/${name}_frame$k.xyz"
+        "${mpi[@]}" "$analyze" "$mats/${name}_frame$k.xyz" --matrix --matrix-closures "$mat_cane" --json > "$mats/${name}_frame$k.json.tmp"
+        mv "$mats/${name}_frame$k.json.tmp" "$mats/${name}_frame$k.json"
+      done
+    done
+    continue
+  fi
   files=("$results/$sweep"/*.h5)
   if [ "${#files[@]}" -eq 0 ]; then
     kf_log "no case files in $results/$sweep: not analysed"
@@ -169,7 +207,6 @@ for i in "${!KF_STUDY_SWEEPS[@]}"; do
   esac
 done
 
-out="$results/reproduction$suffix"
 # Slipknot candidates of the screen (20 closures per subchain: its largest K over ~10^4
 # subchains is biased upwards) are recomputed with mat_confirm closures per subchain; where that
 # is still a slipknot, its knot core and the whole chain get kf_confirm closures, with a seed
@@ -177,10 +214,14 @@ out="$results/reproduction$suffix"
 # knotflow-study applies the rule (docs/analysis.md, "Slipknot confirmation"). Files in
 # $out/confirm, reused by a rerun: <case>_frame<k>.json (matrix), _core.json, _whole.json.
 mkdir -p "$out/confirm"
-for f in ${dir_of[candycane]:+"${dir_of[candycane]}"/*.h5}; do
-  name="$(basename "$f" .h5)"
+lm=()
+[ -n "$ledger" ] && lm=(--ledger-matrices "$mats")
+ext=h5
+[ -n "$ledger" ] && ext=json
+for f in ${dir_of[candycane]:+"${dir_of[candycane]}"/*.$ext}; do
+  name="$(basename "$f" ".$ext")"
   base="$out/confirm/$name"
-  for k in $(knotflow-study --slip-candidates "$f"); do
+  for k in $(knotflow-study --slip-candidates "$f" "${lm[@]}"); do
     json="${base}_frame$k.json"
     [ -s "$json" ] && continue
     kf_log "slipknot candidate $name frame $k: knot matrix with $mat_confirm closures per subchain"
@@ -188,7 +229,7 @@ for f in ${dir_of[candycane]:+"${dir_of[candycane]}"/*.h5}; do
     "${mpi[@]}" "$analyze" "${base}_frame$k.xyz" --matrix --matrix-closures "$mat_confirm" --json > "$json.tmp"
     mv "$json.tmp" "$json"
   done
-  for k in $(knotflow-study --core-candidates "$f" --confirm-dir "$out/confirm"); do
+  for k in $(knotflow-study --core-candidates "$f" --confirm-dir "$out/confirm" "${lm[@]}"); do
     [ -s "${base}_frame${k}_core.json" ] && [ -s "${base}_frame${k}_whole.json" ] && continue
     kf_log "slipknot candidate $name frame $k: knot core and whole chain with $kf_confirm closures"
     [ -s "${base}_frame$k.xyz" ] || knotflow-study --write-frame "$f" "$k" "${base}_frame$k.xyz"
@@ -205,7 +246,7 @@ kf_log "knotflow-study -> $out"
 # A sweep directory without case files goes to knotflow-study too: results.md says "no case
 # files in DIR" there (a sweep not started, without a directory, is left out).
 [ "${#dir_of[@]}" -gt 0 ] || kf_die "no case files in any sweep under $results: nothing to compare"
-args=(--closures "$closures")
+args=(--closures "$closures" "${lm[@]}")
 for role in trefoil candycane ensemble; do
   dir="${dir_of[$role]:-${empty_of[$role]:-}}"
   [ -n "$dir" ] && args+=("--$role" "$dir")

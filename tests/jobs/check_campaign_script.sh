@@ -8,7 +8,8 @@
 #      continues A1.00 from the ledger (the other cases: those the ledger has finished are not
 #      run again, the rest start), every case finishes, and the ledger holds every frame of
 #      every case once (A1.00 in two segments, the second one `A1.00_from<T>`);
-#      knotflow-study reads the ledger's sweep directories as it reads case files;
+#      knotflow-study reads the ledger's sweep directories as it reads case files, and
+#      scripts/reproduce.sh --ledger computes the candy-cane's knot matrices from its kept frames;
 #   3. a third run has nothing to do and changes no ledger row.
 # Exit status 77 (ctest: skipped) without the system's numpy/h5py/matplotlib for the tools.
 # Usage: check_campaign_script.sh SOURCE_DIR BUILD_DIR WORKDIR
@@ -109,6 +110,21 @@ assert [c["case"] for c in r["trefoil"]["cases"]] == ["ora", "orc"], r["trefoil"
 assert all(c["status"] == "finished" and c["t_reached"] == 3.0 for c in r["trefoil"]["cases"])
 assert [c["case"] for c in r["candycane"]] == ["A1.00"] and r["candycane"][0]["t_reached"] == 20.0
 assert [c["case"] for c in r["ensemble"]] == ["A1.00_s1", "A3.00_s1"], r["ensemble"]
+PY
+
+# The multipole study's analysis from the ledger (scripts/reproduce.sh --ledger): knot matrices
+# of the candy-cane's kept frames (t = 0, 10, 20), the slipknot screen on them.
+KNOTFLOW_NP=1 KNOTFLOW_NO_INSTALL=1 bash scripts/reproduce.sh --hydro multipole --ledger "${ledger}" \
+  --no-build >"${work}/reproduce.log" 2>&1 || fail "reproduce.sh --ledger: $(tail -n 10 "${work}/reproduce.log")"
+"$py" - results/reproduction_multipole <<'PY' || fail "reproduce.sh --ledger: not the ledger's analysis"
+import json, os, sys
+out = sys.argv[1]
+r = json.load(open(os.path.join(out, "results.json")))
+m = r["candycane"][0]["matrices"]
+assert [e["frame"] for e in m] == [0, 10, 20] and [e["time"] for e in m] == [0.0, 10.0, 20.0], m
+assert all(0.0 <= e["max_K"] <= 1.0 for e in m), m
+assert sorted(os.listdir(os.path.join(out, "ledger_matrices"))) == sorted(
+    f"A1.00_frame{k}.{x}" for k in (0, 10, 20) for x in ("json", "xyz")), os.listdir(out)
 PY
 
 # 3. Nothing left to do; the ledger stays as it is.

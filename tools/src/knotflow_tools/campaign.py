@@ -400,13 +400,15 @@ def combined_totals(segments: list) -> dict | None:
     return out
 
 
-def ledger_case(path: str):
+def ledger_case(path: str, matrices_dir: str | None = None):
     """A case of the ledger (`<case>.json`) as an io.Case for the study's analysis: the frame
     rows as time, observables, k_f (/analysis/knots), modes, diagnostics and stresslet; the run
     records of every segment at the case's time; overlap totals combined over the segments;
     the case mode recorded by `set_case_mode` when it saw the rows there are now (else none).
     Positions exist only for the frames the ledger keeps (the multiples of `positions_every`
-    and the newest frame, full precision); the others are NaN."""
+    and the newest frame, full precision); the others are NaN. Knot matrices: those of
+    `matrices_dir`, `<case>_frame<k>.json` (knotflow-analyze FRAME.xyz --matrix --json of the
+    kept frame k; scripts/reproduce.sh --ledger computes them)."""
     from .io import Case
     sweep_dir, name = os.path.split(path[:-5])
     ledger, sweep = os.path.split(sweep_dir)
@@ -455,4 +457,20 @@ def ledger_case(path: str):
             rr["t_start"] += s["t_offset"]
             rr["t_end"] += s["t_offset"]
             case.runs.append(rr)
+    if matrices_dir and os.path.isdir(matrices_dir):
+        pat = re.compile(rf"^{re.escape(name)}_frame([0-9]+)\.json$")
+        for f in sorted(os.listdir(matrices_dir)):
+            m = pat.match(f)
+            if m:
+                with open(os.path.join(matrices_dir, f), encoding="utf-8") as fh:
+                    rows_k = json.load(fh)["matrix"]
+                case.knot_matrices[int(m[1])] = np.array(
+                    [[np.nan if x is None else x for x in r] for r in rows_k], dtype=float)
     return case
+
+
+def load_case(path: str, matrices_dir: str | None = None):
+    """A case file (io.read_case) or a ledger entry (`<case>.json`, ledger_case)."""
+    if str(path).endswith(".json"):
+        return ledger_case(str(path), matrices_dir)
+    return read_case(path)

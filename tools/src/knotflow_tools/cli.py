@@ -292,6 +292,9 @@ def _study(argv: Argv) -> int:
     p.add_argument("--confirm-dir", metavar="DIR",
                    help="with --core-candidates: the directory of the recomputed matrices "
                    "(<out>/confirm)")
+    p.add_argument("--ledger-matrices", metavar="DIR",
+                   help="the knot matrices of the cases of a case ledger (CASE_frameK.json; "
+                   "scripts/reproduce.sh --ledger writes them)")
     p.add_argument("--write-frame", nargs=3, metavar=("CASE", "FRAME", "XYZ"),
                    help="write frame FRAME of CASE as a coordinate file and exit")
     p.add_argument("--core-of", metavar="JSON",
@@ -303,7 +306,8 @@ def _study(argv: Argv) -> int:
     if args.core_of and not args.write_frame:
         p.error("--core-of JSON needs --write-frame CASE FRAME XYZ")
     if args.core_candidates:
-        frames = study_slipknots.core_candidates(args.core_candidates, args.confirm_dir)
+        frames = study_slipknots.core_candidates(args.core_candidates, args.confirm_dir,
+                                                 args.ledger_matrices)
         print(" ".join(str(k) for k in frames))
         return 0
     if args.every_time is not None and not args.select_frames:
@@ -311,7 +315,8 @@ def _study(argv: Argv) -> int:
     if args.every_time is not None and not (math.isfinite(args.every_time) and args.every_time > 0):
         p.error(f"--every-time {args.every_time:g} is not allowed (a positive number)")
     if args.slip_candidates:
-        print(" ".join(str(k) for k in study_slipknots.slip_candidates(args.slip_candidates)))
+        print(" ".join(str(k) for k in study_slipknots.slip_candidates(args.slip_candidates,
+                                                                       args.ledger_matrices)))
         return 0
     if args.write_frame:
         path, frame, xyz = args.write_frame
@@ -335,7 +340,7 @@ def _study(argv: Argv) -> int:
     rpy_candycane = (study_compare.load_rpy(args.rpy_candycane, ("candycane", "ensemble"))
                      if args.rpy_candycane else None)
     res = study.write_study(args.trefoil, args.candycane, args.out, args.closures, args.ensemble,
-                            rpy_trefoil, rpy_candycane)
+                            rpy_trefoil, rpy_candycane, args.ledger_matrices)
     if "trefoil" in res:
         t, k = res["trefoil"], res["trefoil"]["reknottings"]
         print(f"trefoils: {t['agree']} of {t['total']} cases agree with the study on "

@@ -48,8 +48,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .campaign import find_ledger_cases  # noqa: E402
-from .io import read_case, write_xyz  # noqa: E402
+from .campaign import find_ledger_cases, load_case  # noqa: E402
+from .io import write_xyz  # noqa: E402
 from .plot import _draw_chain  # noqa: E402
 from .report import find_case_files  # noqa: E402
 from .study_compare import candycane_comparison, trefoil_comparison  # noqa: E402
@@ -84,17 +84,20 @@ def entangled_frames(path, every=50, extra=5, gap=20, every_time=None):
     """Frames for knot matrices: every `every`-th frame (or with `every_time` the frames at the
     multiples of `every_time` time units, `time_frames`) and the last one, plus the `extra`
     frames with the most close pairs, at least `gap` frames from each other."""
-    case = read_case(path)
+    case = load_case(path)
     cp = np.asarray(case.observables.get("close_pairs", np.zeros(case.nframes)))
     sel = (list(range(0, case.nframes, every)) if every_time is None
            else time_frames(case.time, every_time))
     if case.nframes and sel[-1] != case.nframes - 1:
         sel.append(case.nframes - 1)
+    # A ledger keeps the positions of some frames only: the others cannot be chosen.
+    kept = np.isfinite(case.positions[:, 0, 0])
+    sel = [k for k in sel if kept[k]]
     chosen = []
     for k in np.argsort(-cp, kind="stable"):
         if len(chosen) >= extra or cp[k] <= 0:
             break
-        if all(abs(int(k) - c) >= gap for c in chosen) and int(k) not in sel:
+        if kept[k] and all(abs(int(k) - c) >= gap for c in chosen) and int(k) not in sel:
             chosen.append(int(k))
     return sorted(sel + chosen)
 
@@ -402,12 +405,13 @@ def no_case_files(directory) -> str:
 
 
 def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None,
-                rpy_trefoil=None, rpy_candycane=None):
+                rpy_trefoil=None, rpy_candycane=None, ledger_matrices=None):
     """Write figures, results.md, results.json and the per-frame CSV files into `out`.
     rpy_trefoil, rpy_candycane: `load_rpy` of earlier RPY + EV results (or None): three-column
     comparison tables and a "comparison" part in results.json. A sweep directory without case
     files gets the line `no_case_files` in its section (and in results.json under "missing")
-    and nothing else."""
+    and nothing else. ledger_matrices: the knot matrices of the cases of a case ledger
+    (campaign.ledger_case)."""
     confirm_dir = os.path.join(out, "confirm")
     os.makedirs(out, exist_ok=True)
     md = ["# knotflow-study: generated results", "",
@@ -438,7 +442,7 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
     if candycane_dir and not files[candycane_dir]:
         md += ["## Candy-cane", "", no_case_files(candycane_dir), ""]
     elif candycane_dir:
-        rows = candycane_rows(files[candycane_dir], closures, confirm_dir)
+        rows = candycane_rows(files[candycane_dir], closures, confirm_dir, ledger_matrices)
         figs = [plot_candycane_shapes(rows, os.path.join(out, "candycane_shape.png")),
                 plot_candycane_kf(rows, os.path.join(out, "candycane_kf.png")),
                 plot_candycane_snapshots(rows, os.path.join(out, "candycane_snapshots.png")),
@@ -475,8 +479,11 @@ def write_frame(path, frame, xyz, core_of=None) -> None:
     """Frame `frame` of case file `path` as a coordinate file `xyz` (knotflow-study
     --write-frame); with `core_of` (a knotflow-analyze --matrix --json file of that frame) only
     the beads i..j of its knot core."""
-    case = read_case(path)
+    case = load_case(path)
     r = case.positions[frame]
+    if not np.all(np.isfinite(r)):
+        raise ValueError(f"{path}: frame {frame} (t = {case.time[frame]:g}) is not kept in the "
+                         "case ledger (its positions_every and the newest frame are)")
     comment = f"{case.name} frame {frame} t = {case.time[frame]:g}"
     if core_of is not None:
         core = load_json(core_of).get("knot_core")

@@ -9,8 +9,7 @@ import math
 import numpy as np
 
 from .analysis import analyze_case
-from .campaign import ledger_case
-from .io import read_case
+from .campaign import load_case
 from .plot import mode_name
 from .study_reference import in_study
 from .study_slipknots import slipknot_scan
@@ -103,11 +102,12 @@ def late_mask(t, frac=0.5):
     return t >= t[0] + frac * (t[-1] - t[0])
 
 
-def _analysed(files, closures):
+def _analysed(files, closures, matrices_dir=None):
     """(case, its analysis) of every case of `files` with frames: case files, or the entries of
-    a case ledger (`<case>.json`, campaign.ledger_case)."""
+    a case ledger (`<case>.json`, campaign.ledger_case, with the knot matrices of
+    `matrices_dir`)."""
     for path in files:
-        case = ledger_case(path) if str(path).endswith(".json") else read_case(path)
+        case = load_case(path, matrices_dir)
         if case.nframes:
             yield case, analyze_case(case, closures=closures)
 
@@ -134,9 +134,9 @@ def trefoil_rows(files, closures=200):
     return rows
 
 
-def candycane_rows(files, closures=200, confirm_dir=None):
+def candycane_rows(files, closures=200, confirm_dir=None, matrices_dir=None):
     rows = []
-    for case, ana in _analysed(files, closures):
+    for case, ana in _analysed(files, closures, matrices_dir):
         o = ana.observables
         t = case.time
         late = late_mask(t)

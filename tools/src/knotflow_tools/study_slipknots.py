@@ -16,7 +16,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from .analysis import analyze_case  # noqa: E402
-from .io import read_case  # noqa: E402
+from .campaign import load_case  # noqa: E402
 from .knots import knot_core  # noqa: E402
 from .plot import _draw_chain  # noqa: E402
 
@@ -204,18 +204,19 @@ def confirmation(confirm_dir, case_name, frame) -> dict:
     return out
 
 
-def slip_candidates(path):
-    """Frames whose stored (screening) knot matrix looks like a slipknot."""
-    case = read_case(path)
+def slip_candidates(path, matrices_dir=None):
+    """Frames whose stored (screening) knot matrix looks like a slipknot (a ledger entry's: in
+    `matrices_dir`)."""
+    case = load_case(path, matrices_dir)
     ana = analyze_case(case)
     return [m["frame"] for m in slipknot_scan(case, ana.time, ana.kf) if m["slipknot"]]
 
 
-def core_candidates(path, confirm_dir):
-    """Frames of the case file `path` whose recomputed knot matrix (in `confirm_dir`) is still
+def core_candidates(path, confirm_dir, matrices_dir=None):
+    """Frames of the case `path` whose recomputed knot matrix (in `confirm_dir`) is still
     a slipknot: their knot core goes to the check with more closures."""
-    name = read_case(path).name
-    return [k for k in slip_candidates(path)
+    name = load_case(path, matrices_dir).name
+    return [k for k in slip_candidates(path, matrices_dir)
             if confirmation(confirm_dir, name, k).get("recomputed_slipknot")]
 
 
