@@ -130,7 +130,8 @@ if [ "$digest" = 1 ]; then
       base="$(basename "$f" .h5)"
       name="${base%_from*}"
       knotflow-campaign mode --ledger "$ledger" --sweep "$sweep" --case "$name" \
-        --analyze-json "$("$analyze" "$ledger/$sweep/$name.csv" --json)"
+        --analyze-json "$("$analyze" "$ledger/$sweep/$name.csv" --json)" \
+        || kf_log "case mode of $sweep/$name not recorded (above)"
     done
   done
   knotflow-campaign status --ledger "$ledger"
