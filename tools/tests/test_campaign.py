@@ -110,3 +110,29 @@ def test_combined_totals_of_segments():
     assert t["overlap_max_duration"] == 1.0 and t["max_overlapping_pairs"] == 4
     assert t["min_distance"] == 0.95 and t["max_bond_strain"] == 0.02
     assert campaign.combined_totals([{"t_offset": 0.0, "diagnostic_totals": {}}]) is None
+
+
+def test_kept_positions_in_chunks(tmp_path):
+    (tmp_path / "cc").mkdir()
+    (tmp_path / "cc" / "A1.00.json").write_text('{"ledger_version": 1, "n_beads": 3}')
+    times = [10.0 * k for k in range(46)] + [455.0]
+    frames = [np.arange(9.0).reshape(3, 3) + t for t in times]
+    campaign._write_positions(str(tmp_path), "cc", "A1.00", times, frames)
+    files = sorted(p.name for p in (tmp_path / "cc").iterdir() if p.name.endswith(".gz"))
+    assert files == ["A1.00.positions.t00000.gz", "A1.00.positions.t00200.gz",
+                     "A1.00.positions.t00400.gz"]
+    t, r = campaign.read_positions(str(tmp_path), "cc", "A1.00")
+    assert np.array_equal(t, times) and np.allclose(r, frames, atol=5e-5)
+    # The next digest: a finished chunk keeps its bytes (and its file); the last one grows.
+    stamp = {f: (tmp_path / "cc" / f).stat().st_mtime_ns for f in files}
+    first = (tmp_path / "cc" / files[0]).read_bytes()
+    times2 = times[:-1] + [460.0, 470.0]
+    campaign._write_positions(str(tmp_path), "cc", "A1.00", times2, [np.zeros((3, 3))] * len(times2))
+    assert (tmp_path / "cc" / files[0]).read_bytes() != first      # other content: rewritten
+    campaign._write_positions(str(tmp_path), "cc", "A1.00", times2, [np.zeros((3, 3))] * len(times2))
+    again = {f: (tmp_path / "cc" / f).stat().st_mtime_ns for f in files}
+    campaign._write_positions(str(tmp_path), "cc", "A1.00", times2, [np.zeros((3, 3))] * len(times2))
+    assert {f: (tmp_path / "cc" / f).stat().st_mtime_ns for f in files} == again
+    assert stamp.keys() == again.keys()
+    campaign._write_positions(str(tmp_path), "cc", "A1.00", times2[:5], [np.zeros((3, 3))] * 5)
+    assert sorted(p.name for p in (tmp_path / "cc").iterdir() if p.name.endswith(".gz")) == files[:1]

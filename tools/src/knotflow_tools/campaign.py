@@ -10,9 +10,13 @@ the study needs of each case in small text files that are committed, and what is
                                           case, k_f of knotflow-analyze, shape, mode, overlaps,
                                           stresslet; 7 significant digits)
     LEDGER/<sweep>/<case>.last.xyz        the newest frame at full precision: where to go on
-    LEDGER/<sweep>/<case>.positions.gz    frames every `positions_every` time units (4 decimals;
-                                          columns t x y z, a frame's beads in order): snapshots,
-                                          knot matrices, slipknot confirmation
+    LEDGER/<sweep>/<case>.positions.tNNNNN.gz
+                                          frames every `positions_every` time units (4 decimals;
+                                          columns t x y z, a frame's beads in order), one file
+                                          per POSITIONS_CHUNK time units from NNNNN (gzip without
+                                          a time stamp: a finished chunk never changes, so the
+                                          history does not grow with it): snapshots, knot
+                                          matrices, slipknot confirmation
 
 `digest` adds an analysed case file (a copy, after knotflow-analyze) to the ledger. `plan`
 says for each case of a sweep what to run next: nothing (finished), the case's own scene
@@ -27,6 +31,9 @@ ledger's rows from T on, at time T + t.
 
 from __future__ import annotations
 
+import glob
+import gzip
+import io as _io
 import json
 import math
 import os
@@ -42,6 +49,8 @@ FRAME_COLUMNS = ("t", "kf", "rg", "a", "b", "c", "theta", "phi", "close_pairs", 
                  "viscosity", "psi1", "psi2")
 #: Times of two segments closer than this (in units of 1/shear rate) are the same time.
 TIME_TOLERANCE = 1e-6
+#: Time units of kept positions per file.
+POSITIONS_CHUNK = 200.0
 _CONTINUATION = re.compile(r"^(?P<case>.+)_from(?P<t>[0-9]+(?:\.[0-9]+)?)$")
 
 
@@ -59,7 +68,12 @@ def split_name(name: str) -> tuple[str, float]:
 def _paths(ledger: str, sweep: str, case: str) -> dict:
     base = os.path.join(ledger, sweep, case)
     return {k: base + ext for k, ext in (("json", ".json"), ("csv", ".csv"),
-                                         ("last", ".last.xyz"), ("positions", ".positions.gz"))}
+                                         ("last", ".last.xyz"), ("positions", ".positions"))}
+
+
+def _chunk_files(ledger: str, sweep: str, case: str) -> list:
+    base = _paths(ledger, sweep, case)["positions"]
+    return sorted(glob.glob(glob.escape(base) + ".t[0-9][0-9][0-9][0-9][0-9].gz"))
 
 
 def load(ledger: str, sweep: str, case: str) -> dict | None:
@@ -90,15 +104,44 @@ def read_rows(ledger: str, sweep: str, case: str) -> np.ndarray:
 def read_positions(ledger: str, sweep: str, case: str) -> tuple[np.ndarray, np.ndarray]:
     """Times (k,) and positions (k, N, 3) of the frames the ledger keeps."""
     entry = load(ledger, sweep, case)
-    path = _paths(ledger, sweep, case)["positions"]
-    if entry is None or not os.path.exists(path):
+    files = _chunk_files(ledger, sweep, case)
+    if entry is None or not files:
         return np.zeros(0), np.zeros((0, 0, 3))
-    data = np.loadtxt(path, ndmin=2)
     n = int(entry["n_beads"])
-    if data.shape[1] != 4 or len(data) % n:
-        raise ValueError(f"{path}: {data.shape} is not rows of t x y z, {n} beads per frame")
-    data = data.reshape(-1, n, 4)
+    parts = []
+    for path in files:
+        data = np.loadtxt(path, ndmin=2)
+        if data.shape[1] != 4 or len(data) % n:
+            raise ValueError(f"{path}: {data.shape} is not rows of t x y z, {n} beads per frame")
+        parts.append(data.reshape(-1, n, 4))
+    data = np.concatenate(parts)
     return data[:, 0, 0], data[:, :, 1:]
+
+
+def _write_positions(ledger: str, sweep: str, case: str, times, frames) -> None:
+    """The kept frames (times, frames (k, N, 3)) into their chunk files, each rewritten only
+    when its bytes change; chunk files of no kept frame are removed."""
+    base = _paths(ledger, sweep, case)["positions"]
+    keys = [int(t // POSITIONS_CHUNK) * int(POSITIONS_CHUNK) for t in times]
+    wanted = {}
+    for key in sorted(set(keys)):
+        buf = _io.StringIO()
+        block = [np.column_stack([np.full(len(r), t), r])
+                 for t, r, k in zip(times, frames, keys) if k == key]
+        np.savetxt(buf, np.vstack(block), fmt="%.4f")
+        data = gzip.compress(buf.getvalue().encode(), mtime=0)
+        path = f"{base}.t{key:05d}.gz"
+        wanted[path] = True
+        if os.path.exists(path):
+            with open(path, "rb") as fh:
+                if fh.read() == data:
+                    continue
+        with open(path + ".tmp", "wb") as fh:
+            fh.write(data)
+        os.replace(path + ".tmp", path)
+    for path in _chunk_files(ledger, sweep, case):
+        if path not in wanted:
+            os.remove(path)
 
 
 def _column(values, n) -> np.ndarray:
@@ -209,13 +252,10 @@ def digest(path: str, ledger: str, sweep: str, closures: int, positions_every: f
     kept_t, kept = read_positions(ledger, sweep, name)
     chosen = _every(new[:, 0], positions_every) if positions_every > 0 else []
     keep = kept_t < new[0, 0] - TIME_TOLERANCE
-    blocks = [np.column_stack([np.full(len(kept[0]), t), r]) for t, r in
-              zip(kept_t[keep], kept[keep])]
-    blocks += [np.column_stack([np.full(case.positions.shape[1], new[k, 0]), case.positions[k]])
-               for k in chosen]
-    if blocks:
-        np.savetxt(p["positions"] + ".tmp.gz", np.vstack(blocks), fmt="%.4f")
-        os.replace(p["positions"] + ".tmp.gz", p["positions"])
+    times = list(kept_t[keep]) + [float(new[k, 0]) for k in chosen]
+    frames = list(kept[keep]) + [case.positions[k] for k in chosen]
+    if times:
+        _write_positions(ledger, sweep, name, times, frames)
     write_xyz(p["last"] + ".tmp", case.positions[-1],
               comment=f"{sweep}/{name}: the frame at t = {new[-1, 0]:.17g} (knotflow-campaign)")
     os.replace(p["last"] + ".tmp", p["last"])
