@@ -17,32 +17,14 @@ set -uo pipefail
 src="$(cd "$1" && pwd)" build="$(cd "$2" && pwd)" work="$3"
 fail() { echo "FAIL: $*" >&2; exit 1; }
 rm -rf "${work}"
-proj="${work}/project"
-mkdir -p "${proj}/build/bin" "${proj}/inputs" "${proj}/tools"
-cp -r "${src}/scripts" "${proj}/"
-cp -r "${src}/tools/pyproject.toml" "${src}/tools/src" "${proj}/tools/"
-ln -s "${build}/bin/knotflow" "${proj}/build/bin/knotflow"
-ln -s "${build}/bin/knotflow-analyze" "${proj}/build/bin/knotflow-analyze"
-if ! { /usr/bin/python3 -m venv --system-site-packages "${proj}/build/venv" \
-       && "${proj}/build/venv/bin/python" -m pip install -q --no-deps --no-build-isolation --no-index -e "${proj}/tools" \
-       && "${proj}/build/venv/bin/knotflow-campaign" --help; } >"${work}/venv.log" 2>&1; then
-  echo "SKIP: no Python tools (system python3 without numpy/h5py/matplotlib?): $(tail -n 2 "${work}/venv.log")"
-  exit 77
-fi
+# shellcheck source=tests/jobs/project_copy.sh
+source "${src}/tests/jobs/project_copy.sh"
+kf_project_copy "${src}" "${build}" "${work}"
 py="${proj}/build/venv/bin/python"
 cd "${proj}" || fail "no project directory"
-scene() {   # scene SWEEP "chain" "sweep line" T_END
-  cat >"inputs/$1.nml" <<NML
-&chain $2 /
-&forces excluded_volume = .true. /
-&integrator t_end = $4 /
-&output directory = 'results/$1', frame_interval = 1.0, progress_interval = 0.0 /
-$3
-NML
-}
-scene trefoil_table2_multipole "shape = 'trefoil'" "&sweep orientation = 'a', 'c' /" 3.0
-scene candycane_multipole "shape = 'candycane'" "&sweep bending_a = 1.0 /" 20.0
-scene candycane_seeds_multipole "shape = 'candycane'" "&sweep bending_a = 1.0, 3.0, seed = 1 /" 2.0
+kf_small_sweep trefoil_table2_multipole "shape = 'trefoil'" "&sweep orientation = 'a', 'c' /" 3.0
+kf_small_sweep candycane_multipole "shape = 'candycane'" "&sweep bending_a = 1.0 /" 20.0
+kf_small_sweep candycane_seeds_multipole "shape = 'candycane'" "&sweep bending_a = 1.0, 3.0, seed = 1 /" 2.0
 ledger="docs/reproduction_multipole/ledger"
 
 # 1. Killed part-way, digested.

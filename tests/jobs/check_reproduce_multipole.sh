@@ -16,31 +16,15 @@ set -uo pipefail
 src="$(cd "$1" && pwd)" build="$(cd "$2" && pwd)" work="$3"
 fail() { echo "FAIL: $*" >&2; exit 1; }
 rm -rf "${work}"
-proj="${work}/project"
-mkdir -p "${proj}/build/bin" "${proj}/inputs" "${proj}/tools" "${proj}/docs/reproduction" "${proj}/docs/reproduction_p24"
-cp -r "${src}/scripts" "${proj}/"
+# shellcheck source=tests/jobs/project_copy.sh
+source "${src}/tests/jobs/project_copy.sh"
+kf_project_copy "${src}" "${build}" "${work}"
+mkdir -p "${proj}/docs/reproduction" "${proj}/docs/reproduction_p24"
 cp "${src}/docs/reproduction/results.json" "${proj}/docs/reproduction/"
 cp "${src}/docs/reproduction_p24/results.json" "${proj}/docs/reproduction_p24/"
-cp -r "${src}/tools/pyproject.toml" "${src}/tools/src" "${proj}/tools/"
-ln -s "${build}/bin/knotflow" "${proj}/build/bin/knotflow"
-ln -s "${build}/bin/knotflow-analyze" "${proj}/build/bin/knotflow-analyze"
-# The Python tools of this checkout in build/venv, without a network (as tests/jobs/check_slurm_jobs.sh)
-if ! { /usr/bin/python3 -m venv --system-site-packages "${proj}/build/venv" \
-       && "${proj}/build/venv/bin/python" -m pip install -q --no-deps --no-build-isolation --no-index -e "${proj}/tools" \
-       && "${proj}/build/venv/bin/knotflow-study" --help; } >"${work}/venv.log" 2>&1; then
-  echo "SKIP: no Python tools (system python3 without numpy/h5py/matplotlib?): $(tail -n 2 "${work}/venv.log")"
-  exit 77
-fi
-
 cd "${proj}" || fail "no project directory"
-scene() {   # scene SWEEP "chain" "sweep line" T_END
-  cat >"inputs/$1.nml" <<NML
-&chain $2 /
-&forces excluded_volume = .true. /
-&integrator t_end = $4 /
-&output directory = 'results/$1', frame_interval = 1.0, progress_interval = 0.0 /
-$3
-NML
+scene() {   # scene SWEEP "chain" "sweep line" T_END: written (kf_small_sweep) and run
+  kf_small_sweep "$@"
   build/bin/knotflow "inputs/$1.nml" >"${work}/$1.log" 2>&1 || fail "knotflow inputs/$1.nml: $(tail -n 5 "${work}/$1.log")"
 }
 scene trefoil_table2_multipole "shape = 'trefoil'" "&sweep orientation = 'a', 'c' /" 3.0
