@@ -119,7 +119,7 @@ for c in ("A1.40", "A2.20"):
             if not k.startswith("_"):
                 assert close(a[k], b[k]), (c, k, a[k], b[k])
 ref = campaign.read_rows("ledger_ref", SWEEP, "A1.40")
-ref_last = campaign.read_xyz("ledger_ref/sw/A1.40.last.xyz")
+ref_last = np.asarray(campaign.load("ledger_ref", SWEEP, "A1.40")["last_frame"])
 shutil.move("results", "results_ref")
 
 # 2. The campaign: scenes, A killed part-way.
@@ -189,7 +189,7 @@ for c in ("rg", "a", "theta", "close_pairs", "min_distance", "viscosity"):
     assert np.array_equal(rows[before, col[c]], ref[before, col[c]]), c
 assert np.array_equal(rows[before, col["kf"]], ref[before, col["kf"]])
 assert np.all(np.isfinite(rows[:, col["kf"]]))
-last = campaign.read_xyz("ledger/sw/A1.40.last.xyz")
+last = np.asarray(campaign.load("ledger", SWEEP, "A1.40")["last_frame"])
 dev = np.max(np.linalg.norm(last - ref_last, axis=1))
 assert dev < 0.05, f"continued chain at t = 40 is {dev:.3g} d from the uninterrupted one"
 assert abs(rows[-1, col["rg"]] / ref[-1, col["rg"]] - 1) < 0.01, (rows[-1], ref[-1])

@@ -4,12 +4,14 @@ A sweep whose cases run for longer than a machine is kept (a session, a cluster 
 scratch file system that is purged) loses its case files with the machine. The ledger keeps what
 the study needs of each case in small text files that are committed, and what is needed to go on:
 
-    LEDGER/<sweep>/<case>.json            status, time reached, the case's scene, its segments
-                                          (file, time offset, run records, overlap totals)
+    LEDGER/<sweep>/<case>.json            status, time reached and the frame there at full
+                                          precision (where to go on: one record, written last,
+                                          so the two always agree), the case's scene, its
+                                          segments (file, time offset, run records, overlap
+                                          totals)
     LEDGER/<sweep>/<case>.csv             one row per frame: FRAME_COLUMNS (time of the whole
                                           case, k_f of knotflow-analyze, shape, mode, overlaps,
                                           stresslet; 7 significant digits)
-    LEDGER/<sweep>/<case>.last.xyz        the newest frame at full precision: where to go on
     LEDGER/<sweep>/<case>.positions.tNNNNN.gz
                                           frames every `positions_every` time units (4 decimals;
                                           columns t x y z, a frame's beads in order), one file
@@ -22,7 +24,8 @@ the study needs of each case in small text files that are committed, and what is
 says for each case of a sweep what to run next: nothing (finished), the case's own scene
 (`knotflow --write-scenes`; it starts the case or resumes its file on this machine), or, when
 the ledger is ahead of this machine, a continuation: the case's scene started from
-`<case>.last.xyz` for the time still to run, written as `<case>_from<T>` (T: the time reached).
+the ledger's newest frame for the time still to run, written as `<case>_from<T>` (T: the time
+reached).
 Simple shear v0 = (z, 0, 0) does not depend on time, so a continuation computes what a resume
 would, except that the step size and the adaptive multipole path start afresh, as after any
 resume, and an overlap episode open at T is counted as two. The rows of a continuation are the
@@ -41,7 +44,7 @@ import re
 
 import numpy as np
 
-from .io import RUN_FIELDS, read_case, read_xyz, write_xyz
+from .io import RUN_FIELDS, read_case, write_xyz
 
 LEDGER_VERSION = 1
 FRAME_COLUMNS = ("t", "kf", "rg", "a", "b", "c", "theta", "phi", "close_pairs", "mode",
@@ -68,7 +71,7 @@ def split_name(name: str) -> tuple[str, float]:
 def _paths(ledger: str, sweep: str, case: str) -> dict:
     base = os.path.join(ledger, sweep, case)
     return {k: base + ext for k, ext in (("json", ".json"), ("csv", ".csv"),
-                                         ("last", ".last.xyz"), ("positions", ".positions"))}
+                                         ("positions", ".positions"))}
 
 
 def _chunk_files(ledger: str, sweep: str, case: str) -> list:
@@ -247,6 +250,7 @@ def digest(path: str, ledger: str, sweep: str, closures: int, positions_every: f
              "t_end": entry["t_end"] if entry is not None else t_end_case,
              "t_reached": float(rows[-1, 0]), "n_beads": int(case.positions.shape[1]),
              "kf_closures": closures, "positions_every": positions_every,
+             "last_frame": [[float(x) for x in r] for r in case.positions[-1]],
              "scene": scene, "segments": segments}
     # Positions: the kept frames before this segment, then this segment's.
     kept_t, kept = read_positions(ledger, sweep, name)
@@ -256,9 +260,6 @@ def digest(path: str, ledger: str, sweep: str, closures: int, positions_every: f
     frames = list(kept[keep]) + [case.positions[k] for k in chosen]
     if times:
         _write_positions(ledger, sweep, name, times, frames)
-    write_xyz(p["last"] + ".tmp", case.positions[-1],
-              comment=f"{sweep}/{name}: the frame at t = {new[-1, 0]:.17g} (knotflow-campaign)")
-    os.replace(p["last"] + ".tmp", p["last"])
     _write_text(p["csv"], _rows_text(rows))
     _write_text(p["json"], json.dumps(entry, indent=1) + "\n")
     return entry
@@ -288,7 +289,7 @@ def _scene_core(text: str) -> str:
 
 def continuation_scene(entry: dict, coordinate_file: str, directory: str) -> str:
     """The scene that continues a ledger case from its newest frame (`coordinate_file`, a copy
-    of <case>.last.xyz) for the time still to run, into `directory`."""
+    of the entry's last_frame) for the time still to run, into `directory`."""
     text = entry["scene"]
     t_reached, t_end = float(entry["t_reached"]), float(entry["t_end"])
     if not t_end - t_reached > TIME_TOLERANCE:
@@ -338,7 +339,8 @@ def plan(scenes_dir: str, results: str, ledger: str, sweep: str) -> list:
         os.makedirs(cdir, exist_ok=True)
         cname = continuation_name(name, float(entry["t_reached"]))
         xyz = os.path.abspath(os.path.join(cdir, cname + ".xyz"))
-        write_xyz(xyz, read_xyz(_paths(ledger, sweep, name)["last"]))
+        write_xyz(xyz, np.asarray(entry["last_frame"], dtype=float),
+                  comment=f"{sweep}/{name} at t = {entry['t_reached']:.17g} (the case ledger)")
         path = os.path.join(cdir, cname + ".nml")
         _write_text(path, continuation_scene(entry, xyz, cdir))
         out.append((name, "continue", path))
@@ -465,7 +467,7 @@ def ledger_case(path: str, matrices_dir: str | None = None):
         k = int(np.argmin(np.abs(t - tk)))
         if abs(t[k] - tk) <= TIME_TOLERANCE:
             pos[k] = r
-    pos[-1] = read_xyz(_paths(ledger, sweep, name)["last"])
+    pos[-1] = np.asarray(entry["last_frame"], dtype=float)
     scene = entry["scene"]
     attrs = {"case_name": name, "status": entry["status"], "n_beads": n, "scene": scene,
              "integrator.t_end": float(entry["t_end"]), "ledger": path}
