@@ -23,6 +23,9 @@
 # slipknot search, snapshots), the further rotations every 50, the trefoils every 100; every
 # case's newest frame at full precision.
 # Needs a build (scripts/build.sh; KNOTFLOW_BUILD_DIR) and its Python tools; installs nothing.
+# The whole script is one block that bash reads before it runs any of it, so editing this file
+# (a checkout updated) while a campaign runs for hours does not change the running one.
+{
 set -euo pipefail
 # shellcheck source=scripts/lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
@@ -136,3 +139,5 @@ if [ "$digest" = 1 ]; then
   done
   knotflow-campaign status --ledger "$ledger"
 fi
+exit
+}
