@@ -136,3 +136,20 @@ def test_kept_positions_in_chunks(tmp_path):
     assert stamp.keys() == again.keys()
     campaign._write_positions(str(tmp_path), "cc", "A1.00", times2[:5], [np.zeros((3, 3))] * 5)
     assert sorted(p.name for p in (tmp_path / "cc").iterdir() if p.name.endswith(".gz")) == files[:1]
+
+
+def test_rows_to_t_end_are_a_finished_case(tmp_path):
+    """A run killed while it was being marked finished holds every frame: the ledger counts
+    it finished (plan has nothing left to run), one frame fewer is still running."""
+    for nframes, status in ((6, "finished"), (5, "running")):
+        path = str(write_case(tmp_path / "A1.00.h5", unknotting_trefoil_frames(nframes),
+                              status="running", attrs={"integrator.t_end": 5.0}))
+        with h5py.File(path, "r+") as f:
+            g = f.create_group("analysis/knots")
+            g.attrs["closures"] = np.int64(10)
+            g["frame_index"] = np.arange(nframes, dtype=np.int64)
+            g["time"] = np.arange(float(nframes))
+            g["kf"] = np.zeros(nframes)
+        ledger = str(tmp_path / f"ledger{nframes}")
+        e = campaign.digest(path, ledger, "cc", 10)
+        assert e["status"] == status and e["t_end"] == 5.0, e

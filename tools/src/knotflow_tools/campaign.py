@@ -243,11 +243,14 @@ def digest(path: str, ledger: str, sweep: str, closures: int, positions_every: f
                                      for k, v in (case.diagnostic_totals or {}).items()}}
     segments = segments[:same[0]] if same else list(segments)
     segments.append(segment)
-    finished = case.status == "finished"
+    t_end = entry["t_end"] if entry is not None else t_end_case
+    # Finished: the file is, or its rows reach t_end (a run killed while it was being marked
+    # finished has every frame; there is nothing left to run).
+    finished = case.status == "finished" or float(rows[-1, 0]) >= t_end - TIME_TOLERANCE
     scene = entry["scene"] if entry is not None else str(case.attrs.get("scene", ""))
     entry = {"ledger_version": LEDGER_VERSION, "sweep": sweep, "case": name,
              "status": "finished" if finished else "running",
-             "t_end": entry["t_end"] if entry is not None else t_end_case,
+             "t_end": t_end,
              "t_reached": float(rows[-1, 0]), "n_beads": int(case.positions.shape[1]),
              "kf_closures": closures, "positions_every": positions_every,
              "last_frame": [[float(x) for x in r] for r in case.positions[-1]],
