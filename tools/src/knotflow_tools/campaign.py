@@ -44,7 +44,7 @@ import re
 
 import numpy as np
 
-from .io import RUN_FIELDS, read_case, write_xyz
+from .io import RUN_FIELDS, open_case, read_case, read_runs, write_xyz
 
 LEDGER_VERSION = 1
 FRAME_COLUMNS = ("t", "kf", "rg", "a", "b", "c", "theta", "phi", "close_pairs", "mode",
@@ -290,6 +290,12 @@ def _scene_core(text: str) -> str:
     return "\n".join(keep)
 
 
+def _scene_setting(group: str, var: str):
+    """The line `var = value` of group &group of a scene text (kf_scene_items: scene_text):
+    group 1 is the text before it from the group's start, group 2 the value."""
+    return re.compile(rf"(&{group}\n(?:(?!/\n).*\n)*?)\s*{var} = ([^\n]*)\n")
+
+
 def continuation_scene(entry: dict, coordinate_file: str, directory: str) -> str:
     """The scene that continues a ledger case from its newest frame (`coordinate_file`, a copy
     of the entry's last_frame) for the time still to run, into `directory`."""
@@ -300,7 +306,7 @@ def continuation_scene(entry: dict, coordinate_file: str, directory: str) -> str
                          f"(t = {t_reached:g} of {t_end:g})")
 
     def setting(txt, group, var, value):
-        pat = re.compile(rf"(&{group}\n(?:(?!/\n).*\n)*?)\s*{var} = [^\n]*\n")
+        pat = _scene_setting(group, var)
         if not pat.search(txt):
             raise ValueError(f"{entry['case']}: the ledger's scene has no &{group} {var}")
         return pat.sub(lambda m: m.group(1) + f"  {var} = {value}\n", txt, count=1)
@@ -355,8 +361,11 @@ def _continuation_path(results: str, sweep: str, segment: dict) -> str:
 
 
 def _started(path: str) -> str:
+    """`started` of the first /runs record of a case file ("" when unreadable): only /runs is
+    read, not the frames."""
     try:
-        runs = read_case(path).runs
+        with open_case(path) as f:
+            runs = read_runs(path, f)
     except (OSError, ValueError):
         return ""
     return runs[0]["started"] if runs else ""
@@ -411,10 +420,10 @@ def find_ledger_cases(sweep_dir: str) -> list:
 
 
 def _scene_value(scene: str, group: str, var: str):
-    m = re.search(rf"&{group}\n(?:(?!/\n).*\n)*?\s*{var} = ([^\n]*)\n", scene)
+    m = _scene_setting(group, var).search(scene)
     if m is None:
         return None
-    v = m.group(1).strip()
+    v = m.group(2).strip()
     if v.startswith("'"):
         return v.strip("'")
     try:
