@@ -1,6 +1,7 @@
 !> Program knotflow-bench-reuse: accuracy and cost of the adaptive reuse of the multipole many-body
 !> part (`&hydro update = 'adaptive'`) against the exact solve at every stage ('stage'), on the
-!> study's model (multipole L = 2 + lubrication, BWE with eps_lub = tolerance, shear flow).
+!> study's model (multipole L = 2 + lubrication, BWE with eps_lub = tolerance, shear flow) with the
+!> overlap rule of the study's campaign (`--overlap`, default relax).
 !>
 !> Usage: knotflow-bench-reuse PART [options]
 !>   velocity   [--config C] [--t-end T] [--every K]: integrate with the adaptive path and, at
@@ -13,7 +14,8 @@
 !>              diagnostics) of both paths
 !>   rigid      [--config C]: the reused part at rigidly moved and at deformed configurations
 !> C: trefoil (N = 99, orientation c, A = 2.2; default), coil (inputs/configs/
-!> coil_candycane_A1.xyz, A = 1) or a coordinate file path (A = 1). Output: `key = value` lines
+!> coil_candycane_A1.xyz, A = 1) or a coordinate file path (A = 1). --overlap pair|separate|relax:
+!> the &hydro overlap rule (default relax, as inputs/*_multipole.nml). Output: `key = value` lines
 !> (read by knotflow-accuracy-report --reuse).
 program knotflow_bench_reuse
   use, intrinsic :: iso_fortran_env, only: output_unit
@@ -21,6 +23,7 @@ program knotflow_bench_reuse
   use kf_strings, only: to_str
   use kf_error, only: error_t
   use kf_scene, only: scene_t
+  use kf_scene_hydro, only: overlap_names, overlap_relax
   use kf_chain_shapes, only: build_initial_chain
   use kf_dynamics, only: dynamics_t
   use kf_stepper, only: stepper_t
@@ -35,7 +38,7 @@ program knotflow_bench_reuse
 
   character(len=*), parameter :: program_name = 'knotflow-bench-reuse'
 
-  character(len=:), allocatable :: part, config
+  character(len=:), allocatable :: part, config, overlap
   real(wp) :: t_end, eps_lub
   integer :: every
 
@@ -65,13 +68,15 @@ contains
     if (command_argument_count() < 1) call die(program_name, 'usage: knotflow-bench-reuse velocity|trajectory|speed|scaling [options]', 2)
     part = argument(1)
     call standard_option(program_name, part, 'usage: knotflow-bench-reuse velocity|trajectory|speed|overlaps|'// &
-      'scaling|rigid [--config trefoil|coil|FILE] [--t-end T] [--every K] [--eps-lub E]'//new_line('a')// &
+      'scaling|rigid [--config trefoil|coil|FILE] [--t-end T] [--every K] [--eps-lub E]'// &
+      ' [--overlap pair|separate|relax]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
       'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).')
     config = 'trefoil'
     t_end = 10.0_wp
     every = 1
     eps_lub = -1.0_wp
+    overlap = overlap_relax
     k = 2
     do while (k <= command_argument_count())
       arg = argument(k)
@@ -87,6 +92,10 @@ contains
         read (val, *, iostat=ios) eps_lub
         if (ios /= 0 .or. .not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) &
           call die(program_name, '--eps-lub '//trim(val)//': expected a number in (0, 0.5)', 2)
+      case ('--overlap')
+        overlap = trim(val)
+        if (.not. any(overlap_names == overlap)) &
+          call die(program_name, '--overlap '//overlap//': expected pair, separate or relax', 2)
       case ('--every')
         read (val, *, iostat=ios) every
         if (ios /= 0 .or. every < 1) call die(program_name, '--every '//trim(val)//': expected an integer >= 1', 2)
@@ -110,6 +119,7 @@ contains
     scene%hydro%lubrication = .true.
     scene%hydro%update = update
     scene%hydro%eps_lub = eps_lub
+    scene%hydro%overlap = overlap
     scene%integrator%tolerance = tol
     select case (name)
     case ('trefoil')
@@ -136,6 +146,7 @@ contains
     write (output_unit, '(a)') 'part = '//part
     write (output_unit, '(a)') 'config = '//config
     write (output_unit, '(a)') 't_end = '//to_str(t_end, '(g0.6)')
+    write (output_unit, '(a)') 'overlap = '//overlap
     text = 'unknown'
     open (newunit=unit, file='/proc/loadavg', action='read', status='old', iostat=ios)
     if (ios == 0) then

@@ -69,3 +69,16 @@ def test_no_outputs_is_an_error(tmp_path, capsys):
     assert cli.main_accuracy_report(["--reuse", str(tmp_path / "missing"), "--markdown", str(md)]) == 2
     assert "no knotflow-bench-reuse outputs" in capsys.readouterr().err
     assert md.read_text() == "# Report\n"
+
+
+def test_overlap_rule_stated(tmp_path):
+    """Outputs without an overlap line predate the option: they ran the rule 'pair'."""
+    def section():
+        return accuracy.update_reuse(str(tmp_path / "a.md"), str(tmp_path))
+    write_outputs(tmp_path)
+    assert "overlap rule 'pair'," in section()
+    for name, text in (("velocity_trefoil.txt", VELOCITY), ("speed_trefoil.txt", SPEED)):
+        (tmp_path / name).write_text(text.replace("t_end =", "overlap = relax\nt_end ="))
+    assert "overlap rule 'relax'," in section()
+    (tmp_path / "speed_trefoil.txt").write_text(SPEED)
+    assert "overlap rule 'pair' / 'relax' (by part)," in section()
