@@ -61,6 +61,7 @@ program knotflow
   call keep_freed_heap()   ! after MPI start-up, which sets its own allocator options
   call ignore_file_size_signal()   ! a write past `ulimit -f` fails (EFBIG) and is reported
   me = comm%rank()
+  if (me < 0) call die(program_name, 'cannot get the rank of this process (MPI)', 2)
   call parse_arguments(scene_file, dry_run, scenes_dir)
   call h5_initialize(error)
   if (allocated(error)) call stop_all(error%message, 2)

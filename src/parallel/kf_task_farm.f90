@@ -83,6 +83,10 @@ contains
     owner = task_not_run
     messages = repeat(achar(0), task_message_len)
     me = comm%rank()
+    if (me < 0) then
+      call fatal_error(error, 'run_task_farm: cannot get the rank of this process')
+      return
+    end if
     if (ntasks == 0) return
 
     call counter%create(comm, 2, error)
