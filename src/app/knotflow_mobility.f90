@@ -21,6 +21,7 @@ program knotflow_mobility
   use kf_text_coords, only: read_coordinates
   use kf_hydro_model, only: hydro_model_t
   use kf_hydro_multipole, only: multipole_model_t
+  use kf_multipole_system, only: max_multipole_order
   use kf_hydro_factory, only: make_hydro_model, hydro_model_names
   use kf_scene_check, only: name_list
   use kf_scene, only: hydro_params_t
@@ -63,9 +64,9 @@ program knotflow_mobility
         model_name = val
       case ('--order')
         read (val, *, iostat=ios) order
-        if (ios /= 0 .or. verify(trim(val), '0123456789') /= 0) &
-          call die(program_name, '--order '//val//': expected an integer 1..20', 2)
-        if (order < 1 .or. order > 20) call die(program_name, '--order '//val//': expected an integer 1..20', 2)
+        if (ios /= 0 .or. verify(trim(val), '0123456789') /= 0) order = 0
+        if (order < 1 .or. order > max_multipole_order) &
+          call die(program_name, '--order '//val//': expected an integer 1..'//to_str(max_multipole_order), 2)
       case ('--lubrication')
         if (val /= 'on' .and. val /= 'off') call die(program_name, '--lubrication '//val//': allowed values are on, off', 2)
         lubrication = (val == 'on')

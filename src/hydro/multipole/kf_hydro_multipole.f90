@@ -134,7 +134,7 @@ module kf_hydro_multipole
 
 contains
 
-  !> Order L (1..20), lubrication on/off, BWE shift eps_lub (0 < eps_lub < 0.5), update mode
+  !> Order L (1..max_multipole_order), lubrication on/off, BWE shift eps_lub (0 < eps_lub < 0.5), update mode
   !> ('stage', the default, or 'adaptive') and the integration tolerance (> 0, default 1e-4)
   !> that sets the reuse budget.
   subroutine multipole_init(this, order, lubrication, eps_lub, error, update, tolerance)

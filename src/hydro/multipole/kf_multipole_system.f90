@@ -30,6 +30,9 @@ module kf_multipole_system
   implicit none
   private
 
+  !> The highest truncation order L the system takes (the scene allows less: kf_scene_hydro).
+  integer, parameter, public :: max_multipole_order = 20
+
   !> The factorised N-sphere system.
   !> Work arrays and sizes are private; `n_clamped` and `seconds` report on the last factorise.
   type, public :: multipole_system_t
@@ -67,7 +70,7 @@ module kf_multipole_system
 
 contains
 
-  !> Truncation order L (1..20) and the distance min_distance (1 + eps_lub) at which closer
+  !> Truncation order L (1..max_multipole_order) and the distance min_distance (1 + eps_lub) at which closer
   !> (overlapping) pairs are evaluated; min_distance <= 0 disables the overlap treatment.
   subroutine system_init(this, order, min_distance, error)
     class(multipole_system_t), intent(inout) :: this
@@ -76,8 +79,9 @@ contains
     type(error_t), allocatable, intent(out) :: error
     integer :: c, s
 
-    if (order < 1 .or. order > 20) then
-      call fatal_error(error, 'multipole order L = '//to_str(order)//' not allowed (1 <= L <= 20)')
+    if (order < 1 .or. order > max_multipole_order) then
+      call fatal_error(error, 'multipole order L = '//to_str(order)//' not allowed (1 <= L <= '// &
+                       to_str(max_multipole_order)//')')
       return
     end if
     call this%lay%init(order)
