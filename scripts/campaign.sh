@@ -137,7 +137,7 @@ if [ "$digest" = 1 ]; then
         || kf_log "case mode of $sweep/$name not recorded (above)"
     done
   done
-  knotflow-campaign status --ledger "$ledger"
+  knotflow-campaign status --ledger "$ledger" --scenes "$results/scenes"
 fi
 exit
 }

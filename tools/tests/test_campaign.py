@@ -153,3 +153,43 @@ def test_rows_to_t_end_are_a_finished_case(tmp_path):
         ledger = str(tmp_path / f"ledger{nframes}")
         e = campaign.digest(path, ledger, "cc", 10)
         assert e["status"] == status and e["t_end"] == 5.0, e
+
+
+def _ledger_entry(case, status, t_reached, t_end, walls_loads):
+    runs = [{"commit": "abcdef012345", "wall_seconds": w, "load_mean": x} for w, x in walls_loads]
+    return {"ledger_version": campaign.LEDGER_VERSION, "sweep": "tr", "case": case,
+            "status": status, "t_reached": t_reached, "t_end": t_end,
+            "segments": [{"runs": runs}]}
+
+
+def test_status_counts_cases_and_time_left(tmp_path):
+    """Rate = wall of all runs / time reached; time left = rate x (t_end − t_reached) of the
+    running cases + rate x t_end of those not started (t_end from their scenes)."""
+    import json
+    ledger, scenes = tmp_path / "ledger", tmp_path / "scenes"
+    (ledger / "tr").mkdir(parents=True)
+    (scenes / "tr").mkdir(parents=True)
+    (scenes / "cc").mkdir(parents=True)
+    entries = [_ledger_entry("A1", "finished", 1000.0, 1000.0, [(3000.0, 2.0), (1000.0, 4.0)]),
+               _ledger_entry("A2", "running", 500.0, 1000.0, [(2000.0, 2.0)])]
+    for e in entries:
+        (ledger / "tr" / (e["case"] + ".json")).write_text(json.dumps(e))
+    for name, t_end in (("A1", 1000.0), ("A2", 1000.0), ("A3", 800.0)):
+        (scenes / "tr" / (name + ".nml")).write_text(
+            SCENE.replace("2000.0000000000000", repr(t_end)).replace("candycane", "trefoil"))
+    (scenes / "cc" / "B1.nml").write_text(SCENE)
+    lines = campaign.status_lines(str(ledger), str(scenes))
+    assert lines[0] == ("tr/A1: finished, t = 1000 of 1000, 1 segment(s), wall 1.11 h, load 2.5, "
+                        "commits abcdef0")
+    assert lines[1].startswith("tr/A2: running, t = 500 of 1000,")
+    # cc: one case, nothing measured; tr: 6000 s for 1500 time units = 4 s per time unit, left
+    # 500 + 800 time units = 5200 s (without the scenes: 500, 2000 s); load
+    # (3000*2 + 1000*4 + 2000*2) / 6000.
+    assert lines[2] == "cc: 0 of 1 finished, 0 running, 1 not started; no rate measured yet"
+    assert lines[3] == ("tr: 1 of 3 finished, 1 running, 1 not started; 4.00 s of wall per time "
+                        "unit (load 2.3): about 1.4 h of one worker left")
+    assert lines[4] == ("campaign: 1 of 4 cases finished; about 1.4 h of one worker left at the "
+                        "measured rates (sweeps without a measured rate not counted)")
+    assert campaign.status_lines(str(ledger)) == lines[:2] + [
+        "tr: 1 of 2 finished, 1 running; 4.00 s of wall per time unit (load 2.3): about 0.6 h of "
+        "one worker left"]

@@ -371,28 +371,77 @@ def _started(path: str) -> str:
     return runs[0]["started"] if runs else ""
 
 
-def status_lines(ledger: str) -> list:
+def _run_totals(entry: dict) -> tuple[float, float, str]:
+    """Wall seconds of a case's runs, their mean load (weighted by wall time; nan when none is
+    recorded) and their commits."""
+    runs = [r for s in entry["segments"] for r in s["runs"]]
+    wall = sum(r["wall_seconds"] or 0.0 for r in runs)
+    loaded = [(r["wall_seconds"], r["load_mean"]) for r in runs
+              if r["wall_seconds"] and r["load_mean"] is not None]
+    load_mean = sum(w * x for w, x in loaded) / sum(w for w, _ in loaded) if loaded else math.nan
+    return wall, load_mean, ",".join(dict.fromkeys(str(r["commit"])[:7] for r in runs))
+
+
+def status_lines(ledger: str, scenes: str | None = None) -> list:
     """One line per case of the ledger: sweep/case, status, time reached of t_end, segments,
-    wall time and mean load of its runs (weighted by wall time), commits."""
-    lines = []
-    for sweep in sorted(d for d in os.listdir(ledger) if os.path.isdir(os.path.join(ledger, d))):
-        for f in sorted(os.listdir(os.path.join(ledger, sweep))):
-            if not f.endswith(".json"):
-                continue
-            e = load(ledger, sweep, f[:-5])
+    wall time and mean load of its runs (weighted by wall time), commits. Then one line per
+    sweep: cases finished, running and (with `scenes`, the campaign's scene directories
+    <scenes>/<sweep>/<case>.nml) not started; its measured rate (wall seconds of all its runs
+    per time unit reached, at their mean load) and the wall time one worker still needs at that
+    rate; and a last line for the whole campaign."""
+    lines, summary = [], []
+    sweeps = {d for d in os.listdir(ledger) if os.path.isdir(os.path.join(ledger, d))}
+    if scenes is not None:
+        sweeps |= {d for d in os.listdir(scenes) if os.path.isdir(os.path.join(scenes, d))}
+    left_total, counted, cases_total, finished_total = 0.0, True, 0, 0
+    for sweep in sorted(sweeps):
+        names = set()
+        if os.path.isdir(os.path.join(ledger, sweep)):
+            names |= {f[:-5] for f in os.listdir(os.path.join(ledger, sweep)) if f.endswith(".json")}
+        scene_dir = os.path.join(scenes, sweep) if scenes is not None else None
+        if scene_dir is not None and os.path.isdir(scene_dir):
+            names |= {f[:-4] for f in os.listdir(scene_dir) if f.endswith(".nml")}
+        count = {"finished": 0, "running": 0, "not started": 0}
+        wall_sum = t_sum = weighted_load = 0.0
+        t_left = 0.0
+        for name in sorted(names):
+            e = load(ledger, sweep, name)
             if e is None:
+                with open(os.path.join(scene_dir or "", name + ".nml"), encoding="utf-8") as fh:
+                    t_end = _scene_value(fh.read(), "integrator", "t_end")
+                count["not started"] += 1
+                t_left += float(t_end) if t_end is not None else math.nan
                 continue
-            runs = [r for s in e["segments"] for r in s["runs"]]
-            wall = sum(r["wall_seconds"] or 0.0 for r in runs)
-            loaded = [(r["wall_seconds"], r["load_mean"]) for r in runs
-                      if r["wall_seconds"] and r["load_mean"] is not None]
-            load_mean = (sum(w * x for w, x in loaded) / sum(w for w, _ in loaded)
-                         if loaded else math.nan)
-            commits = ",".join(dict.fromkeys(str(r["commit"])[:7] for r in runs))
+            wall, load_mean, commits = _run_totals(e)
+            count[e["status"]] = count.get(e["status"], 0) + 1
+            wall_sum += wall
+            t_sum += float(e["t_reached"])
+            weighted_load += wall * (0.0 if math.isnan(load_mean) else load_mean)
+            t_left += max(float(e["t_end"]) - float(e["t_reached"]), 0.0) \
+                if e["status"] != "finished" else 0.0
             lines.append(f"{sweep}/{e['case']}: {e['status']}, t = {e['t_reached']:g} of "
                          f"{e['t_end']:g}, {len(e['segments'])} segment(s), wall "
                          f"{wall / 3600:.2f} h, load {load_mean:.1f}, commits {commits}")
-    return lines
+        n = len(names)
+        cases_total += n
+        finished_total += count["finished"]
+        text = (f"{sweep}: {count['finished']} of {n} finished, {count['running']} running"
+                + (f", {count['not started']} not started" if scenes is not None else ""))
+        if wall_sum > 0.0 and t_sum > 0.0:
+            rate = wall_sum / t_sum
+            left = rate * t_left
+            left_total += left
+            text += (f"; {rate:.2f} s of wall per time unit (load {weighted_load / wall_sum:.1f}): "
+                     f"about {left / 3600:.1f} h of one worker left")
+        else:
+            counted = counted and t_left == 0.0
+            text += "; no rate measured yet"
+        summary.append(text)
+    if scenes is not None:
+        summary.append(f"campaign: {finished_total} of {cases_total} cases finished; about "
+                       f"{left_total / 3600:.1f} h of one worker left at the measured rates"
+                       + ("" if counted else " (sweeps without a measured rate not counted)"))
+    return lines + summary
 
 
 def set_case_mode(ledger: str, sweep: str, case: str, analyze_json: str) -> dict:

@@ -528,7 +528,11 @@ def _campaign(argv: Argv) -> int:
                     help="closures per frame the files were analysed with")
     dg.add_argument("--positions-every", type=float, default=0.0, metavar="T",
                     help="keep the positions of the frames at multiples of T (0: only the newest)")
-    st = sub.add_parser("status", help="one line per case of the ledger's sweeps")
+    st = sub.add_parser("status", help="one line per case of the ledger's sweeps, then one per "
+                        "sweep (cases, measured rate, time left) and one for the campaign")
+    st.add_argument("--scenes", metavar="DIR",
+                    help="the campaign's scenes (DIR/<sweep>/<case>.nml, knotflow --write-scenes):"
+                    " count the cases not started and the time they need")
     md = sub.add_parser("mode", help="record a case's mode: knotflow-analyze <case>.csv --json")
     md.add_argument("--case", required=True)
     md.add_argument("--analyze-json", required=True, metavar="TEXT",
@@ -558,7 +562,9 @@ def _campaign(argv: Argv) -> int:
         print(f"{args.sweep}/{args.case}: case mode {e['case_mode']['mode']} of "
               f"{e['case_mode']['frames']} frames")
     else:
-        for line in campaign.status_lines(args.ledger):
+        if args.scenes is not None and not os.path.isdir(args.scenes):
+            p.error(f"--scenes {args.scenes}: not a directory")
+        for line in campaign.status_lines(args.ledger, args.scenes):
             print(line)
     return 0
 
