@@ -137,7 +137,9 @@ if [ "$digest" = 1 ]; then
         || kf_log "case mode of $sweep/$name not recorded (above)"
     done
   done
-  knotflow-campaign status --ledger "$ledger" --scenes "$results/scenes"
+  scenes=()
+  [ -d "$results/scenes" ] && scenes=(--scenes "$results/scenes")
+  knotflow-campaign status --ledger "$ledger" "${scenes[@]}"
 fi
 exit
 }

@@ -57,6 +57,8 @@ bash scripts/campaign.sh --workers 2 --digest >"${work}/run2.log" 2>&1 \
   || fail "campaign.sh --digest after the loss: $(tail -n 10 "${work}/run2.log")"
 grep -q "candycane_multipole/A1.00 (continue: results/candycane_multipole/continued/A1.00_from" "${work}/run2.log" \
   || fail "A1.00 was not continued from the ledger: $(cat "${work}/run2.log")"
+grep -q "^campaign: 5 of 5 cases finished; about 0.0 h of one worker left" "${work}/run2.log" \
+  || fail "knotflow-campaign status after the campaign: $(tail -n 8 "${work}/run2.log")"
 "$py" - "$ledger" <<'PY' || fail "the ledger after the loss is not the whole campaign"
 import sys
 import numpy as np
