@@ -13,9 +13,12 @@
 !>   overlaps   [--config C] [--t-end T] [--eps-lub E]: BWE overlap statistics (run
 !>              diagnostics) of both paths
 !>   rigid      [--config C]: the reused part at rigidly moved and at deformed configurations
+!>              (overlap rule pair only: the model's reused part against its exact one, both
+!>              without the dynamics' configuration rules separate and relax)
 !> C: trefoil (N = 99, orientation c, A = 2.2; default), coil (inputs/configs/
 !> coil_candycane_A1.xyz, A = 1) or a coordinate file path (A = 1). --overlap pair|separate|relax:
-!> the &hydro overlap rule (default relax, as inputs/*_multipole.nml). Output: `key = value` lines
+!> the &hydro overlap rule (default relax, as inputs/*_multipole.nml; rigid: pair). Output:
+!> `key = value` lines
 !> (read by knotflow-accuracy-report --reuse).
 program knotflow_bench_reuse
   use, intrinsic :: iso_fortran_env, only: output_unit
@@ -23,7 +26,7 @@ program knotflow_bench_reuse
   use kf_strings, only: to_str
   use kf_error, only: error_t
   use kf_scene, only: scene_t
-  use kf_scene_hydro, only: overlap_names, overlap_relax
+  use kf_scene_hydro, only: overlap_names, overlap_pair, overlap_relax
   use kf_chain_shapes, only: build_initial_chain
   use kf_dynamics, only: dynamics_t
   use kf_stepper, only: stepper_t
@@ -76,7 +79,7 @@ contains
     t_end = 10.0_wp
     every = 1
     eps_lub = -1.0_wp
-    overlap = overlap_relax
+    overlap = ''
     k = 2
     do while (k <= command_argument_count())
       arg = argument(k)
@@ -104,6 +107,14 @@ contains
       end select
       k = k + 2
     end do
+    if (part == 'rigid') then
+      if (overlap /= '' .and. overlap /= overlap_pair) &
+        call die(program_name, '--overlap '//overlap//': rigid compares the model''s reused and exact parts, '// &
+                 'which only the rule pair leaves alone (allowed: pair)', 2)
+      overlap = overlap_pair
+    else if (overlap == '') then
+      overlap = overlap_relax
+    end if
   end subroutine parse_arguments
 
   !> The study's model on configuration `name`, tolerance tol, with initial positions r.

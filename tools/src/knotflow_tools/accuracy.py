@@ -448,14 +448,17 @@ def reuse_section(runs: dict) -> str:
                                  pr.get("%s%d.max_error" % (kind, i))])
         out += ["### What limits the reuse", "",
                 "The many-body part of the trefoil at t = 0 reused as it is (no extrapolation) at "
-                "moved configurations, against the exact velocities there (max over beads of "
+                "moved configurations, against the exact velocities there (overlap rule %s: the "
+                "rules separate and relax act in the dynamics, outside the model, and would "
+                "compare unlike velocities where a move makes beads overlap; max over beads of "
                 "|v − v_exact|, forces and flow at the moved configuration): a rigid rotation "
                 "(plus a small deformation), every bond stretched by the given relative amount, "
                 "every bead moved by the given amount. A rigid motion costs nothing; a bond "
                 "length change of 1e-3 already gives a velocity error near the budget, because "
                 "the stiff springs (k = 500) turn it into large forces on which the reused "
                 "mobility acts. Runge–Kutta stages change bond lengths by about that much, so "
-                "the many-body part can be reused only over a few stages at the tolerance.", "",
+                "the many-body part can be reused only over a few stages at the tolerance."
+                % ("'%s'" % pr.get("overlap", "pair")), "",
                 _md_table(["motion", "angle", "amplitude", "largest velocity error"], rows), ""]
     ca = runs.get("case_trefoil")
     if ca:
