@@ -17,6 +17,10 @@ kf_job_environment() {
     module load ${MODULES}
   fi
   export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1
+  # OpenBLAS's kernels for the node's CPU (scripts/blas_env.sh), unless OPENBLAS_CORETYPE is set.
+  # shellcheck source=scripts/blas_env.sh
+  source "${KNOTFLOW_DIR}/scripts/blas_env.sh"
+  kf_openblas_environment
   case "${HDF5_FILE_LOCKING:-on}" in
     on) ;;
     off) export HDF5_USE_FILE_LOCKING=FALSE ;;

@@ -20,6 +20,10 @@ export DEBIAN_FRONTEND=noninteractive
 # One thread per MPI rank: every rank runs one serial case, and idle OpenBLAS threads spin
 # (sched_yield) and steal the cores the other ranks need. Set them yourself to override.
 export OPENBLAS_NUM_THREADS="${OPENBLAS_NUM_THREADS:-1}" OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}"
+# OpenBLAS's kernels chosen by the CPU's instruction sets unless OPENBLAS_CORETYPE is set.
+# shellcheck source=scripts/blas_env.sh
+source "$KF_ROOT/scripts/blas_env.sh"
+kf_openblas_environment
 
 kf_log() { printf '==> %s\n' "$*"; }
 kf_die() { printf 'ERROR: %s\n' "$*" >&2; exit 1; }
