@@ -9,7 +9,7 @@ src="$(cd "$1" && pwd)" build="$(cd "$2" && pwd)" work="$3" flags="${4:-}"
 fail() { echo "FAIL: $*" >&2; exit 1; }
 rm -rf "${work}"
 mkdir -p "${work}/project/build/bin" "${work}/project/inputs"
-cp -r "${src}/jobs" "${work}/project/"
+cp -r "${src}/jobs" "${src}/scripts" "${work}/project/"
 ln -s "${build}/bin/knotflow" "${work}/project/build/bin/knotflow"
 cat >"${work}/project/inputs/tiny.nml" <<'NML'
 &chain shape = 'trefoil' /
