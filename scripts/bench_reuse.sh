@@ -47,7 +47,8 @@ for part in "${parts[@]}"; do
     case)
       dir="$out/case"
       rm -rf "$dir"; mkdir -p "$dir"
-      sed -e "s|@DIR@|$dir|" > "$dir/trefoil.nml" <<'NML'
+      overlap=relax   # the rule of the study inputs
+      sed -e "s|@DIR@|$dir|" -e "s|@OVERLAP@|$overlap|" > "$dir/trefoil.nml" <<'NML'
 &chain
   shape = 'trefoil', orientation = 'c'
 /
@@ -55,7 +56,7 @@ for part in "${parts[@]}"; do
   bending_a = 2.2
 /
 &hydro
-  model = 'multipole', order = 2, lubrication = .true., update = 'adaptive', overlap = 'relax'
+  model = 'multipole', order = 2, lubrication = .true., update = 'adaptive', overlap = '@OVERLAP@'
 /
 &integrator
   t_end = 1000.0, tolerance = 1.0e-4
@@ -69,7 +70,7 @@ NML
       load0=$(cat /proc/loadavg)
       status=finished
       taskset -c 0 "$KF_ROOT/build/bin/knotflow" "$dir/trefoil.nml" | tee "$dir/log.txt" || status=failed
-      { echo "part = case"; echo "config = trefoil"; echo "t_end = 1000"; echo "overlap = relax";
+      { echo "part = case"; echo "config = trefoil"; echo "t_end = 1000"; echo "overlap = $overlap";
         echo "loadavg_start = $load0"; echo "wall_s = $(( $(date +%s) - start ))";
         echo "loadavg_end = $(cat /proc/loadavg)";
         echo "status = $status (see $dir/log.txt)"; } > "$out/case_trefoil.txt" ;;

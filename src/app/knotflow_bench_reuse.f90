@@ -27,6 +27,7 @@ program knotflow_bench_reuse
   use kf_error, only: error_t
   use kf_scene, only: scene_t
   use kf_scene_hydro, only: overlap_names, overlap_pair, overlap_relax
+  use kf_scene_check, only: name_list
   use kf_chain_shapes, only: build_initial_chain
   use kf_dynamics, only: dynamics_t
   use kf_stepper, only: stepper_t
@@ -98,7 +99,7 @@ contains
       case ('--overlap')
         overlap = trim(val)
         if (.not. any(overlap_names == overlap)) &
-          call die(program_name, '--overlap '//overlap//': expected pair, separate or relax', 2)
+          call die(program_name, '--overlap '//overlap//': allowed values are '//name_list(overlap_names), 2)
       case ('--every')
         read (val, *, iostat=ios) every
         if (ios /= 0 .or. every < 1) call die(program_name, '--every '//trim(val)//': expected an integer >= 1', 2)

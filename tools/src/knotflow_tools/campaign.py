@@ -371,15 +371,18 @@ def _started(path: str) -> str:
     return runs[0]["started"] if runs else ""
 
 
-def _run_totals(entry: dict) -> tuple[float, float, str]:
-    """Wall seconds of a case's runs, their mean load (weighted by wall time; nan when none is
-    recorded) and their commits."""
+def _run_totals(entry: dict) -> tuple[float, float, float, str]:
+    """Of a case's runs: their wall seconds; the wall seconds and the wall-weighted load sum of
+    those that recorded a load (their mean load is the ratio); their commits."""
     runs = [r for s in entry["segments"] for r in s["runs"]]
-    wall = sum(r["wall_seconds"] or 0.0 for r in runs)
     loaded = [(r["wall_seconds"], r["load_mean"]) for r in runs
               if r["wall_seconds"] and r["load_mean"] is not None]
-    load_mean = sum(w * x for w, x in loaded) / sum(w for w, _ in loaded) if loaded else math.nan
-    return wall, load_mean, ",".join(dict.fromkeys(str(r["commit"])[:7] for r in runs))
+    return (sum(r["wall_seconds"] or 0.0 for r in runs), sum(w for w, _ in loaded),
+            sum(w * x for w, x in loaded), ",".join(dict.fromkeys(str(r["commit"])[:7] for r in runs)))
+
+
+def _ratio(a: float, b: float) -> float:
+    return a / b if b > 0.0 else math.nan
 
 
 def status_lines(ledger: str, scenes: str | None = None) -> list:
@@ -402,26 +405,24 @@ def status_lines(ledger: str, scenes: str | None = None) -> list:
         if scene_dir is not None and os.path.isdir(scene_dir):
             names |= {f[:-4] for f in os.listdir(scene_dir) if f.endswith(".nml")}
         count = {"finished": 0, "running": 0, "not started": 0}
-        wall_sum = t_sum = weighted_load = 0.0
-        t_left = 0.0
+        wall_sum = loaded_sum = load_sum = t_sum = t_left = 0.0
         for name in sorted(names):
             e = load(ledger, sweep, name)
-            if e is None:
-                with open(os.path.join(scene_dir or "", name + ".nml"), encoding="utf-8") as fh:
+            if e is None:   # a scene without a ledger entry
+                with open(os.path.join(str(scene_dir), name + ".nml"), encoding="utf-8") as fh:
                     t_end = _scene_value(fh.read(), "integrator", "t_end")
                 count["not started"] += 1
                 t_left += float(t_end) if t_end is not None else math.nan
                 continue
-            wall, load_mean, commits = _run_totals(e)
+            wall, loaded, load_w, commits = _run_totals(e)
             count[e["status"]] = count.get(e["status"], 0) + 1
-            wall_sum += wall
+            wall_sum, loaded_sum, load_sum = wall_sum + wall, loaded_sum + loaded, load_sum + load_w
             t_sum += float(e["t_reached"])
-            weighted_load += wall * (0.0 if math.isnan(load_mean) else load_mean)
-            t_left += max(float(e["t_end"]) - float(e["t_reached"]), 0.0) \
-                if e["status"] != "finished" else 0.0
+            if e["status"] != "finished":
+                t_left += max(float(e["t_end"]) - float(e["t_reached"]), 0.0)
             lines.append(f"{sweep}/{e['case']}: {e['status']}, t = {e['t_reached']:g} of "
                          f"{e['t_end']:g}, {len(e['segments'])} segment(s), wall "
-                         f"{wall / 3600:.2f} h, load {load_mean:.1f}, commits {commits}")
+                         f"{wall / 3600:.2f} h, load {_ratio(load_w, loaded):.1f}, commits {commits}")
         n = len(names)
         cases_total += n
         finished_total += count["finished"]
@@ -431,7 +432,7 @@ def status_lines(ledger: str, scenes: str | None = None) -> list:
             rate = wall_sum / t_sum
             left = rate * t_left
             left_total += left
-            text += (f"; {rate:.2f} s of wall per time unit (load {weighted_load / wall_sum:.1f}): "
+            text += (f"; {rate:.2f} s of wall per time unit (load {_ratio(load_sum, loaded_sum):.1f}): "
                      f"about {left / 3600:.1f} h of one worker left")
         else:
             counted = counted and t_left == 0.0
