@@ -27,7 +27,7 @@ program knotflow
   use kf_sweep_tasks, only: sweep_tasks_t, status_word
   use kf_exit, only: exit_program_now
   use kf_cli, only: standard_option, argument, version_line, die
-  use kf_blas_threads, only: allowed_cpus, blas_threads_for, set_blas_threads, blas_threads_in_use
+  use kf_blas_threads, only: allowed_cpus, blas_threads_for, set_blas_threads, blas_threads_in_use, blas_library
   use kf_platform, only: load_average
   use kf_kinds, only: wp
   implicit none
@@ -119,15 +119,24 @@ program knotflow
   end if
   threads = blas_threads_for(allowed_cpus(), comm%ranks_on_node(), real(load))
   call set_blas_threads(threads, threads_set)
-  if (me == 0 .and. threads_set .and. threads > 1) then
-    write (output_unit, '(a)') 'knotflow: '//to_str(threads)//' BLAS threads per rank'
-    flush (output_unit)
-  end if
-
   tasks%sweep = sw
   tasks%reporter%rank = me
   tasks%launch%ranks = comm%size()
   tasks%launch%threads = blas_threads_in_use()
+  tasks%launch%blas = blas_library()
+  if (me == 0) then
+    ! The kernels decide the speed (scripts/blas_env.sh); each case's /runs records them too.
+    if (tasks%launch%threads > 0 .and. threads_set) then
+      write (output_unit, '(a)') 'knotflow: BLAS '//tasks%launch%blas//', '// &
+        to_str(tasks%launch%threads)//' thread(s) per rank'
+    else if (tasks%launch%threads > 0) then
+      write (output_unit, '(a)') 'knotflow: BLAS '//tasks%launch%blas//', '// &
+        to_str(tasks%launch%threads)//' thread(s) per rank (OPENBLAS_NUM_THREADS)'
+    else
+      write (output_unit, '(a)') 'knotflow: BLAS '//tasks%launch%blas
+    end if
+    flush (output_unit)
+  end if
   call run_task_farm(comm, sw%n_cases(), tasks, results, error)
   if (allocated(error)) call stop_all(error%message, 1)
   nfailed = count(results%status /= task_ok .and. results%status /= task_skipped)

@@ -12,14 +12,24 @@
 !> load. A sweep that keeps every core busy keeps 1 thread per rank. An explicit
 !> OPENBLAS_NUM_THREADS (any count >= 1) in the environment is the user's choice and is left alone: `OPENBLAS_NUM_THREADS=1 knotflow ...`
 !> really runs on one core (scripts/lib.sh sets 1 unless the caller set it).
+!>
+!> `blas_library` names the library and the kernels it runs ('OpenBLAS 0.3.21 SkylakeX'), for
+!> the start-up line and the /runs record of every run segment: OpenBLAS chooses its kernels
+!> from the CPU at start-up (or takes OPENBLAS_CORETYPE, scripts/blas_env.sh), and a CPU it does
+!> not know gets its oldest x86-64 kernels, about 3.4 times slower (docs/multipole.md), so a
+!> timing means little without them.
 module kf_blas_threads
 #ifdef KNOTFLOW_HAVE_OPENBLAS_THREADS
   use, intrinsic :: iso_c_binding, only: c_int
+#endif
+#ifdef KNOTFLOW_HAVE_OPENBLAS_CORENAME
+  use, intrinsic :: iso_c_binding, only: c_ptr, c_char, c_size_t, c_f_pointer, c_associated
 #endif
   implicit none
   private
 
   public :: allowed_cpus, cpu_list_count, blas_threads_for, requested_threads, set_blas_threads, blas_threads_in_use
+  public :: blas_library, blas_description
 
 contains
 
@@ -140,5 +150,72 @@ contains
     n = 0
 #endif
   end function blas_threads_in_use
+
+  !> The library and its kernels as recorded: 'OpenBLAS <version> <core>' from OpenBLAS's
+  !> configuration string `config` (openblas_get_config: 'OpenBLAS 0.3.21 DYNAMIC_ARCH ...', the
+  !> version its second word) and its core name `core` (openblas_get_corename); a word that is
+  !> missing is left out.
+  pure function blas_description(config, core) result(text)
+    character(len=*), intent(in) :: config, core
+    character(len=:), allocatable :: text
+    character(len=len(config)) :: rest
+    integer :: k
+    text = 'OpenBLAS'
+    rest = adjustl(config)
+    k = index(trim(rest), ' ')
+    if (k > 0) then
+      rest = adjustl(rest(k + 1:))
+      k = index(trim(rest), ' ')
+      if (k == 0) k = len_trim(rest) + 1
+      if (k > 1) text = text//' '//rest(:k - 1)
+    end if
+    if (len_trim(core) > 0) text = text//' '//trim(adjustl(core))
+  end function blas_description
+
+  !> The BLAS library this program runs and its kernels ('OpenBLAS 0.3.21 SkylakeX'), 'unknown'
+  !> for a library other than OpenBLAS (it cannot be asked).
+  function blas_library() result(text)
+    character(len=:), allocatable :: text
+#ifdef KNOTFLOW_HAVE_OPENBLAS_CORENAME
+    interface
+      function openblas_get_config() bind(c, name='openblas_get_config') result(p)
+        import :: c_ptr
+        type(c_ptr) :: p
+      end function openblas_get_config
+      function openblas_get_corename() bind(c, name='openblas_get_corename') result(p)
+        import :: c_ptr
+        type(c_ptr) :: p
+      end function openblas_get_corename
+    end interface
+    text = blas_description(c_text(openblas_get_config()), c_text(openblas_get_corename()))
+#else
+    text = 'unknown'
+#endif
+  end function blas_library
+
+#ifdef KNOTFLOW_HAVE_OPENBLAS_CORENAME
+  !> The NUL-terminated C string at `p` ('' for a null pointer).
+  function c_text(p) result(text)
+    type(c_ptr), intent(in) :: p
+    character(len=:), allocatable :: text
+    interface
+      function strlen(s) bind(c, name='strlen') result(n)
+        import :: c_ptr, c_size_t
+        type(c_ptr), value :: s
+        integer(c_size_t) :: n
+      end function strlen
+    end interface
+    character(kind=c_char), pointer :: chars(:)
+    integer :: n, k
+    text = ''
+    if (.not. c_associated(p)) return
+    n = int(strlen(p))
+    call c_f_pointer(p, chars, [n])
+    text = repeat(' ', n)
+    do k = 1, n
+      text(k:k) = chars(k)
+    end do
+  end function c_text
+#endif
 
 end module kf_blas_threads

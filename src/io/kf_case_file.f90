@@ -34,7 +34,8 @@
 !>   (nframes,) float64 (intrinsic-viscosity form), one entry per frame, truncated
 !>   with the frames on resume. Files without /frames/stresslet are valid: it is optional.
 !> - /runs (schema 4): one entry per run segment (the first start and every resume), 1-D
-!>   datasets of equal length: commit, started, host (strings), ranks, threads (int32), t_start,
+!>   datasets of equal length: commit, started, host, blas (strings; blas from schema 5: files
+!>   of schema 4 read as 'unknown'), ranks, threads (int32), t_start,
 !>   t_end, wall_seconds, load_start, load_mean (float64), steps (int64). `start_run` appends
 !>   the segment's entry (a `run_record_t` the run layer fills); `append_frame` and `finish`
 !>   given the record rewrite its changing figures (t_end, steps, wall_seconds, load_mean) in
@@ -88,8 +89,9 @@ module kf_case_file
   !> (before it existed); 2: the attribute itself; 3: two checkpoint slots written alternately
   !> (/checkpoint/slot0, /checkpoint/slot1) instead of one /checkpoint rewritten in place;
   !> 4: /runs, one entry per run segment (kept up to date only by a program that knows it: an
-  !> older one refuses to continue such a file). Raise it with any change a reader must know.
-  integer(i4), parameter, public :: case_schema_version = 4
+  !> older one refuses to continue such a file); 5: /runs/blas (an older program would leave it
+  !> shorter than the rest). Raise it with any change a reader must know.
+  integer(i4), parameter, public :: case_schema_version = 5
 
   !> The checkpoint slots of schema 3: the checkpoint of frame count k is written to
   !> slot_groups(mod(k, 2)), so the other slot keeps the previous checkpoint whole while one is
@@ -108,8 +110,12 @@ module kf_case_file
   !> The longest string of /runs read back (commit, start time, host name: host names have at
   !> most 255 bytes).
   integer, parameter :: run_text_capacity = 256
-  character(len=*), parameter :: run_sets(11) = [character(len=12) :: 'commit', 'started', 'host', 'ranks', &
-    'threads', 't_start', 't_end', 'steps', 'wall_seconds', 'load_start', 'load_mean']
+  !> The string datasets come first (`run_texts` numbers them); 'blas' may be missing (schema 4).
+  integer, parameter :: run_string_sets = 4, run_blas_set = 4
+  character(len=*), parameter :: run_sets(12) = [character(len=12) :: 'commit', 'started', 'host', 'blas', &
+    'ranks', 'threads', 't_start', 't_end', 'steps', 'wall_seconds', 'load_start', 'load_mean']
+  !> What a file without /runs/blas (schema 4) reads as.
+  character(len=*), parameter :: blas_unrecorded = 'unknown'
 
   integer, parameter :: kind_str = 1, kind_i4 = 2, kind_i8 = 3, kind_real = 4, kind_real1 = 5, &
     kind_real2 = 6
@@ -172,6 +178,7 @@ module kf_case_file
     character(len=:), allocatable :: commit    !< git hash the program was built from
     character(len=:), allocatable :: started   !< start of the segment, ISO 8601 UTC
     character(len=:), allocatable :: host      !< host name
+    character(len=:), allocatable :: blas      !< BLAS library and kernels (kf_blas_threads' blas_library)
     integer :: ranks = 0, threads = 0          !< MPI ranks of the sweep, BLAS threads of the rank
     real(wp) :: t_start = 0.0_wp, t_end = 0.0_wp   !< model time at the start, newest reached
     integer(i8) :: steps = 0                   !< steps taken in the segment
@@ -717,7 +724,7 @@ contains
     type(run_record_t), intent(in) :: runs(:)
     type(error_t), allocatable, intent(out) :: error
     integer :: k
-    do k = 1, 3
+    do k = 1, run_string_sets
       call h5_write(file, runs_group//'/'//trim(run_sets(k)), run_texts(runs, k), error)
       if (allocated(error)) return
     end do
@@ -740,7 +747,7 @@ contains
     if (.not. allocated(error)) call h5_write(file, runs_group//'/load_mean', runs%load_mean, error)
   end subroutine write_run_figures
 
-  !> The string field `field` (1 commit, 2 started, 3 host) of every entry ('' if not set).
+  !> The string field `field` (1 commit, 2 started, 3 host, 4 blas) of every entry ('' if not set).
   pure function run_texts(runs, field) result(text)
     type(run_record_t), intent(in) :: runs(:)
     integer, intent(in) :: field
@@ -768,24 +775,30 @@ contains
       if (allocated(run%started)) text = run%started
     case (3)
       if (allocated(run%host)) text = run%host
+    case (run_blas_set)
+      if (allocated(run%blas)) text = run%blas
     end select
   end function run_text
 
   !> Read /runs: the entries as far as every dataset holds them, at most `limit` (`equal`: all
-  !> datasets have the same length). The error names the missing or unreadable dataset.
+  !> datasets have the same length). The error names the missing or unreadable dataset; a file
+  !> without /runs/blas (schema 4) reads as `blas_unrecorded`.
   subroutine read_runs_table(file, runs, equal, error, limit)
     type(h5_file_t), intent(in) :: file
     type(run_record_t), allocatable, intent(out) :: runs(:)
     logical, intent(out) :: equal
     type(error_t), allocatable, intent(out) :: error
     integer, intent(in), optional :: limit
-    character(len=run_text_capacity), allocatable :: commit(:), started(:), host(:)
+    character(len=run_text_capacity), allocatable :: commit(:), started(:), host(:), blas(:)
     integer(i4), allocatable :: ranks(:), threads(:)
     real(wp), allocatable :: t_start(:), t_end(:), wall(:), load_start(:), load_mean(:)
     integer(i8), allocatable :: steps(:)
     integer :: k, n, lengths(size(run_sets))
+    logical :: has_blas
     equal = .false.
+    has_blas = h5_exists(file, runs_group//'/'//trim(run_sets(run_blas_set)))
     do k = 1, size(run_sets)
+      if (k == run_blas_set) cycle
       if (.not. h5_exists(file, runs_group//'/'//trim(run_sets(k)))) then
         call fatal_error(error, "case file '"//file%name()//"': no dataset "//runs_group//'/'//trim(run_sets(k)))
         return
@@ -794,6 +807,7 @@ contains
     call h5_read(file, runs_group//'/commit', commit, error)
     if (.not. allocated(error)) call h5_read(file, runs_group//'/started', started, error)
     if (.not. allocated(error)) call h5_read(file, runs_group//'/host', host, error)
+    if (.not. allocated(error) .and. has_blas) call h5_read(file, runs_group//'/blas', blas, error)
     if (.not. allocated(error)) call h5_read(file, runs_group//'/ranks', ranks, error)
     if (.not. allocated(error)) call h5_read(file, runs_group//'/threads', threads, error)
     if (.not. allocated(error)) call h5_read(file, runs_group//'/t_start', t_start, error)
@@ -803,8 +817,12 @@ contains
     if (.not. allocated(error)) call h5_read(file, runs_group//'/load_start', load_start, error)
     if (.not. allocated(error)) call h5_read(file, runs_group//'/load_mean', load_mean, error)
     if (allocated(error)) return
-    lengths = [size(commit), size(started), size(host), size(ranks), size(threads), size(t_start), &
-               size(t_end), size(steps), size(wall), size(load_start), size(load_mean)]
+    if (.not. has_blas) then
+      allocate (blas(size(commit)))
+      blas = blas_unrecorded
+    end if
+    lengths = [size(commit), size(started), size(host), size(blas), size(ranks), size(threads), &
+               size(t_start), size(t_end), size(steps), size(wall), size(load_start), size(load_mean)]
     equal = all(lengths == lengths(1))
     n = minval(lengths)
     if (present(limit)) n = min(n, limit)
@@ -813,6 +831,7 @@ contains
       runs(k)%commit = trim(commit(k))
       runs(k)%started = trim(started(k))
       runs(k)%host = trim(host(k))
+      runs(k)%blas = trim(blas(k))
       runs(k)%ranks = ranks(k)
       runs(k)%threads = threads(k)
       runs(k)%t_start = t_start(k)
@@ -1580,7 +1599,8 @@ contains
       if (h5_exists(file, runs_group)) call check_runs()
     end subroutine check
 
-    !> /runs (files of schema 4): every dataset reads back, all of one length, at least 1.
+    !> /runs (files of schema 4 and later): every dataset reads back, all of one length, at
+    !> least 1.
     subroutine check_runs()
       type(run_record_t), allocatable :: runs(:)
       logical :: equal

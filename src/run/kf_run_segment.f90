@@ -1,5 +1,6 @@
 !> A run segment of a case (its first start or one resume) as the case file records it in
-!> /runs (kf_case_file's run_record_t): who ran it (commit, host, MPI ranks, BLAS threads), when
+!> /runs (kf_case_file's run_record_t): who ran it (commit, host, BLAS library and kernels, MPI
+!> ranks, BLAS threads), when
 !> (start in UTC), how far (model time, steps) and at what cost (wall time; the machine's
 !> 1-minute load average at the start and its mean over the start and every checkpoint).
 !> What the platform cannot tell is recorded as NaN (load) or 'unknown' (host, start time).
@@ -14,11 +15,13 @@ module kf_run_segment
   implicit none
   private
 
-  !> How the program launched the case: the MPI ranks of the sweep and the BLAS threads of the
-  !> rank (kf_blas_threads' blas_threads_in_use; 0: not known).
+  !> How the program launched the case: the MPI ranks of the sweep, the BLAS threads of the
+  !> rank (kf_blas_threads' blas_threads_in_use; 0: not known) and the BLAS library with its
+  !> kernels (kf_blas_threads' blas_library).
   type, public :: run_launch_t
     integer :: ranks = 1
     integer :: threads = 0
+    character(len=:), allocatable :: blas
   end type run_launch_t
 
   !> The segment being run: its record and what its figures are computed from.
@@ -63,6 +66,8 @@ contains
     end if
     call host_name(this%rec%host, error)
     if (allocated(error)) this%rec%host = 'unknown'
+    this%rec%blas = 'unknown'
+    if (allocated(launch%blas)) this%rec%blas = launch%blas
     this%rec%ranks = launch%ranks
     this%rec%threads = launch%threads
     this%rec%load_start = machine_load()

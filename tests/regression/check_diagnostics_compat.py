@@ -77,9 +77,9 @@ assert "resuming" in out, out
 with h5py.File(old_path, "r") as h:
     assert h.attrs["status"] in (b"finished", "finished")
     assert "diagnostics" not in h["frames"] and "diagnostics" not in h["checkpoint"]
-    # resumed, an older file gets the current layout: two checkpoint slots, /runs, schema_version 4
+    # resumed, an older file gets the current layout: two checkpoint slots, /runs, schema_version 5
     assert sorted(h["checkpoint"].keys()) == ["slot0", "slot1"], list(h["checkpoint"].keys())
-    assert h.attrs["schema_version"] == 4
+    assert h.attrs["schema_version"] == 5
     t = h["frames/time"][:]
     r = h["frames/positions"][:]
 assert np.array_equal(t, t_ref), (t, t_ref)

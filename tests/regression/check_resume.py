@@ -154,8 +154,8 @@ dev_legacy = np.abs(r - r_ref).max()
 assert dev_legacy < 1e-2, dev_legacy
 with h5py.File(os.path.join(work, "legacy", "c.h5"), "r") as h:
     assert sorted(h["checkpoint"].keys()) == ["slot0", "slot1"], list(h["checkpoint"].keys())
-    assert h.attrs["schema_version"] == 4
-    # the run records begin with the resume (/runs, schema 4)
+    assert h.attrs["schema_version"] == 5
+    # the run records begin with the resume (/runs, schema 4 on)
     assert list(h["runs/t_start"][()]) == [t_legacy] and list(h["runs/t_end"][()]) == [300.0]
 print("resumed without the stepper state: max deviation from the uninterrupted run %.2e" % dev_legacy)
 

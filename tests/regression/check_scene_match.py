@@ -5,7 +5,7 @@
    the group, variable and both values and what to do, and no case file changed. The same for
    an interrupted case (status 'running'). A change in output.progress_interval alone is not a
    change of the scene (skipped).
-2. New case files carry schema_version = 4. An older file (no schema_version, no hydro.update,
+2. New case files carry schema_version = 5. An older file (no schema_version, no hydro.update,
    no output.diagnostics attribute) counts the missing variables as their defaults, except
    hydro.update, which counts as 'stage' (the only behaviour before it existed, whatever the
    default is now): skipped when the requested scene has those values, refused naming the
@@ -93,7 +93,7 @@ r = run(base)
 assert r.returncode == 0, (r.stdout, r.stderr)
 case = os.path.join(out, "c.h5")
 with h5py.File(case, "r") as h:
-    assert h.attrs["schema_version"] == 4, dict(h.attrs)
+    assert h.attrs["schema_version"] == 5, dict(h.attrs)
     assert h.attrs["status"] in (b"finished", "finished")
 checks = 1
 

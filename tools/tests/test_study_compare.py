@@ -222,7 +222,8 @@ def test_overlap_statistics_of_a_running_case_come_from_its_checkpoint(tmp_path)
 
 # ---------------------------------------------------------------------------- run records
 
-def _write_runs(path, commits, wall, load, drop=None, short=None):
+def _write_runs(path, commits, wall, load, drop=None, short=None, blas=None):
+    """/runs of a case file; `blas` None writes none (a file of schema 4)."""
     n = len(commits)
     data = {"commit": np.array(commits, dtype=h5py.string_dtype()),
             "started": np.array(["2026-12-02T01:00:00Z"] * n, dtype=h5py.string_dtype()),
@@ -231,6 +232,8 @@ def _write_runs(path, commits, wall, load, drop=None, short=None):
             "t_start": np.arange(n) * 100.0, "t_end": np.arange(1, n + 1) * 100.0,
             "steps": np.full(n, 1000, dtype=np.int64), "wall_seconds": np.array(wall, float),
             "load_start": np.full(n, np.nan), "load_mean": np.array(load, float)}
+    if blas is not None:
+        data["blas"] = np.array(blas, dtype=h5py.string_dtype())
     with h5py.File(path, "a") as f:
         g = f.create_group("runs")
         for k, v in data.items():
@@ -240,42 +243,53 @@ def _write_runs(path, commits, wall, load, drop=None, short=None):
 
 def test_run_records_are_read_and_summed(tmp_path):
     a = write_case(tmp_path / "a.h5", _straight(3))
-    _write_runs(a, ["abc", "abc", "def"], [3600.0, 1800.0, 5400.0], [2.0, np.nan, 1.0])
+    _write_runs(a, ["abc", "abc", "def"], [3600.0, 1800.0, 5400.0], [2.0, np.nan, 1.0],
+                blas=["OpenBLAS 0.3.21 Prescott", "unknown", "OpenBLAS 0.3.21 SkylakeX"])
     b = write_case(tmp_path / "b.h5", _straight(3))
     _write_runs(b, ["def"], [7200.0], [3.0])
     case = io.read_case(a)
     assert len(case.runs) == 3 and case.runs[0]["commit"] == "abc"
+    assert [r["blas"] for r in case.runs] == ["OpenBLAS 0.3.21 Prescott", "unknown",
+                                              "OpenBLAS 0.3.21 SkylakeX"]
+    assert io.read_case(b).runs[0]["blas"] is None   # schema 4: no /runs/blas
     assert case.runs[2]["host"] == "node1" and case.runs[1]["ranks"] == 2
     assert case.runs[1]["steps"] == 1000 and math.isnan(case.runs[1]["load_mean"])
     assert io.read_case(write_case(tmp_path / "c.h5", _straight(3))).runs == []
     sa = study_rows.runs_summary(case.runs)
     # by hand: 3600 + 1800 + 5400 = 10800 s; load (2 x 3600 + 1 x 5400) / 9000 = 1.4
     assert sa["commits"] == ["abc", "def"] and sa["wall_seconds"] == 10800.0
+    assert sa["blas"] == ["OpenBLAS 0.3.21 Prescott", "OpenBLAS 0.3.21 SkylakeX"]
+    assert sa["blas_unknown"] == 1
     assert sa["mean_load"] == pytest.approx(1.4) and sa["segments"] == 3
     assert (sa["t_start"], sa["t_end"]) == (0.0, 300.0) and sa["wall_unknown"] == 0
     # a segment without a wall time (NaN): left out of the sum and of the load weights
     d = study_rows.runs_summary([dict(case.runs[0], wall_seconds=math.nan), case.runs[2]])
     assert d["wall_seconds"] == 5400.0 and d["wall_unknown"] == 1 and d["mean_load"] == 1.0
-    assert "| x | finished | abc, def | 1.50 h (+ 1 segment(s) not recorded) | 1.00 | 2 |" in \
+    assert "| x | finished | abc, def | OpenBLAS 0.3.21 Prescott, OpenBLAS 0.3.21 SkylakeX | " \
+        "1.50 h (+ 1 segment(s) not recorded) | 1.00 | 2 |" in \
         study.runs_table([{"case": "x", "status": "finished", "runs": d}])
     sb = study_rows.runs_summary(io.read_case(b).runs)
     rows = [{"case": "a", "status": "finished", "runs": sa},
             {"case": "b", "status": "finished", "runs": sb},
             {"case": "c", "status": "finished", "runs": None}]
     text = "\n".join(study.runs_table(rows))
-    assert "| a | finished | abc, def | 3.00 h | 1.40 | 3 |" in text
+    assert "| a | finished | abc, def | OpenBLAS 0.3.21 Prescott, OpenBLAS 0.3.21 SkylakeX " \
+        "(+ 1 segment(s) not recorded) | 3.00 h | 1.40 | 3 |" in text
+    assert "| b | finished | def | 1 segment(s) not recorded | 2.00 h | 3.00 | 1 |" in text
     assert "| c | finished | not recorded |" in text
     # all: 18000 s = 5 h; load (1.4 x 9000 + 3 x 7200) / 16200 = 2.111
-    assert "| all (2 of 3 cases recorded) | | | 5.00 h | 2.11 | 4 |" in text
+    assert "| all (2 of 3 cases recorded) | | | | 5.00 h | 2.11 | 4 |" in text
 
 
 @pytest.mark.parametrize("drop, short, problem", [
     ("host", None, "no dataset /runs/host"),
     (None, "wall_seconds", "different lengths"),
+    (None, "blas", "different lengths"),
 ])
 def test_bad_run_records_are_refused(tmp_path, drop, short, problem):
     path = write_case(tmp_path / "a.h5", _straight(3))
-    _write_runs(path, ["abc", "abc"], [1.0, 2.0], [1.0, 1.0], drop=drop, short=short)
+    _write_runs(path, ["abc", "abc"], [1.0, 2.0], [1.0, 1.0], drop=drop, short=short,
+                blas=["OpenBLAS 0.3.21 Haswell"] * 2)
     with pytest.raises(ValueError, match=problem) as exc:
         io.read_case(path)
     assert str(path) in str(exc.value)

@@ -26,9 +26,11 @@ DIAGNOSTIC_TOTALS = ("strand_passages", "first_passage_time", "overlap_episodes"
                      "min_distance", "max_bond_strain")
 # Run records (optional): /runs holds one entry per run segment (a start or a resume) as 1-D
 # datasets of equal length: name -> kind ("s" string, "i" integer, "f" float; NaN = unknown).
-RUN_FIELDS = {"commit": "s", "started": "s", "host": "s", "ranks": "i", "threads": "i",
+RUN_FIELDS = {"commit": "s", "started": "s", "host": "s", "blas": "s", "ranks": "i", "threads": "i",
               "t_start": "f", "t_end": "f", "steps": "i", "wall_seconds": "f",
               "load_start": "f", "load_mean": "f"}
+#: Run fields a file may lack (from the schema that added them on): read as None.
+OPTIONAL_RUN_FIELDS = ("blas",)   # schema 5
 
 
 def _attr(value):
@@ -166,8 +168,9 @@ def checkpoint_diagnostic_totals(f):
 
 def read_runs(path, f) -> list:
     """The run records of the open case file `f` (/runs, RUN_FIELDS): one dict per run segment,
-    [] without /runs. A ValueError names the file and the dataset that is missing, not 1-D, of
-    the wrong kind or of another length than the others."""
+    [] without /runs; a field of OPTIONAL_RUN_FIELDS the file lacks is None. A ValueError names
+    the file and the dataset that is missing, not 1-D, of the wrong kind or of another length
+    than the others."""
     if "runs" not in f:
         return []
     g = f["runs"]
@@ -175,6 +178,8 @@ def read_runs(path, f) -> list:
         raise ValueError(f"{path}: /runs is not a group")
     columns = {}
     for name, kind in RUN_FIELDS.items():
+        if name in OPTIONAL_RUN_FIELDS and name not in g:
+            continue
         if name not in g or not isinstance(g[name], h5py.Dataset):
             raise ValueError(f"{path}: no dataset /runs/{name} (a run record needs "
                              + ", ".join(RUN_FIELDS) + ")")
@@ -196,7 +201,8 @@ def read_runs(path, f) -> list:
         raise ValueError(f"{path}: the /runs datasets have different lengths ("
                          + ", ".join(f"{k} {n}" for k, n in lengths.items()) + ")")
     n = next(iter(lengths.values()))
-    return [{name: columns[name][k] for name in RUN_FIELDS} for k in range(n)]
+    return [{name: columns[name][k] if name in columns else None for name in RUN_FIELDS}
+            for k in range(n)]
 
 
 def open_case(path):

@@ -285,19 +285,30 @@ def _hours(seconds, unknown=0) -> str:
     return f"{seconds / 3600:.2f} h" + (f" (+ {unknown} segment(s) not recorded)" if unknown else "")
 
 
+def _blas_text(summary) -> str:
+    """The BLAS kernels of a case's runs_summary, and how many segments did not record them."""
+    known = ", ".join(summary.get("blas", []))
+    unknown = summary.get("blas_unknown", 0)
+    if not unknown:
+        return known
+    missing = f"{unknown} segment(s) not recorded"
+    return f"{known} (+ {missing})" if known else missing
+
+
 def runs_table(rows) -> list:
-    """Run records of every case (commit, wall time, time-weighted mean load, segments) and
-    the sum over the cases with records."""
-    out = ["| case | status | commit(s) | total wall time | mean load (time-weighted) | segments |",
-           "|---|---|---|---|---|---|"]
+    """Run records of every case (commit, BLAS kernels, wall time, time-weighted mean load,
+    segments) and the sum over the cases with records."""
+    out = ["| case | status | commit(s) | BLAS | total wall time | mean load (time-weighted) | "
+           "segments |",
+           "|---|---|---|---|---|---|---|"]
     recorded = [r["runs"] for r in rows if r["runs"] is not None]
     for r in rows:
         s = r["runs"]
         if s is None:
-            out.append(f"| {r['case']} | {status_text(r)} | not recorded | | | |")
+            out.append(f"| {r['case']} | {status_text(r)} | not recorded | | | | |")
             continue
         out.append(f"| {r['case']} | {status_text(r)} | {', '.join(s['commits'])} | "
-                   f"{_hours(s['wall_seconds'], s['wall_unknown'])} | "
+                   f"{_blas_text(s)} | {_hours(s['wall_seconds'], s['wall_unknown'])} | "
                    f"{fmt(s['mean_load'], '.2f')} | "
                    f"{s['segments']} |")
     if recorded:
@@ -306,7 +317,7 @@ def runs_table(rows) -> list:
                 / weight) if weight > 0 else None
         wall = _hours(sum(s["wall_seconds"] for s in recorded),
                       sum(s["wall_unknown"] for s in recorded))
-        out.append(f"| all ({len(recorded)} of {len(rows)} cases recorded) | | | {wall} | "
+        out.append(f"| all ({len(recorded)} of {len(rows)} cases recorded) | | | | {wall} | "
                    f"{fmt(load, '.2f')} | "
                    f"{sum(s['segments'] for s in recorded)} |")
     return out

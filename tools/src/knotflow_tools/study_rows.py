@@ -75,8 +75,9 @@ def overlap_stats(case) -> dict | None:
 
 
 def runs_summary(runs) -> dict | None:
-    """The run records of a case (io.RUN_FIELDS per segment) summed: commits in order of first
-    use, total wall time of the segments that record one (a NaN wall time is counted in
+    """The run records of a case (io.RUN_FIELDS per segment) summed: commits and BLAS kernels in
+    order of first use (the kernels of segments that recorded them; `blas_unknown` counts the
+    others), total wall time of the segments that record one (a NaN wall time is counted in
     `wall_unknown`), mean load weighted by wall time over the segments with a known load (None
     when none is known), segments, t range. None without records."""
     if not runs:
@@ -85,12 +86,18 @@ def runs_summary(runs) -> dict | None:
     for r in runs:
         if r["commit"] not in commits:
             commits.append(r["commit"])
+    blas: list = []
+    for r in runs:
+        if r.get("blas") not in (None, "unknown") and r["blas"] not in blas:
+            blas.append(r["blas"])
     wall = float(sum(r["wall_seconds"] for r in runs if math.isfinite(r["wall_seconds"])))
     known = [r for r in runs if math.isfinite(r["load_mean"]) and math.isfinite(r["wall_seconds"])]
     weight = float(sum(r["wall_seconds"] for r in known))
     load = float(sum(r["load_mean"] * r["wall_seconds"] for r in known) / weight) if weight > 0 \
         else None
-    return {"commits": commits, "wall_seconds": wall,
+    return {"commits": commits, "blas": blas,
+            "blas_unknown": sum(r.get("blas") in (None, "unknown") for r in runs),
+            "wall_seconds": wall,
             "wall_unknown": sum(not math.isfinite(r["wall_seconds"]) for r in runs),
             "mean_load": load, "load_seconds": weight, "segments": len(runs),
             "t_start": float(min(r["t_start"] for r in runs)),
