@@ -23,7 +23,8 @@ module kf_blas_threads
   use, intrinsic :: iso_c_binding, only: c_int
 #endif
 #ifdef KNOTFLOW_HAVE_OPENBLAS_CORENAME
-  use, intrinsic :: iso_c_binding, only: c_ptr, c_char, c_size_t, c_f_pointer, c_associated
+  use, intrinsic :: iso_c_binding, only: c_ptr
+  use kf_strings, only: c_string
 #endif
   implicit none
   private
@@ -187,35 +188,10 @@ contains
         type(c_ptr) :: p
       end function openblas_get_corename
     end interface
-    text = blas_description(c_text(openblas_get_config()), c_text(openblas_get_corename()))
+    text = blas_description(c_string(openblas_get_config()), c_string(openblas_get_corename()))
 #else
     text = 'unknown'
 #endif
   end function blas_library
-
-#ifdef KNOTFLOW_HAVE_OPENBLAS_CORENAME
-  !> The NUL-terminated C string at `p` ('' for a null pointer).
-  function c_text(p) result(text)
-    type(c_ptr), intent(in) :: p
-    character(len=:), allocatable :: text
-    interface
-      function strlen(s) bind(c, name='strlen') result(n)
-        import :: c_ptr, c_size_t
-        type(c_ptr), value :: s
-        integer(c_size_t) :: n
-      end function strlen
-    end interface
-    character(kind=c_char), pointer :: chars(:)
-    integer :: n, k
-    text = ''
-    if (.not. c_associated(p)) return
-    n = int(strlen(p))
-    call c_f_pointer(p, chars, [n])
-    text = repeat(' ', n)
-    do k = 1, n
-      text(k:k) = chars(k)
-    end do
-  end function c_text
-#endif
 
 end module kf_blas_threads
