@@ -193,3 +193,30 @@ def test_status_counts_cases_and_time_left(tmp_path):
     assert campaign.status_lines(str(ledger)) == lines[:2] + [
         "tr: 1 of 2 finished, 1 running; 4.00 s of wall per time unit (load 2.3): about 0.6 h of "
         "one worker left"]
+
+
+def test_status_rate_from_the_newest_kernels(tmp_path):
+    """Runs that recorded their BLAS kernels: the rate comes from the runs on the kernels of
+    the newest of them (by `started`); older runs (other kernels, or none recorded) are left
+    out of it but still count for the time reached."""
+    import json
+    ledger = tmp_path / "ledger"
+    (ledger / "tr").mkdir(parents=True)
+
+    def run(started, blas, t0, t1, wall, load):
+        return {"commit": "abcdef012345", "started": started, "blas": blas, "t_start": t0,
+                "t_end": t1, "wall_seconds": wall, "load_mean": load}
+    a1 = _ledger_entry("A1", "running", 600.0, 1000.0, [])
+    a1["segments"] = [{"runs": [run("2026-12-02T11:00:00Z", None, 0.0, 300.0, 6000.0, 3.0),
+                                run("2026-12-02T16:00:00Z", "OpenBLAS 0.3.21 Prescott", 300.0,
+                                    400.0, 1000.0, 2.0),
+                                run("2026-12-02T17:00:00Z", "OpenBLAS 0.3.21 SkylakeX", 400.0,
+                                    500.0, 300.0, 2.0)]},
+                      {"runs": [run("2026-12-02T18:00:00Z", "OpenBLAS 0.3.21 SkylakeX", 0.0,
+                                    100.0, 200.0, 4.0)]}]
+    (ledger / "tr" / "A1.json").write_text(json.dumps(a1))
+    lines = campaign.status_lines(str(ledger))
+    # SkylakeX runs: 300 + 200 s for 100 + 100 time units = 2.5 s per time unit, load
+    # (300*2 + 200*4) / 500 = 2.8; left 400 time units = 1000 s = 0.28 h
+    assert lines[-1] == ("tr: 0 of 1 finished, 1 running; 2.50 s of wall per time unit (load "
+                         "2.8, runs with OpenBLAS 0.3.21 SkylakeX): about 0.3 h of one worker left")

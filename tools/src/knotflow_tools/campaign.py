@@ -385,13 +385,38 @@ def _ratio(a: float, b: float) -> float:
     return a / b if b > 0.0 else math.nan
 
 
+def _known_blas(run: dict) -> bool:
+    return run.get("blas") not in (None, "unknown", "")
+
+
+def _newest_kernels_rate(runs: list) -> tuple[str, float, float, float, float] | None:
+    """(kernels, wall seconds, time units, wall-weighted load sum, wall with a load) of the runs
+    that ran on the BLAS kernels of the newest run that recorded its kernels (`started` is ISO
+    8601 UTC, so it sorts by time), None when no run recorded them or those runs covered no time.
+    A sweep's rate is taken from these, because the kernels change the speed several-fold
+    (README, "Performance") and a campaign's older runs may have had slower ones."""
+    known = [r for r in runs if _known_blas(r) and r.get("started")]
+    if not known:
+        return None
+    kernels = max(known, key=lambda r: str(r["started"]))["blas"]
+    same = [r for r in known if r["blas"] == kernels and r.get("wall_seconds")
+            and r.get("t_end") is not None and r.get("t_start") is not None]
+    span = sum(float(r["t_end"]) - float(r["t_start"]) for r in same)
+    if span <= 0.0:
+        return None
+    loaded = [(r["wall_seconds"], r["load_mean"]) for r in same if r.get("load_mean") is not None]
+    return (str(kernels), sum(r["wall_seconds"] for r in same), span,
+            sum(w * x for w, x in loaded), sum(w for w, _ in loaded))
+
+
 def status_lines(ledger: str, scenes: str | None = None) -> list:
     """One line per case of the ledger: sweep/case, status, time reached of t_end, segments,
     wall time and mean load of its runs (weighted by wall time), commits. Then one line per
     sweep: cases finished, running and (with `scenes`, the campaign's scene directories
     <scenes>/<sweep>/<case>.nml) not started; its measured rate (wall seconds of all its runs
-    per time unit reached, at their mean load) and the wall time one worker still needs at that
-    rate; and a last line for the whole campaign."""
+    per time unit reached, at their mean load; only the runs on the newest BLAS kernels when runs
+    recorded them, _newest_kernels_rate) and the wall time one worker still needs at that rate;
+    and a last line for the whole campaign."""
     lines, summary = [], []
     sweeps = {d for d in os.listdir(ledger) if os.path.isdir(os.path.join(ledger, d))}
     if scenes is not None:
@@ -406,6 +431,7 @@ def status_lines(ledger: str, scenes: str | None = None) -> list:
             names |= {f[:-4] for f in os.listdir(scene_dir) if f.endswith(".nml")}
         count = {"finished": 0, "running": 0, "not started": 0}
         wall_sum = loaded_sum = load_sum = t_sum = t_left = 0.0
+        sweep_runs: list = []
         for name in sorted(names):
             e = load(ledger, sweep, name)
             if e is None:   # a scene without a ledger entry
@@ -415,6 +441,7 @@ def status_lines(ledger: str, scenes: str | None = None) -> list:
                 t_left += float(t_end) if t_end is not None else math.nan
                 continue
             wall, loaded, load_w, commits = _run_totals(e)
+            sweep_runs += [r for seg in e["segments"] for r in seg["runs"]]
             count[e["status"]] = count.get(e["status"], 0) + 1
             wall_sum, loaded_sum, load_sum = wall_sum + wall, loaded_sum + loaded, load_sum + load_w
             t_sum += float(e["t_reached"])
@@ -428,11 +455,16 @@ def status_lines(ledger: str, scenes: str | None = None) -> list:
         finished_total += count["finished"]
         text = (f"{sweep}: {count['finished']} of {n} finished, {count['running']} running"
                 + (f", {count['not started']} not started" if scenes is not None else ""))
+        newest = _newest_kernels_rate(sweep_runs)
+        kernels = ""
+        if newest is not None:
+            kernels, wall_sum, t_sum, load_sum, loaded_sum = newest
         if wall_sum > 0.0 and t_sum > 0.0:
             rate = wall_sum / t_sum
             left = rate * t_left
             left_total += left
-            text += (f"; {rate:.2f} s of wall per time unit (load {_ratio(load_sum, loaded_sum):.1f}): "
+            text += (f"; {rate:.2f} s of wall per time unit (load {_ratio(load_sum, loaded_sum):.1f}"
+                     + (f", runs with {kernels}" if kernels else "") + "): "
                      f"about {left / 3600:.1f} h of one worker left")
         else:
             counted = counted and t_left == 0.0
