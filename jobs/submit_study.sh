@@ -4,7 +4,8 @@
 # extras), and the analysis job that runs when all of them have ended (follow-up jobs included)
 # and analyses exactly these sweeps:
 #   rpy        trefoil_table2 (29 cases), candycane (3 cases)
-#   multipole  trefoil_table2_multipole (29), candycane_multipole (3), candycane_seeds_multipole (4)
+#   multipole  trefoil_table2_multipole (29), candycane_multipole (3), candycane_seeds_multipole (4),
+#              candycane_epslub_multipole (1, the probe of issue 11)
 #   bash jobs/submit_study.sh slurm|pbs [rpy|multipole] [options]
 # Options:
 #   --time-scale F       a shortened trial: every t_end times F (0 < F <= 1), into its own
@@ -12,7 +13,8 @@
 #                        job names, so a trial never blocks or touches the real run
 #   --ntasks-trefoil N   MPI ranks of the sweep of that role (default: the sweep script's
 #   --ntasks-candycane N   directives; 29, 3 and 4 run every case at once);
-#   --ntasks-ensemble N    --ntasks-ensemble only where the study has an ensemble (multipole)
+#   --ntasks-ensemble N    --ntasks-ensemble and --ntasks-probe only where the study has them
+#   --ntasks-probe N       (multipole)
 #   --ntasks-analysis N  MPI ranks of the analysis job (default: the study script's directives)
 #   --max-resubmits N    follow-up jobs of each sweep (MAX_RESUBMITS, default 0)
 #   --quick-analysis     few closures in the analysis (scripts/reproduce.sh --quick): for a trial
@@ -28,7 +30,7 @@
 # day: raise the walltime in the sweep scripts or use --max-resubmits (jobs/README.md).
 set -euo pipefail
 die() { echo "ERROR: $*" >&2; exit 2; }
-usage="usage: bash jobs/submit_study.sh slurm|pbs [rpy|multipole] [--time-scale F] [--ntasks-trefoil N] [--ntasks-candycane N] [--ntasks-ensemble N] [--ntasks-analysis N] [--max-resubmits N] [--quick-analysis] [--hold]"
+usage="usage: bash jobs/submit_study.sh slurm|pbs [rpy|multipole] [--time-scale F] [--ntasks-trefoil N] [--ntasks-candycane N] [--ntasks-ensemble N] [--ntasks-probe N] [--ntasks-analysis N] [--max-resubmits N] [--quick-analysis] [--hold]"
 scheduler="${1:-}"
 [[ "${scheduler}" == slurm || "${scheduler}" == pbs ]] || die "${usage}"
 shift

@@ -19,8 +19,9 @@
 #   --workdir   where knotflow runs (default: the repository): the case files go where the
 #               inputs say, DIR/results/<sweep>/; --ledger: default
 #               docs/reproduction_multipole/ledger of the repository.
-# Positions kept in the ledger: the candy-canes every 10 time units (the knot matrices of the
-# slipknot search, snapshots), the further rotations every 50, the trefoils every 100; every
+# Positions kept in the ledger: the candy-canes and the probe every 10 time units (the knot
+# matrices of the slipknot search, snapshots), the further rotations every 50, the trefoils
+# every 100; every
 # case's newest frame at full precision.
 # Needs a build (scripts/build.sh; KNOTFLOW_BUILD_DIR) and its Python tools; installs nothing.
 # The whole script is one block that bash reads before it runs any of it, so editing this file
@@ -110,7 +111,7 @@ if [ "$digest" = 1 ]; then
     read -r closures stride < <(kf_study_closures multipole "$role")
     [ "$stride" = 1 ] || kf_die "$sweep: the ledger takes k_f of every frame (stride $stride)"
     case "$role" in
-      candycane) every=10 ;;
+      candycane|probe) every=10 ;;
       ensemble) every=50 ;;
       *) every=100 ;;
     esac

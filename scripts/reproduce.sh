@@ -10,8 +10,9 @@
 #   --hydro multipole  the campaign of issue 11 with the study's model (multipole L = 2 +
 #                      lubrication): inputs/trefoil_table2_multipole.nml, candycane_multipole.nml
 #                      and candycane_seeds_multipole.nml (A = 1, 3 from two further rotations:
-#                      part of this study, not an extra); hours per case (a cluster job:
-#                      jobs/README.md).
+#                      part of this study, not an extra) and the probe
+#                      candycane_epslub_multipole.nml (A = 1 with eps_lub = 1e-2); hours per
+#                      case (a cluster job: jobs/README.md).
 #   --no-run           only analyse what the sweeps already wrote (e.g. after cluster jobs).
 #   --no-extras        (rpy) skip the two checks beyond the study's inputs: the candy-cane with 5
 #                      random rotations (inputs/candycane_seeds.nml) and Table 2 with the open
@@ -35,7 +36,7 @@
 # Analysis (knotflow-analyze fills /analysis of every case file; knotflow-study compares):
 #                      rpy                            multipole (as the study)
 #   k_f per frame      200 closures, every frame      1000 closures, every frame
-#                      (ensemble: 100, every 2nd)     (rotations too)
+#                      (ensemble: 100, every 2nd)     (rotations and probe too)
 #   knot matrices      trefoils: last frame, 100 closures per subchain (both)
 #                      candy-canes: 20 per subchain at the frames of knotflow-study
 #                      --select-frames: every 50th   --every-time 10: every 10 time units
@@ -45,7 +46,9 @@
 #                      (seed 1973): confirmed by the rule of docs/analysis.md (both)
 #   comparison         results/reproduction[_multipole]/; multipole: the rotations as --ensemble,
 #                      and the RPY results beside it (--rpy-trefoil docs/reproduction_p24/results.json
-#                      --rpy-candycane docs/reproduction/results.json) when both files are there.
+#                      --rpy-candycane docs/reproduction/results.json) when both files are there;
+#                      each probe on its own as a candy-cane sweep (no knot matrices) in
+#                      results/reproduction_multipole_<probe sweep>/.
 # Cost of the multipole analysis, measured with build/bin/knotflow-analyze on one rank (CPU
 # time; load 4.2-4.9 on 2 cores, wall time twice that): k_f with 1000 closures 38 s for a
 # trefoil case (N = 99, 1001 frames: 29 cases 18 min) and 0.066 s per candy-cane frame (N = 152,
@@ -150,6 +153,7 @@ fi
 shopt -s nullglob
 declare -A dir_of=()   # role -> output directory, for the sweeps with case files
 declare -A empty_of=() # role -> output directory, for the sweeps there without case files
+probe_dirs=()          # the probes' directories with case files (a role with several sweeps)
 out="$results/reproduction$suffix"
 mats="$out/ledger_matrices"
 for i in "${!KF_STUDY_SWEEPS[@]}"; do
@@ -162,7 +166,7 @@ for i in "${!KF_STUDY_SWEEPS[@]}"; do
       kf_log "no ledger entries in $ledger/$sweep: not analysed"
       continue
     fi
-    dir_of[$role]="$ledger/$sweep"
+    if [ "$role" = probe ]; then probe_dirs+=("$ledger/$sweep"); else dir_of[$role]="$ledger/$sweep"; fi
     [ "$role" = candycane ] || continue
     mkdir -p "$mats"
     for f in "${files[@]}"; do
@@ -184,7 +188,7 @@ for i in "${!KF_STUDY_SWEEPS[@]}"; do
     [ -d "$results/$sweep" ] && empty_of[$role]="$results/$sweep"
     continue
   fi
-  dir_of[$role]="$results/$sweep"
+  if [ "$role" = probe ]; then probe_dirs+=("$results/$sweep"); else dir_of[$role]="$results/$sweep"; fi
   case "$role" in
     trefoil|trefoil_p24)
       # k_f of every frame, knot matrix of the last frame.
@@ -202,6 +206,13 @@ for i in "${!KF_STUDY_SWEEPS[@]}"; do
       for f in "${files[@]}"; do
         kf_log "knotflow-analyze $f (ensemble: $ens_closures closures, frame stride $ens_stride)"
         "${mpi[@]}" "$analyze" "$f" --closures "$ens_closures" --stride "$ens_stride"
+      done ;;
+    probe)
+      read -r probe_closures probe_stride < <(kf_study_closures "$hydro" probe)
+      [ "$quick" = 1 ] && probe_closures=20
+      for f in "${files[@]}"; do
+        kf_log "knotflow-analyze $f (probe: $probe_closures closures, frame stride $probe_stride)"
+        "${mpi[@]}" "$analyze" "$f" --closures "$probe_closures" --stride "$probe_stride"
       done ;;
     *) kf_die "scripts/study_sweeps.sh: role '$role' of $sweep has no analysis here" ;;
   esac
@@ -262,6 +273,14 @@ if [ "$hydro" = multipole ] && [ -f docs/reproduction_p24/results.json ] && [ -f
   done
 fi
 knotflow-study "${args[@]}" --out "$out"
+# Each probe on its own, as a candy-cane sweep (shape panels, modes, k_f; no knot matrices), to
+# set beside the candy-cane of the same A in reproduction_multipole.
+for dir in "${probe_dirs[@]}"; do
+  read -r probe_closures _ < <(kf_study_closures "$hydro" probe)
+  [ "$quick" = 1 ] && probe_closures=20
+  kf_log "knotflow-study -> ${out}_$(basename "$dir") (a probe)"
+  knotflow-study --candycane "$dir" --closures "$probe_closures" --out "${out}_$(basename "$dir")"
+done
 if [ -n "${dir_of[trefoil_p24]:-}" ]; then
   kf_log "knotflow-study -> ${out}_p24 (the open trefoil with k_f(0) = 0.98)"
   knotflow-study --trefoil "${dir_of[trefoil_p24]}" --out "${out}_p24"

@@ -19,13 +19,16 @@
 #   candycane    the candy-cane (A = 1, 1.4, 3): k_f of every frame, knot matrices of selected
 #                frames (the slipknot search) and the slipknot candidates confirmed
 #   ensemble     candy-canes from further random rotations: k_f of every frame
+#   probe        the candy-cane with one setting of the model changed (what decides its mode?):
+#                k_f of every frame, compared on its own as a candy-cane sweep
 #   trefoil_p24  Table 2 with the open trefoil whose k_f(0) = 0.98, compared on its own
 #
 # rpy:       trefoil_table2, candycane; the extras (EXTRAS = 1) candycane_seeds (5 rotations)
 #            and trefoil_table2_p24 are checks beyond the study's inputs.
 # multipole: the campaign of issue 11: trefoil_table2_multipole (with the k_f(0) = 0.98
-#            trefoil), candycane_multipole and candycane_seeds_multipole (A = 1, 3 from two
-#            further rotations) - the last is part of the study, whatever EXTRAS says.
+#            trefoil), candycane_multipole, candycane_seeds_multipole (A = 1, 3 from two
+#            further rotations) and the probe candycane_epslub_multipole (A = 1 with
+#            eps_lub = 1e-2) - the last two are part of the study, whatever EXTRAS says.
 
 kf_study_sweeps() {
   local hydro="$1" extras="${2:-1}"
@@ -38,7 +41,7 @@ kf_study_sweeps() {
       ;;
     multipole)
       printf '%s\n' "trefoil trefoil_table2_multipole" "candycane candycane_multipole" \
-                    "ensemble candycane_seeds_multipole"
+                    "ensemble candycane_seeds_multipole" "probe candycane_epslub_multipole"
       ;;
     *)
       printf 'ERROR: hydro %s is unknown (allowed: rpy, multipole)\n' "$hydro" >&2
@@ -61,7 +64,7 @@ kf_study_closures() {
   case "$1:$2" in
     rpy:ensemble) printf '100 2\n' ;;
     rpy:trefoil|rpy:candycane|rpy:trefoil_p24) printf '200 1\n' ;;
-    multipole:trefoil|multipole:candycane|multipole:ensemble) printf '1000 1\n' ;;
+    multipole:trefoil|multipole:candycane|multipole:ensemble|multipole:probe) printf '1000 1\n' ;;
     *)
       printf 'ERROR: no closures for hydro %s, role %s\n' "$1" "$2" >&2
       return 2

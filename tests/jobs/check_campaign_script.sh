@@ -9,7 +9,8 @@
 #      run again, the rest start), every case finishes, and the ledger holds every frame of
 #      every case once (A1.00 in two segments, the second one `A1.00_from<T>`);
 #      knotflow-study reads the ledger's sweep directories as it reads case files, and
-#      scripts/reproduce.sh --ledger computes the candy-cane's knot matrices from its kept frames;
+#      scripts/reproduce.sh --ledger computes the candy-cane's knot matrices from its kept frames
+#      and compares the probe (candycane_epslub_multipole) on its own;
 #   3. a third run has nothing to do and changes no ledger row.
 # Exit status 77 (ctest: skipped) without the system's numpy/h5py/matplotlib for the tools.
 # Usage: check_campaign_script.sh SOURCE_DIR BUILD_DIR WORKDIR
@@ -25,6 +26,7 @@ cd "${proj}" || fail "no project directory"
 kf_small_sweep trefoil_table2_multipole "shape = 'trefoil'" "&sweep orientation = 'a', 'c' /" 3.0
 kf_small_sweep candycane_multipole "shape = 'candycane'" "&sweep bending_a = 1.0 /" 20.0
 kf_small_sweep candycane_seeds_multipole "shape = 'candycane'" "&sweep bending_a = 1.0, 3.0, seed = 1 /" 2.0
+kf_small_sweep candycane_epslub_multipole "shape = 'candycane'" "&sweep bending_a = 1.0 /" 2.0
 ledger="docs/reproduction_multipole/ledger"
 
 # 1. Killed part-way, digested.
@@ -57,7 +59,7 @@ bash scripts/campaign.sh --workers 2 --digest >"${work}/run2.log" 2>&1 \
   || fail "campaign.sh --digest after the loss: $(tail -n 10 "${work}/run2.log")"
 grep -q "candycane_multipole/A1.00 (continue: results/candycane_multipole/continued/A1.00_from" "${work}/run2.log" \
   || fail "A1.00 was not continued from the ledger: $(cat "${work}/run2.log")"
-grep -q "^campaign: 5 of 5 cases finished; about 0.0 h of one worker left" "${work}/run2.log" \
+grep -q "^campaign: 6 of 6 cases finished; about 0.0 h of one worker left" "${work}/run2.log" \
   || fail "knotflow-campaign status after the campaign: $(tail -n 8 "${work}/run2.log")"
 "$py" - "$ledger" <<'PY' || fail "the ledger after the loss is not the whole campaign"
 import sys
@@ -66,7 +68,8 @@ from knotflow_tools import campaign
 ledger = sys.argv[1]
 cases = {"trefoil_table2_multipole": {"ora": 3.0, "orc": 3.0},
          "candycane_multipole": {"A1.00": 20.0},
-         "candycane_seeds_multipole": {"A1.00_s1": 2.0, "A3.00_s1": 2.0}}
+         "candycane_seeds_multipole": {"A1.00_s1": 2.0, "A3.00_s1": 2.0},
+         "candycane_epslub_multipole": {"A1.00": 2.0}}
 for sweep, names in cases.items():
     for name, t_end in names.items():
         e = campaign.load(ledger, sweep, name)
@@ -109,6 +112,9 @@ assert [e["frame"] for e in m] == [0, 10, 20] and [e["time"] for e in m] == [0.0
 assert all(0.0 <= e["max_K"] <= 1.0 for e in m), m
 assert sorted(os.listdir(os.path.join(out, "ledger_matrices"))) == sorted(
     f"A1.00_frame{k}.{x}" for k in (0, 10, 20) for x in ("json", "xyz")), os.listdir(out)
+# the probe on its own, from its ledger sweep, without knot matrices
+p = json.load(open(out + "_candycane_epslub_multipole/results.json"))
+assert [c["case"] for c in p["candycane"]] == ["A1.00"] and p["candycane"][0]["t_reached"] == 2.0, p
 PY
 
 # 3. Nothing left to do; the ledger stays as it is.
