@@ -107,6 +107,10 @@ module kf_case_file
 
   !> The /runs datasets, in the order of `run_record_t`: strings, int32, float64, int64.
   character(len=*), parameter :: runs_group = '/runs'
+  !> `start_run` writes the longer list here first and then renames it to /runs, so a kill while
+  !> the list grows never leaves it without a whole copy (`restore_runs` reads this one when
+  !> /runs cannot be read).
+  character(len=*), parameter :: runs_next_group = '/runs_next'
   !> The longest string of /runs read back (commit, start time, host name: host names have at
   !> most 255 bytes).
   integer, parameter :: run_text_capacity = 256
@@ -652,7 +656,7 @@ contains
     ! but the first could be lost.
     if (this%nframes == 1) call write_checkpoint(this%file, trim(slot_groups(0)), ck, error)
     if (.not. allocated(error)) call write_checkpoint(this%file, trim(slot_groups(mod(this%nframes, 2_i8))), ck, error)
-    if (.not. allocated(error) .and. present(run)) call write_run_figures(this%file, this%runs, error)
+    if (.not. allocated(error) .and. present(run)) call write_run_figures(this%file, runs_group, this%runs, error)
     if (allocated(error)) return
     call h5_flush(this%file, error)
     if (.not. allocated(error)) this%flushed_time = t
@@ -689,9 +693,10 @@ contains
   ! ---------------------------------------------------------------- run segments (/runs)
 
   !> Begin a run segment (after `create`, or after `open_resume`): `run` is appended to /runs
-  !> (every /runs dataset rewritten one entry longer; a file without /runs gets it) and the
-  !> file marked with this schema version; flushed. Later `append_frame` and `finish` calls
-  !> given the segment's record update its entry.
+  !> (a file without /runs gets it) and the file marked with this schema version; flushed.
+  !> Later `append_frame` and `finish` calls given the segment's record update its entry.
+  !> The longer list is written whole to /runs_next and flushed, then /runs is deleted and
+  !> /runs_next renamed to it: a kill at any point leaves one whole list (`restore_runs`).
   subroutine start_run(this, run, error)
     class(case_file_t), intent(inout) :: this
     type(run_record_t), intent(in) :: run
@@ -712,39 +717,46 @@ contains
     longer(1:n) = this%runs
     longer(n + 1) = run
     call move_alloc(longer, this%runs)
-    call write_runs(this%file, this%runs, error)
+    call h5_delete(this%file, runs_next_group, error)   ! a part written by a killed start_run
+    if (.not. allocated(error)) call write_runs(this%file, runs_next_group, this%runs, error)
+    if (.not. allocated(error)) call h5_flush(this%file, error)
+    if (.not. allocated(error)) call h5_delete(this%file, runs_group, error)
+    if (.not. allocated(error)) call h5_move(this%file, runs_next_group, runs_group, error)
     if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'schema_version', case_schema_version, error)
     if (.not. allocated(error)) call h5_flush(this%file, error)
     if (.not. allocated(error)) this%run_started = .true.
   end subroutine start_run
 
-  !> Every /runs dataset, `runs` in full (a dataset of another length is replaced).
-  subroutine write_runs(file, runs, error)
+  !> Every run dataset of `group` (/runs or /runs_next), `runs` in full (a dataset of another
+  !> length is replaced).
+  subroutine write_runs(file, group, runs, error)
     type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: group
     type(run_record_t), intent(in) :: runs(:)
     type(error_t), allocatable, intent(out) :: error
     integer :: k
     do k = 1, run_string_sets
-      call h5_write(file, runs_group//'/'//trim(run_sets(k)), run_texts(runs, k), error)
+      call h5_write(file, group//'/'//trim(run_sets(k)), run_texts(runs, k), error)
       if (allocated(error)) return
     end do
-    call h5_write(file, runs_group//'/ranks', int(runs%ranks, i4), error)
-    if (.not. allocated(error)) call h5_write(file, runs_group//'/threads', int(runs%threads, i4), error)
-    if (.not. allocated(error)) call h5_write(file, runs_group//'/t_start', runs%t_start, error)
-    if (.not. allocated(error)) call h5_write(file, runs_group//'/load_start', runs%load_start, error)
-    if (.not. allocated(error)) call write_run_figures(file, runs, error)
+    call h5_write(file, group//'/ranks', int(runs%ranks, i4), error)
+    if (.not. allocated(error)) call h5_write(file, group//'/threads', int(runs%threads, i4), error)
+    if (.not. allocated(error)) call h5_write(file, group//'/t_start', runs%t_start, error)
+    if (.not. allocated(error)) call h5_write(file, group//'/load_start', runs%load_start, error)
+    if (.not. allocated(error)) call write_run_figures(file, group, runs, error)
   end subroutine write_runs
 
-  !> The /runs datasets that change during a segment (t_end, steps, wall_seconds, load_mean),
-  !> rewritten in place.
-  subroutine write_run_figures(file, runs, error)
+  !> The run datasets of `group` that change during a segment (t_end, steps, wall_seconds,
+  !> load_mean), rewritten in place.
+  subroutine write_run_figures(file, group, runs, error)
     type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: group
     type(run_record_t), intent(in) :: runs(:)
     type(error_t), allocatable, intent(out) :: error
-    call h5_write(file, runs_group//'/t_end', runs%t_end, error)
-    if (.not. allocated(error)) call h5_write(file, runs_group//'/steps', runs%steps, error)
-    if (.not. allocated(error)) call h5_write(file, runs_group//'/wall_seconds', runs%wall_seconds, error)
-    if (.not. allocated(error)) call h5_write(file, runs_group//'/load_mean', runs%load_mean, error)
+    call h5_write(file, group//'/t_end', runs%t_end, error)
+    if (.not. allocated(error)) call h5_write(file, group//'/steps', runs%steps, error)
+    if (.not. allocated(error)) call h5_write(file, group//'/wall_seconds', runs%wall_seconds, error)
+    if (.not. allocated(error)) call h5_write(file, group//'/load_mean', runs%load_mean, error)
   end subroutine write_run_figures
 
   !> The string field `field` (1 commit, 2 started, 3 host, 4 blas) of every entry ('' if not set).
@@ -780,11 +792,13 @@ contains
     end select
   end function run_text
 
-  !> Read /runs: the entries as far as every dataset holds them, at most `limit` (`equal`: all
-  !> datasets have the same length). The error names the missing or unreadable dataset; a file
-  !> without /runs/blas (schema 4) reads as `blas_unrecorded`.
-  subroutine read_runs_table(file, runs, equal, error, limit)
+  !> Read the run list of `group` (/runs or /runs_next): the entries as far as every dataset
+  !> holds them, at most `limit` (`equal`: all datasets have the same length). The error names
+  !> the missing or unreadable dataset; a file without /runs/blas (schema 4) reads as
+  !> `blas_unrecorded`.
+  subroutine read_runs_table(file, group, runs, equal, error, limit)
     type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: group
     type(run_record_t), allocatable, intent(out) :: runs(:)
     logical, intent(out) :: equal
     type(error_t), allocatable, intent(out) :: error
@@ -796,26 +810,26 @@ contains
     integer :: k, n, lengths(size(run_sets))
     logical :: has_blas
     equal = .false.
-    has_blas = h5_exists(file, runs_group//'/'//trim(run_sets(run_blas_set)))
+    has_blas = h5_exists(file, group//'/'//trim(run_sets(run_blas_set)))
     do k = 1, size(run_sets)
       if (k == run_blas_set) cycle
-      if (.not. h5_exists(file, runs_group//'/'//trim(run_sets(k)))) then
-        call fatal_error(error, "case file '"//file%name()//"': no dataset "//runs_group//'/'//trim(run_sets(k)))
+      if (.not. h5_exists(file, group//'/'//trim(run_sets(k)))) then
+        call fatal_error(error, "case file '"//file%name()//"': no dataset "//group//'/'//trim(run_sets(k)))
         return
       end if
     end do
-    call h5_read(file, runs_group//'/commit', commit, error)
-    if (.not. allocated(error)) call h5_read(file, runs_group//'/started', started, error)
-    if (.not. allocated(error)) call h5_read(file, runs_group//'/host', host, error)
-    if (.not. allocated(error) .and. has_blas) call h5_read(file, runs_group//'/blas', blas, error)
-    if (.not. allocated(error)) call h5_read(file, runs_group//'/ranks', ranks, error)
-    if (.not. allocated(error)) call h5_read(file, runs_group//'/threads', threads, error)
-    if (.not. allocated(error)) call h5_read(file, runs_group//'/t_start', t_start, error)
-    if (.not. allocated(error)) call h5_read(file, runs_group//'/t_end', t_end, error)
-    if (.not. allocated(error)) call h5_read(file, runs_group//'/steps', steps, error)
-    if (.not. allocated(error)) call h5_read(file, runs_group//'/wall_seconds', wall, error)
-    if (.not. allocated(error)) call h5_read(file, runs_group//'/load_start', load_start, error)
-    if (.not. allocated(error)) call h5_read(file, runs_group//'/load_mean', load_mean, error)
+    call h5_read(file, group//'/commit', commit, error)
+    if (.not. allocated(error)) call h5_read(file, group//'/started', started, error)
+    if (.not. allocated(error)) call h5_read(file, group//'/host', host, error)
+    if (.not. allocated(error) .and. has_blas) call h5_read(file, group//'/blas', blas, error)
+    if (.not. allocated(error)) call h5_read(file, group//'/ranks', ranks, error)
+    if (.not. allocated(error)) call h5_read(file, group//'/threads', threads, error)
+    if (.not. allocated(error)) call h5_read(file, group//'/t_start', t_start, error)
+    if (.not. allocated(error)) call h5_read(file, group//'/t_end', t_end, error)
+    if (.not. allocated(error)) call h5_read(file, group//'/steps', steps, error)
+    if (.not. allocated(error)) call h5_read(file, group//'/wall_seconds', wall, error)
+    if (.not. allocated(error)) call h5_read(file, group//'/load_start', load_start, error)
+    if (.not. allocated(error)) call h5_read(file, group//'/load_mean', load_mean, error)
     if (allocated(error)) return
     if (.not. has_blas) then
       allocate (blas(size(commit)))
@@ -845,8 +859,9 @@ contains
 
   !> The /runs entries of a file being resumed, as they were at the checkpoint it continues
   !> from: the entries the checkpoint counts, the last with the checkpoint's figures (a kill
-  !> after the checkpoint may have left /runs ahead of or behind it). A file without /runs, or
-  !> whose /runs cannot be read, starts a new list (the resume itself never fails for it);
+  !> after the checkpoint may have left /runs ahead of or behind it). A file whose /runs cannot
+  !> be read (a kill inside `start_run`) is read from /runs_next; a file without either, or
+  !> whose lists cannot be read, starts a new list (the resume itself never fails for it);
   !> a checkpoint without run figures (written before they existed) keeps /runs as it is.
   subroutine restore_runs(this)
     class(case_file_t), intent(inout) :: this
@@ -861,7 +876,11 @@ contains
       if (fix) fix = ck%run_counts(1) >= 1 .and. ck%run_counts(1) <= huge(n)
       n = huge(n)
       if (fix) n = int(ck%run_counts(1))
-      if (h5_exists(this%file, runs_group)) call read_runs_table(this%file, this%runs, equal, err, n)
+      if (h5_exists(this%file, runs_group)) call read_runs_table(this%file, runs_group, this%runs, equal, err, n)
+      if ((allocated(err) .or. .not. allocated(this%runs)) .and. h5_exists(this%file, runs_next_group)) then
+        if (allocated(err)) deallocate (err)
+        call read_runs_table(this%file, runs_next_group, this%runs, equal, err, n)
+      end if
       if (allocated(err) .or. .not. allocated(this%runs)) then
         if (allocated(this%runs)) deallocate (this%runs)
         allocate (this%runs(0))
@@ -1254,7 +1273,7 @@ contains
     path = this%file%name()
     if (present(run) .and. this%run_started) then
       this%runs(size(this%runs)) = run
-      call write_run_figures(this%file, this%runs, error)
+      call write_run_figures(this%file, runs_group, this%runs, error)
       if (allocated(error)) then
         call this%close()
         return
@@ -1604,7 +1623,7 @@ contains
     subroutine check_runs()
       type(run_record_t), allocatable :: runs(:)
       logical :: equal
-      call read_runs_table(file, runs, equal, error)
+      call read_runs_table(file, runs_group, runs, equal, error)
       if (allocated(error)) return
       if (.not. equal .or. size(runs) < 1) call fatal_error(error, runs_group// &
         ' does not hold one entry per run segment in every dataset')
