@@ -877,9 +877,11 @@ contains
       n = huge(n)
       if (fix) n = int(ck%run_counts(1))
       if (h5_exists(this%file, runs_group)) call read_runs_table(this%file, runs_group, this%runs, equal, err, n)
-      if ((allocated(err) .or. .not. allocated(this%runs)) .and. h5_exists(this%file, runs_next_group)) then
-        if (allocated(err)) deallocate (err)
-        call read_runs_table(this%file, runs_next_group, this%runs, equal, err, n)
+      if (allocated(err) .or. .not. allocated(this%runs)) then
+        if (h5_exists(this%file, runs_next_group)) then
+          if (allocated(err)) deallocate (err)
+          call read_runs_table(this%file, runs_next_group, this%runs, equal, err, n)
+        end if
       end if
       if (allocated(err) .or. .not. allocated(this%runs)) then
         if (allocated(this%runs)) deallocate (this%runs)
