@@ -2,12 +2,12 @@
 module kf_lapack
   use kf_kinds, only: wp
   use kf_strings, only: to_str
-  use kf_blas, only: dpotrf, dpotrs, dpotri, dsyev
+  use kf_blas, only: dpotrf, dpotrs, dpotri
   use kf_error, only: error_t, fatal_error
   implicit none
   private
 
-  public :: cholesky_factor, cholesky_solve, cholesky_invert, symmetric_eigen
+  public :: cholesky_factor, cholesky_solve, cholesky_invert
 
   !> Solve A X = B (B a matrix or a vector) given the factor from cholesky_factor.
   interface cholesky_solve
@@ -65,20 +65,5 @@ contains
       a(1:i - 1, i) = a(i, 1:i - 1)
     end do
   end subroutine cholesky_invert
-
-  !> Eigenvalues (ascending) and, in a, the eigenvectors of a real symmetric matrix.
-  subroutine symmetric_eigen(a, w, error)
-    real(wp), intent(inout) :: a(:, :)
-    real(wp), intent(out) :: w(:)
-    type(error_t), allocatable, intent(out) :: error
-    real(wp), allocatable :: work(:)
-    real(wp) :: query(1)
-    integer :: info, n
-    n = size(a, 1)
-    call dsyev('V', 'L', n, a, n, w, query, -1, info)
-    allocate (work(max(1, int(query(1)))))
-    call dsyev('V', 'L', n, a, n, w, work, size(work), info)
-    if (info /= 0) call fatal_error(error, 'dsyev failed to converge')
-  end subroutine symmetric_eigen
 
 end module kf_lapack

@@ -7,7 +7,7 @@
 module kf_rigid_fit
   use kf_kinds, only: wp
   use kf_error, only: error_t
-  use kf_lapack, only: symmetric_eigen
+  use kf_symmetric_eigen, only: symmetric_eigen
   implicit none
   private
 

@@ -11,6 +11,10 @@ end at t_end and their steps add up to the run's. After a kill that came after f
 flushed), the rerun must resume from frame k or later: a kill costs at most the frame being
 written. A kill before the first checkpoint is whole may instead make the rerun move the file
 aside (named `.damaged`) and compute the case from the start; the result is checked the same.
+The uninterrupted run has one BLAS thread (OPENBLAS_NUM_THREADS=1), the killed runs and reruns
+two: knotflow picks the thread count from the machine's load at start-up, so a resume may well
+get another count, and an RPY case must not depend on it (its dynamics call no BLAS; the shape
+observables use kf_symmetric_eigen, not the threaded dsyev).
 
 Kill points:
 - at the N-th write: strace delivers SIGKILL when the process enters its N-th pwrite64 call
@@ -72,8 +76,13 @@ def contents(path):
     return status.decode() if isinstance(status, bytes) else status, data
 
 
-def run():
-    return subprocess.run([exe, scene], capture_output=True, text=True, timeout=600)
+def threads(n):
+    """The environment of a run with n BLAS threads."""
+    return dict(os.environ, OPENBLAS_NUM_THREADS=str(n))
+
+
+def run(n=2):
+    return subprocess.run([exe, scene], capture_output=True, text=True, timeout=600, env=threads(n))
 
 
 # the uninterrupted run, its pwrite calls and the progress line after each frame
@@ -82,14 +91,14 @@ traced = None
 if strace:
     log = os.path.join(work, "trace.txt")
     traced = subprocess.run([strace, "-o", log, "-s", "200", "-e", "trace=pwrite64,write", exe, scene],
-                            capture_output=True, text=True, timeout=600)
+                            capture_output=True, text=True, timeout=600, env=threads(1))
     if traced.returncode != 0:
         print("strace cannot trace here (%s): the kill points at writes are skipped"
               % traced.stderr.strip().splitlines()[-1:])
         strace = None
         shutil.rmtree(out)
 if not strace:
-    ref = run()
+    ref = run(1)
     assert ref.returncode == 0, ref.stderr
 status, reference = contents(case)
 assert status == "finished", status
@@ -166,7 +175,7 @@ if strace:
         shutil.rmtree(out, ignore_errors=True)
         killed = subprocess.run([strace, "-o", os.devnull, "-e", "trace=pwrite64", "-e",
                                  "inject=pwrite64:signal=KILL:when=%d" % n, exe, scene],
-                                capture_output=True, text=True, timeout=600)
+                                capture_output=True, text=True, timeout=600, env=threads(2))
         assert killed.returncode in (-9, 137), (n, killed.returncode, killed.stderr[-500:])
         # frames complete before the kill: reported ones (progress line after the checkpoint)
         done = calls[n - 1] + (1 if calls[n - 1] > 0 else 0)
@@ -181,7 +190,8 @@ rng = random.Random(20261201)
 random_counts = {}
 for i in range(n_random):
     shutil.rmtree(out, ignore_errors=True)
-    proc = subprocess.Popen([exe, scene], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    proc = subprocess.Popen([exe, scene], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+                            env=threads(2))
     wanted = rng.randrange(0, len(reference["time"]) - 1)
     seen = 0
     lines = []
