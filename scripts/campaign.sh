@@ -3,7 +3,8 @@
 # what each case needs is kept in the case ledger (docs/reproduction_multipole/ledger, small
 # committed text files: knotflow-campaign, docs/analysis.md "The case ledger"), and the next
 # machine goes on from it.
-#   scripts/campaign.sh [--workers N] [--digest] [--no-run] [--workdir DIR] [--ledger DIR]
+#   scripts/campaign.sh [--workers N] [--digest] [--digest-every MIN] [--no-run] [--workdir DIR]
+#                       [--ledger DIR]
 #
 #   (default)   run: each case of every sweep as a single-case scene (knotflow --write-scenes),
 #               N processes of one rank each (default KNOTFLOW_NP, 2) taking the cases in
@@ -16,6 +17,10 @@
 #               k_f of every frame (knotflow-analyze, closures of scripts/study_sweeps.sh),
 #               knotflow-campaign digest. Run it before the machine goes (it may run beside
 #               the campaign: it reads copies), then commit the ledger.
+#   --digest-every  while the workers run, also digest every MIN minutes (decimals allowed; one at a
+#               time, in the background of the run), so that a machine that goes without
+#               warning loses at most MIN minutes of progress when the ledger lives on storage
+#               that outlasts it (the repository's checkout); commit the ledger as before.
 #   --workdir   where knotflow runs (default: the repository): the case files go where the
 #               inputs say, DIR/results/<sweep>/; --ledger: default
 #               docs/reproduction_multipole/ledger of the repository.
@@ -35,6 +40,7 @@ source "$KF_ROOT/scripts/study_sweeps.sh"
 
 run=1
 digest=0
+digest_every=0
 workdir="$KF_ROOT"
 ledger="$KF_ROOT/docs/reproduction_multipole/ledger"
 workers="$(kf_ranks)"
@@ -44,10 +50,15 @@ while [ $# -gt 0 ]; do
       if [ $# -lt 2 ] || ! [[ "$2" =~ ^[1-9][0-9]*$ ]]; then kf_die "--workers needs a positive integer"; fi
       workers="$2"; shift 2 ;;
     --digest) digest=1; shift ;;
+    --digest-every)
+      if [ $# -lt 2 ] || ! [[ "$2" =~ ^[0-9]+(\.[0-9]+)?$ ]] || [ "$(awk -v m="$2" 'BEGIN {print (m * 60 >= 1)}')" != 1 ]; then
+        kf_die "--digest-every needs a number of minutes, at least 1 s (0.0167): got '${2:-}'"
+      fi
+      digest_every="$2"; shift 2 ;;
     --no-run) run=0; shift ;;
     --workdir) [ $# -ge 2 ] || kf_die "--workdir needs a directory"; workdir="$2"; shift 2 ;;
     --ledger) [ $# -ge 2 ] || kf_die "--ledger needs a directory"; ledger="$2"; shift 2 ;;
-    *) kf_die "unknown argument '$1' (allowed: --workers N, --digest, --no-run, --workdir DIR, --ledger DIR)" ;;
+    *) kf_die "unknown argument '$1' (allowed: --workers N, --digest, --digest-every MIN, --no-run, --workdir DIR, --ledger DIR)" ;;
   esac
 done
 [ -d "$KF_BUILD_DIR/venv/bin" ] && PATH="$KF_BUILD_DIR/venv/bin:$PATH"
@@ -89,21 +100,8 @@ worker() {
   done <"$results/queue.txt"
 }
 
-if [ "$run" = 1 ]; then
-  export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
-  rm -rf "$results/claims"
-  mkdir -p "$results/claims"
-  queue >"$results/queue.txt"
-  kf_log "$(wc -l <"$results/queue.txt") case(s) to run, $workers worker(s); queue in $results/queue.txt"
-  pids=()
-  for w in $(seq 1 "$workers"); do
-    worker "$w" &
-    pids+=($!)
-  done
-  for p in "${pids[@]}"; do wait "$p"; done
-fi
-
-if [ "$digest" = 1 ]; then
+# Add every case file here to the ledger (--digest).
+digest_all() {
   shopt -s nullglob
   copies="$results/ledger_copies"
   for i in "${!KF_STUDY_SWEEPS[@]}"; do
@@ -141,6 +139,51 @@ if [ "$digest" = 1 ]; then
   scenes=()
   [ -d "$results/scenes" ] && scenes=(--scenes "$results/scenes")
   knotflow-campaign status --ledger "$ledger" "${scenes[@]}"
+}
+
+# --digest-every: a digest every $digest_every minutes until the file $1 appears (checked every
+# second, so the run ends soon after its workers, never in the middle of a digest); a failed
+# digest is logged and the next one tried.
+digest_loop() {
+  local stop="$1" waited=0 period
+  period="$(awk -v m="$digest_every" 'BEGIN {printf "%d", m * 60 + 0.5}')"
+  while [ ! -e "$stop" ]; do
+    sleep 1
+    waited=$((waited + 1))
+    if [ "$waited" -lt "$period" ] || [ -e "$stop" ]; then continue; fi
+    waited=0
+    kf_log "periodic digest (every $digest_every min), log in $results/campaign_digest.log"
+    ( digest_all ) >>"$results/campaign_digest.log" 2>&1 \
+      || kf_log "periodic digest failed (see $results/campaign_digest.log); next in $digest_every min"
+  done
+}
+
+if [ "$run" = 1 ]; then
+  export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
+  rm -rf "$results/claims"
+  mkdir -p "$results/claims"
+  queue >"$results/queue.txt"
+  kf_log "$(wc -l <"$results/queue.txt") case(s) to run, $workers worker(s); queue in $results/queue.txt"
+  pids=()
+  for w in $(seq 1 "$workers"); do
+    worker "$w" &
+    pids+=($!)
+  done
+  loop=
+  rm -f "$results/digest_loop.stop"
+  if [ "$digest_every" != 0 ]; then
+    digest_loop "$results/digest_loop.stop" &
+    loop=$!
+  fi
+  for p in "${pids[@]}"; do wait "$p"; done
+  if [ -n "$loop" ]; then
+    touch "$results/digest_loop.stop"
+    wait "$loop" || true
+  fi
+fi
+
+if [ "$digest" = 1 ]; then
+  digest_all
 fi
 exit
 }

@@ -11,7 +11,10 @@
 #      knotflow-study reads the ledger's sweep directories as it reads case files, and
 #      scripts/reproduce.sh --ledger computes the candy-cane's knot matrices from its kept frames
 #      and compares the probe (candycane_epslub_multipole) on its own;
-#   3. a third run has nothing to do and changes no ledger row.
+#   3. a third run has nothing to do and changes no ledger row;
+#   4. --digest-every: the probe's ledger entry is removed and its case run again (no --digest)
+#      by a knotflow that waits 15 s after the case before it exits; the digest every 3 s puts
+#      the finished case into the ledger while the run goes on, and the run ends with its worker.
 # Exit status 77 (ctest: skipped) without the system's numpy/h5py/matplotlib for the tools.
 # Usage: check_campaign_script.sh SOURCE_DIR BUILD_DIR WORKDIR
 set -uo pipefail
@@ -122,4 +125,33 @@ before="$(cat "${ledger}"/*/*.csv | md5sum)"
 bash scripts/campaign.sh --workers 2 >"${work}/run3.log" 2>&1 || fail "a third campaign.sh: $(tail -n 5 "${work}/run3.log")"
 grep -q "^==> 0 case(s) to run" "${work}/run3.log" || fail "a finished campaign ran again: $(cat "${work}/run3.log")"
 [ "$(cat "${ledger}"/*/*.csv | md5sum)" = "${before}" ] || fail "the ledger changed without a run"
-echo "campaign.sh: killed at t = ${t_kill}, continued from the ledger on a new results directory, every case finished once"
+# 4. A digest every 3 s while the run goes on.
+rm -rf results "${ledger}/candycane_epslub_multipole"
+slow="${work}/slow_build"
+mkdir -p "${slow}/bin"
+ln -s "${proj}/build/venv" "${slow}/venv"
+ln -s "${proj}/build/bin/knotflow-analyze" "${slow}/bin/knotflow-analyze"
+cat >"${slow}/bin/knotflow" <<EOF
+#!/bin/bash
+"${proj}/build/bin/knotflow" "\$@"
+status=\$?
+case " \$* " in *" --write-scenes "*) ;; *) sleep 15 ;; esac
+exit \$status
+EOF
+chmod +x "${slow}/bin/knotflow"
+KNOTFLOW_BUILD_DIR="${slow}" bash scripts/campaign.sh --workers 1 --digest-every 0.05 >"${work}/run4.log" 2>&1 \
+  || fail "campaign.sh --digest-every: $(tail -n 5 "${work}/run4.log")"
+grep -q "^==> 1 case(s) to run" "${work}/run4.log" || fail "not the probe alone: $(cat "${work}/run4.log")"
+grep -q "periodic digest (every 0.05 min)" "${work}/run4.log" || fail "no periodic digest: $(cat "${work}/run4.log")"
+"$py" - "$ledger" <<'PY' || fail "the periodic digest did not put the probe into the ledger: $(cat results/campaign_digest.log)"
+import sys
+from knotflow_tools import campaign
+e = campaign.load(sys.argv[1], "candycane_epslub_multipole", "A1.00")
+assert e is not None and e["status"] == "finished", e
+assert len(campaign.read_rows(sys.argv[1], "candycane_epslub_multipole", "A1.00")) == 3
+PY
+KNOTFLOW_BUILD_DIR="${slow}" bash scripts/campaign.sh --digest-every 0 >"${work}/bad.log" 2>&1 \
+  && fail "--digest-every 0 accepted"
+grep -q "digest-every needs a number of minutes" "${work}/bad.log" || fail "--digest-every 0: $(cat "${work}/bad.log")"
+
+echo "campaign.sh: killed at t = ${t_kill}, continued from the ledger on a new results directory, every case finished once; a digest every 3 s during a run"
