@@ -8,6 +8,7 @@
 !> order, so the result is the same bit for bit on every run of one binary, and it is accurate to
 !> a few units in the last place of the largest eigenvalue (the rotations are orthogonal).
 module kf_symmetric_eigen
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use kf_kinds, only: wp
   use kf_error, only: error_t, fatal_error
   use kf_strings, only: to_str
@@ -37,6 +38,13 @@ contains
         to_str(size(a, 1))//' x '//to_str(size(a, 2))//', w has '//to_str(size(w))//')')
       return
     end if
+    do j = 1, n
+      if (.not. all(ieee_is_finite(a(j:n, j)))) then
+        call fatal_error(error, 'symmetric_eigen: the matrix has a non-finite entry in column '// &
+          to_str(j))
+        return
+      end if
+    end do
     do j = 2, n
       a(1:j - 1, j) = a(j, 1:j - 1)
     end do
@@ -59,7 +67,7 @@ contains
       end do
       if (.not. rotated) exit
     end do
-    if (rotated) then
+    if (rotated) then   ! not seen: Jacobi converges quadratically for finite entries
       call fatal_error(error, 'symmetric_eigen: Jacobi rotations did not converge in '// &
         to_str(max_sweeps)//' sweeps')
       return
