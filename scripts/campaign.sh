@@ -40,7 +40,8 @@ source "$KF_ROOT/scripts/study_sweeps.sh"
 
 run=1
 digest=0
-digest_every=0
+digest_every=0   # minutes, as given (0: no periodic digest)
+digest_period=0  # the same in whole seconds
 workdir="$KF_ROOT"
 ledger="$KF_ROOT/docs/reproduction_multipole/ledger"
 workers="$(kf_ranks)"
@@ -51,7 +52,8 @@ while [ $# -gt 0 ]; do
       workers="$2"; shift 2 ;;
     --digest) digest=1; shift ;;
     --digest-every)
-      if [ $# -lt 2 ] || ! [[ "$2" =~ ^[0-9]+(\.[0-9]+)?$ ]] || [ "$(awk -v m="$2" 'BEGIN {print (m * 60 >= 1)}')" != 1 ]; then
+      [[ "${2:-}" =~ ^[0-9]+(\.[0-9]+)?$ ]] && digest_period="$(awk -v m="$2" 'BEGIN {printf "%d", m * 60 + 0.5}')"
+      if [ "$digest_period" -lt 1 ]; then
         kf_die "--digest-every needs a number of minutes, at least 1 s (0.0167): got '${2:-}'"
       fi
       digest_every="$2"; shift 2 ;;
@@ -145,12 +147,11 @@ digest_all() {
 # second, so the run ends soon after its workers, never in the middle of a digest); a failed
 # digest is logged and the next one tried.
 digest_loop() {
-  local stop="$1" waited=0 period
-  period="$(awk -v m="$digest_every" 'BEGIN {printf "%d", m * 60 + 0.5}')"
+  local stop="$1" waited=0
   while [ ! -e "$stop" ]; do
     sleep 1
     waited=$((waited + 1))
-    if [ "$waited" -lt "$period" ] || [ -e "$stop" ]; then continue; fi
+    if [ "$waited" -lt "$digest_period" ] || [ -e "$stop" ]; then continue; fi
     waited=0
     kf_log "periodic digest (every $digest_every min), log in $results/campaign_digest.log"
     ( digest_all ) >>"$results/campaign_digest.log" 2>&1 \
@@ -171,7 +172,7 @@ if [ "$run" = 1 ]; then
   done
   loop=
   rm -f "$results/digest_loop.stop"
-  if [ "$digest_every" != 0 ]; then
+  if [ "$digest_period" -gt 0 ]; then
     digest_loop "$results/digest_loop.stop" &
     loop=$!
   fi

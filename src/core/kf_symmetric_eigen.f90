@@ -12,6 +12,7 @@ module kf_symmetric_eigen
   use kf_kinds, only: wp
   use kf_error, only: error_t, fatal_error
   use kf_strings, only: to_str
+  use kf_vector_ops, only: sort_index
   implicit none
   private
 
@@ -29,7 +30,7 @@ contains
     type(error_t), allocatable, intent(out) :: error
     real(wp), allocatable :: v(:, :)
     real(wp) :: negligible
-    integer :: n, i, j, sweep
+    integer :: n, i, j, sweep, order(size(w))
     logical :: rotated
 
     n = size(a, 1)
@@ -75,8 +76,9 @@ contains
     do i = 1, n
       w(i) = a(i, i)
     end do
-    call sort_ascending(w, v)
-    a = v
+    order = sort_index(w)
+    w = w(order)
+    a = v(:, order)
   end subroutine symmetric_eigen
 
   !> The Jacobi rotation in the (p, q) plane that zeroes a(p, q): a <- J^T a J, v <- v J.
@@ -109,25 +111,5 @@ contains
     v(:, p) = c*col_p - s*col_q
     v(:, q) = s*col_p + c*col_q
   end subroutine rotate
-
-  !> Sort w ascending and the columns of v with it (insertion sort: n is small; ties keep order).
-  pure subroutine sort_ascending(w, v)
-    real(wp), intent(inout) :: w(:), v(:, :)
-    real(wp) :: wk, vk(size(v, 1))
-    integer :: i, k
-    do k = 2, size(w)
-      wk = w(k)
-      vk = v(:, k)
-      i = k - 1
-      do while (i >= 1)
-        if (w(i) <= wk) exit
-        w(i + 1) = w(i)
-        v(:, i + 1) = v(:, i)
-        i = i - 1
-      end do
-      w(i + 1) = wk
-      v(:, i + 1) = vk
-    end do
-  end subroutine sort_ascending
 
 end module kf_symmetric_eigen
