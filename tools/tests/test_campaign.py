@@ -220,3 +220,31 @@ def test_status_rate_from_the_newest_kernels(tmp_path):
     # (300*2 + 200*4) / 500 = 2.8; left 400 time units = 1000 s = 0.28 h
     assert lines[-1] == ("tr: 0 of 1 finished, 1 running; 2.50 s of wall per time unit (load "
                          "2.8, runs with OpenBLAS 0.3.21 SkylakeX): about 0.3 h of one worker left")
+
+
+def test_windows_table_of_two_runs(tmp_path, capsys):
+    """`knotflow-campaign windows`: a run and one started at t = 20 of it (--offset), window by
+    window; without /analysis no k_f (nan) and no modes (-); an --offset per case."""
+    from knotflow_tools import cli
+    from knotflow_tools.shape import shape_series
+    frames = unknotting_trefoil_frames(6)
+    (tmp_path / "full").mkdir()
+    (tmp_path / "late").mkdir()
+    full = str(write_case(tmp_path / "full" / "A1.h5", frames, time=10.0 * np.arange(6)))
+    late = str(write_case(tmp_path / "late" / "A1.h5", frames[2:], time=10.0 * np.arange(4)))
+    assert cli.main_campaign(["windows", full, late, "--width", "20", "--offset", "0", "20"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("| window | case | frames | R_g |")
+    rows = [[x.strip() for x in line.split("|")[1:-1]] for line in lines[2:]]
+    # full: windows 0-20 (t 0, 10), 20-40 (20, 30), 40-60 (40, 50); late: 20-40, 40-60
+    assert [r[:3] for r in rows] == [["0-20", "full/A1", "2"], ["20-40", "full/A1", "2"],
+                                     ["20-40", "late/A1", "2"], ["40-60", "full/A1", "2"],
+                                     ["40-60", "late/A1", "2"]]
+    rg = shape_series(frames)["rg"]
+    assert float(rows[1][3]) == pytest.approx(rg[2:4].mean(), abs=0.05)
+    assert rows[1][3:10] == rows[2][3:10]
+    assert rows[0][10:] == ["nan", "nan", "-", "-"]
+    assert cli.main_campaign(["windows", full, late, "--width", "20", "--offset", "5"]) == 2
+    assert "--offset: 1 value(s) for 2 case(s)" in capsys.readouterr().err
+    assert cli.main_campaign(["windows", full, "--width", "0"]) == 2
+    assert "window width 0.0" in capsys.readouterr().err

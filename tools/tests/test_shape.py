@@ -65,3 +65,55 @@ def test_dominant_period_of_sines():
     v = np.stack([np.cos(2 * np.pi * t / 40), np.sin(2 * np.pi * t / 40), 0 * t], axis=1)
     assert S.dominant_period(t, v)[2] == pytest.approx(40.0, rel=0.01)
     assert S.dominant_period(t[:3], t[:3])[2] == float("inf")
+
+
+def _window_series(t):
+    t = np.asarray(t, dtype=float)
+    return {"rg": t, "a": 2.0 * t + 2.0, "b": t + 1.0, "c": np.full(len(t), 0.5),
+            "theta": np.where(np.arange(len(t)) % 2 == 0, 0.0, np.pi / 3),
+            "close_pairs": np.arange(len(t)) % 3}
+
+
+def test_window_means_exact_values():
+    # t = 0..10 in windows of 5: [0, 5) has 5 frames, the last holds t = 5..10 (6 frames)
+    t = np.arange(11.0)
+    kf = np.full(11, np.nan)
+    kf[[1, 2, 4]] = (0.2, 0.4, 0.9)
+    modes = np.array([1, 2, 1, 0, 0, 1, 1, 1, 2, 0, 1])
+    w = S.window_means(t, _window_series(t), 5.0, kf, modes)
+    assert [(x["t0"], x["t1"], x["frames"]) for x in w] == [(0.0, 5.0, 5), (5.0, 10.0, 6)]
+    assert w[0]["rg"] == pytest.approx(2.0) and w[1]["rg"] == pytest.approx(7.5)
+    assert w[0]["a_over_b"] == pytest.approx(2.0) and w[1]["c"] == pytest.approx(0.5)
+    # |cos theta| alternates 1 and 1/2: frames 0..4 -> (3 + 1) / 5, frames 5..10 -> (3 + 1.5) / 6
+    assert w[0]["abs_cos_theta"] == pytest.approx(4.0 / 5.0)
+    assert w[1]["abs_cos_theta"] == pytest.approx(4.5 / 6.0)
+    assert w[0]["close_pairs"] == pytest.approx((0 + 1 + 2 + 0 + 1) / 5.0)
+    assert w[0]["kf_mean"] == pytest.approx(0.5) and w[0]["kf_max"] == pytest.approx(0.9)
+    assert np.isnan(w[1]["kf_mean"]) and np.isnan(w[1]["kf_max"])
+    assert (w[0]["mode_1"], w[0]["mode_2"], w[1]["mode_1"], w[1]["mode_2"]) == (2, 1, 4, 1)
+    assert np.isnan(S.window_means(t, _window_series(t), 5.0)[0]["mode_1"])
+
+
+def test_window_means_offset_and_range():
+    # a run started at t = 800 of another: its times 0..30 are 800..830
+    t = np.arange(31.0)
+    w = S.window_means(t, _window_series(t), 10.0, offset=800.0, t_from=805.0, t_to=825.0)
+    assert [(x["t0"], x["frames"]) for x in w] == [(805.0, 10), (815.0, 11)]
+    assert w[0]["rg"] == pytest.approx(9.5) and w[1]["rg"] == pytest.approx(20.0)
+    # the default start is the first time rounded down; windows without frames are left out
+    t = np.array([3.0, 4.0, 31.0])
+    w = S.window_means(t, _window_series(t), 10.0)
+    assert [(x["t0"], x["frames"]) for x in w] == [(0.0, 2), (30.0, 1)]
+    assert [x["frames"] for x in S.window_means([7.0], _window_series([7.0]), 10.0)] == [1]
+
+
+@pytest.mark.parametrize("width", [0.0, -1.0, np.nan, np.inf])
+def test_window_means_refuses_bad_width(width):
+    with pytest.raises(ValueError, match="window width"):
+        S.window_means(np.arange(3.0), _window_series(np.arange(3.0)), width)
+
+
+def test_window_means_refuses_non_finite_times():
+    t = np.array([0.0, np.nan, 2.0])
+    with pytest.raises(ValueError, match="non-finite"):
+        S.window_means(t, _window_series(t), 1.0)

@@ -511,6 +511,37 @@ def main_campaign(argv: Argv = None) -> int:
     return run_reporting_errors("knotflow-campaign", _campaign, argv)
 
 
+def _window_table(args) -> list:
+    """The lines of `knotflow-campaign windows`: cases interleaved window by window."""
+    from . import campaign, shape
+    offsets = args.offset or [0.0] * len(args.cases)
+    if len(offsets) != len(args.cases):
+        raise ValueError(f"--offset: {len(offsets)} value(s) for {len(args.cases)} case(s)")
+    if not all(math.isfinite(x) for x in offsets + [args.t_from or 0.0, args.t_to or 0.0]):
+        raise ValueError("--offset, --from and --to need finite values")
+    rows = []
+    for k, (path, offset) in enumerate(zip(args.cases, offsets)):
+        case = campaign.load_case(path)
+        kf = None
+        if case.knots is not None:
+            kf = np.full(case.nframes, np.nan)
+            kf[np.asarray(case.knots["frame_index"], dtype=int)] = case.knots["kf"]
+        label = f"{os.path.basename(os.path.dirname(path))}/{case.name}"
+        for w in shape.window_means(case.time, case.observables, args.width, kf, case.modes,
+                                    offset, args.t_from, args.t_to):
+            rows.append((w["t0"], k, label, w))
+    head = ("| window | case | frames | R_g | a | b | c | a/b | mean abs(cos theta) | close pairs "
+            "| k_f mean | k_f max | mode I | mode II |")
+    lines = [head, "|" + "---|" * head.count(" | ") + "---|"]
+    for t0, _, label, w in sorted(rows, key=lambda r: (r[0], r[1])):
+        vals = [f"{w[c]:.2f}" if c in ("c", "a_over_b", "abs_cos_theta", "kf_mean", "kf_max")
+                else f"{w[c]:.1f}" for c in shape.WINDOW_COLUMNS[1:10]]
+        modes = ["-" if math.isnan(w[c]) else str(w[c]) for c in ("mode_1", "mode_2")]
+        lines.append(f"| {t0:g}-{w['t1']:g} | {label} | {w['frames']} | " + " | ".join(vals + modes)
+                     + " |")
+    return lines
+
+
 def _campaign(argv: Argv) -> int:
     from . import campaign
     p = make_parser("knotflow-campaign",
@@ -538,6 +569,20 @@ def _campaign(argv: Argv) -> int:
     md.add_argument("--analyze-json", required=True, metavar="TEXT",
                     help="what knotflow-analyze LEDGER/SWEEP/CASE.csv --json printed")
     md.add_argument("--sweep", required=True, help="the sweep's name")
+    wn = sub.add_parser("windows", help="means of the shape observables, k_f and the per-frame "
+                        "modes over consecutive time windows of cases (a markdown table, one "
+                        "row per window and case)")
+    wn.add_argument("cases", nargs="+", metavar="CASE",
+                    help="ledger entries (<ledger>/<sweep>/<case>.json) or case files (.h5)")
+    wn.add_argument("--width", type=float, required=True, help="the window length")
+    wn.add_argument("--offset", type=float, nargs="+", metavar="T",
+                    help="added to each case's time (one value per case; default 0): a run "
+                    "started from a frame of another at its time")
+    wn.add_argument("--from", dest="t_from", type=float, metavar="T",
+                    help="the first window's start (default: each case's first time rounded "
+                    "down to a multiple of --width)")
+    wn.add_argument("--to", dest="t_to", type=float, metavar="T",
+                    help="the last time included (default: each case's last)")
     for q in (pl, dg, st, md):
         q.add_argument("--ledger", required=True, help="the ledger directory")
     for q in (pl, dg):
@@ -557,6 +602,9 @@ def _campaign(argv: Argv) -> int:
                                 args.positions_every, source)
             print(f"{args.sweep}/{e['case']}: {e['status']}, t = {e['t_reached']:g} of "
                   f"{e['t_end']:g}, {len(e['segments'])} segment(s)")
+    elif args.command == "windows":
+        for line in _window_table(args):
+            print(line)
     elif args.command == "mode":
         e = campaign.set_case_mode(args.ledger, args.sweep, args.case, args.analyze_json)
         print(f"{args.sweep}/{args.case}: case mode {e['case_mode']['mode']} of "

@@ -6,6 +6,7 @@ docs/analysis.md) and read from /analysis/shape; this module computes no mode.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -106,3 +107,57 @@ def spectra(time: np.ndarray, positions: np.ndarray, obs: dict) -> dict:
     return {"frequency": f, "power_rg": p_rg, "power_phi": p_phi, "power_end_to_end": p_ee,
             "dominant_period_rg": per_rg, "dominant_period_phi": per_phi,
             "dominant_period_end_to_end": per_ee}
+
+
+#: The columns of `window_means`, in table order.
+WINDOW_COLUMNS = ("frames", "rg", "a", "b", "c", "a_over_b", "abs_cos_theta", "close_pairs",
+                  "kf_mean", "kf_max", "mode_1", "mode_2")
+
+
+def window_means(time, obs: dict, width: float, kf=None, modes=None, offset: float = 0.0,
+                 t_from: float | None = None, t_to: float | None = None) -> list:
+    """Means of the shape observables over consecutive windows of the case time offset + time.
+
+    Windows are [t0, t0 + width) with t0 = t_from + k width (t_from default: the first time
+    rounded down to a multiple of width) below t_to (default: the last time); the last one
+    also holds the frames at its end up to t_to (so 0..2000 in windows of 100 is 20 windows,
+    t = 2000 in the last). A window without frames is left out. Per window (WINDOW_COLUMNS):
+    the number of frames, the means of R_g, a, b, c, a/b and |cos theta| and of the close
+    pairs, the mean and maximum of k_f over the frames that have one (NaN if none: kf None or
+    all NaN), and the frames of mode I and mode II (NaN when modes is None). Raises ValueError
+    on a width that is not positive and finite or on non-finite times.
+    """
+    if not (math.isfinite(width) and width > 0.0):
+        raise ValueError(f"window width {width}: must be positive and finite")
+    t = offset + np.asarray(time, dtype=float)
+    if len(t) == 0:
+        return []
+    if not np.all(np.isfinite(t)):
+        raise ValueError("non-finite frame times")
+    start = math.floor(t[0] / width) * width if t_from is None else float(t_from)
+    stop = t[-1] if t_to is None else float(t_to)
+    kfa = None if kf is None else np.asarray(kf, dtype=float)
+    out = []
+    k = 0
+    while start + k * width < stop or k == 0:
+        t0 = start + k * width
+        k += 1
+        last = t0 + width >= stop
+        m = (t >= t0) & ((t < t0 + width) | last) & (t <= stop)
+        if not m.any():
+            continue
+        row = {"t0": t0, "t1": t0 + width, "frames": int(m.sum())}
+        for key in ("rg", "a", "b", "c", "close_pairs"):
+            row[key] = float(np.mean(np.asarray(obs[key], dtype=float)[m]))
+        row["a_over_b"] = float(np.mean(np.asarray(obs["a"], dtype=float)[m]
+                                        / np.asarray(obs["b"], dtype=float)[m]))
+        row["abs_cos_theta"] = float(np.mean(np.abs(np.cos(np.asarray(obs["theta"],
+                                                                       dtype=float)[m]))))
+        kw = np.array([]) if kfa is None else kfa[m][np.isfinite(kfa[m])]
+        row["kf_mean"] = float(kw.mean()) if kw.size else math.nan
+        row["kf_max"] = float(kw.max()) if kw.size else math.nan
+        for mode in (1, 2):
+            row[f"mode_{mode}"] = (math.nan if modes is None
+                                   else int(np.count_nonzero(np.asarray(modes)[m] == mode)))
+        out.append(row)
+    return out
