@@ -15,8 +15,9 @@
 #               finished; killing it loses nothing but the frames since the last digest.
 #   --digest    then (with --no-run: only) add every case file here to the ledger: a copy,
 #               k_f of every frame (knotflow-analyze, closures of scripts/study_sweeps.sh),
-#               knotflow-campaign digest. Run it before the machine goes (it may run beside
-#               the campaign: it reads copies), then commit the ledger.
+#               knotflow-campaign digest; a file unchanged since its last digest is skipped.
+#               Run it before the machine goes (it may run beside the campaign: it reads
+#               copies), then commit the ledger.
 #   --digest-every  while the workers run, also digest every MIN minutes (decimals allowed; one at a
 #               time, in the background of the run), so that a machine that goes without
 #               warning loses at most MIN minutes of progress when the ledger lives on storage
@@ -117,6 +118,17 @@ digest_all() {
     esac
     for f in "$results/$sweep"/*.h5 "$results/$sweep"/continued/*.h5; do
       rel="${f#"$results"/}"
+      base="$(basename "$f" .h5)"
+      name="${base%_from*}"
+      # A file unchanged (size, modification time to the ns) since its last digest into this
+      # ledger is not copied and analysed again: a finished case costs one digest, not one per
+      # digest. The stamp is taken before the copy, so a write during the copy makes it stale.
+      stamp="$(stat -c '%s %.9Y' "$f") $ledger"
+      if [ -f "$copies/$rel.digested" ] && [ "$(cat "$copies/$rel.digested")" = "$stamp" ] \
+          && [ -f "$ledger/$sweep/$name.json" ]; then
+        kf_log "unchanged since its last digest: $f"
+        continue
+      fi
       mkdir -p "$copies/$(dirname "$rel")"
       cp "$f" "$copies/$rel.tmp" && mv "$copies/$rel.tmp" "$copies/$rel"
       # A file killed before its first frame was whole has nothing to digest (the next run
@@ -131,11 +143,12 @@ digest_all() {
         continue
       fi
       # The case mode of all its rows (a continuation's file holds only its own frames).
-      base="$(basename "$f" .h5)"
-      name="${base%_from*}"
-      knotflow-campaign mode --ledger "$ledger" --sweep "$sweep" --case "$name" \
-        --analyze-json "$("$analyze" "$ledger/$sweep/$name.csv" --json)" \
-        || kf_log "case mode of $sweep/$name not recorded (above)"
+      if knotflow-campaign mode --ledger "$ledger" --sweep "$sweep" --case "$name" \
+          --analyze-json "$("$analyze" "$ledger/$sweep/$name.csv" --json)"; then
+        printf '%s\n' "$stamp" >"$copies/$rel.digested"
+      else
+        kf_log "case mode of $sweep/$name not recorded (above)"
+      fi
     done
   done
   scenes=()

@@ -14,7 +14,9 @@
 #   3. a third run has nothing to do and changes no ledger row;
 #   4. --digest-every: the probe's ledger entry is removed and its case run again (no --digest)
 #      by a knotflow that waits 15 s after the case before it exits; the digest every 3 s puts
-#      the finished case into the ledger while the run goes on, and the run ends with its worker.
+#      the finished case into the ledger while the run goes on, and the run ends with its worker;
+#   5. a digest skips a file unchanged since its last digest (the ledger stays as it is) and
+#      digests it again once it has changed (touched).
 # Exit status 77 (ctest: skipped) without the system's numpy/h5py/matplotlib for the tools.
 # Usage: check_campaign_script.sh SOURCE_DIR BUILD_DIR WORKDIR
 set -uo pipefail
@@ -154,4 +156,24 @@ KNOTFLOW_BUILD_DIR="${slow}" bash scripts/campaign.sh --digest-every 0 >"${work}
   && fail "--digest-every 0 accepted"
 grep -q "digest-every needs a number of minutes" "${work}/bad.log" || fail "--digest-every 0: $(cat "${work}/bad.log")"
 
-echo "campaign.sh: killed at t = ${t_kill}, continued from the ledger on a new results directory, every case finished once; a digest every 3 s during a run"
+# 5. A digest skips the files unchanged since their last digest, and only those.
+bash scripts/campaign.sh --no-run --digest >"${work}/digest5a.log" 2>&1 \
+  || fail "campaign.sh --no-run --digest (5): $(tail -n 5 "${work}/digest5a.log")"
+files="$(find results -path results/ledger_copies -prune -o -name '*.h5' -print | sort)"
+[ "$(wc -l <<<"${files}")" -eq 1 ] || fail "step 5 expects the probe's file alone: ${files}"
+before="$(cat "${ledger}"/*/*.csv "${ledger}"/*/*.json | md5sum)"
+bash scripts/campaign.sh --no-run --digest >"${work}/digest5b.log" 2>&1 \
+  || fail "campaign.sh --no-run --digest (5, again): $(tail -n 5 "${work}/digest5b.log")"
+grep -qx "==> unchanged since its last digest: ${files}" "${work}/digest5b.log" \
+  || fail "an unchanged file was digested again: $(cat "${work}/digest5b.log")"
+[ "$(cat "${ledger}"/*/*.csv "${ledger}"/*/*.json | md5sum)" = "${before}" ] \
+  || fail "skipping an unchanged file changed the ledger"
+touch "${files}"
+bash scripts/campaign.sh --no-run --digest >"${work}/digest5c.log" 2>&1 \
+  || fail "campaign.sh --no-run --digest (5, touched): $(tail -n 5 "${work}/digest5c.log")"
+grep -q "unchanged since its last digest" "${work}/digest5c.log" \
+  && fail "a changed file was skipped: $(cat "${work}/digest5c.log")"
+grep -q "^candycane_epslub_multipole/A1.00: finished" "${work}/digest5c.log" \
+  || fail "the changed file was not digested: $(cat "${work}/digest5c.log")"
+
+echo "campaign.sh: killed at t = ${t_kill}, continued from the ledger on a new results directory, every case finished once; a digest every 3 s during a run; unchanged files skipped"
