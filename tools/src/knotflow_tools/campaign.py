@@ -151,14 +151,23 @@ def _column(values, n) -> np.ndarray:
     return np.full(n, np.nan) if values is None else np.asarray(values, dtype=float)[:n]
 
 
+def frame_kf(case) -> np.ndarray | None:
+    """k_f of every frame of a case (/analysis/knots; NaN at the frames not analysed), None
+    when the case has no /analysis/knots."""
+    if case.knots is None:
+        return None
+    kf = np.full(case.nframes, np.nan)
+    kf[np.asarray(case.knots["frame_index"], dtype=int)] = case.knots["kf"]
+    return kf
+
+
 def frame_rows(case, offset: float) -> np.ndarray:
     """FRAME_COLUMNS of every frame of an analysed case (k_f and modes from /analysis; NaN
     where the file has none), at time offset + t."""
     n = case.nframes
-    if case.knots is None:
+    kf = frame_kf(case)
+    if kf is None:
         raise ValueError(f"{case.path}: no /analysis/knots (run knotflow-analyze first)")
-    kf = np.full(n, np.nan)
-    kf[np.asarray(case.knots["frame_index"], dtype=int)] = case.knots["kf"]
     obs = case.observables
     diag = case.diagnostics or {}
     st = case.stresslet or {}

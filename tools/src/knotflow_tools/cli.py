@@ -522,13 +522,10 @@ def _window_table(args) -> list:
     rows = []
     for k, (path, offset) in enumerate(zip(args.cases, offsets)):
         case = campaign.load_case(path)
-        kf = None
-        if case.knots is not None:
-            kf = np.full(case.nframes, np.nan)
-            kf[np.asarray(case.knots["frame_index"], dtype=int)] = case.knots["kf"]
         label = f"{os.path.basename(os.path.dirname(path))}/{case.name}"
-        for w in shape.window_means(case.time, case.observables, args.width, kf, case.modes,
-                                    offset, args.t_from, args.t_to):
+        for w in shape.window_means(case.time, case.observables, args.width,
+                                    campaign.frame_kf(case), case.modes, offset, args.t_from,
+                                    args.t_to):
             rows.append((w["t0"], k, label, w))
     head = ("| window | case | frames | R_g | a | b | c | a/b | mean abs(cos theta) | close pairs "
             "| k_f mean | k_f max | mode I | mode II |")

@@ -137,6 +137,10 @@ def window_means(time, obs: dict, width: float, kf=None, modes=None, offset: flo
     start = math.floor(t[0] / width) * width if t_from is None else float(t_from)
     stop = t[-1] if t_to is None else float(t_to)
     kfa = None if kf is None else np.asarray(kf, dtype=float)
+    md = None if modes is None else np.asarray(modes)
+    o = {key: np.asarray(obs[key], dtype=float) for key in ("rg", "a", "b", "c", "close_pairs")}
+    a_over_b = o["a"] / o["b"]
+    abs_cos = np.abs(np.cos(np.asarray(obs["theta"], dtype=float)))
     out = []
     k = 0
     while start + k * width < stop or k == 0:
@@ -147,17 +151,15 @@ def window_means(time, obs: dict, width: float, kf=None, modes=None, offset: flo
         if not m.any():
             continue
         row = {"t0": t0, "t1": t0 + width, "frames": int(m.sum())}
-        for key in ("rg", "a", "b", "c", "close_pairs"):
-            row[key] = float(np.mean(np.asarray(obs[key], dtype=float)[m]))
-        row["a_over_b"] = float(np.mean(np.asarray(obs["a"], dtype=float)[m]
-                                        / np.asarray(obs["b"], dtype=float)[m]))
-        row["abs_cos_theta"] = float(np.mean(np.abs(np.cos(np.asarray(obs["theta"],
-                                                                       dtype=float)[m]))))
+        for key, values in o.items():
+            row[key] = float(np.mean(values[m]))
+        row["a_over_b"] = float(np.mean(a_over_b[m]))
+        row["abs_cos_theta"] = float(np.mean(abs_cos[m]))
         kw = np.array([]) if kfa is None else kfa[m][np.isfinite(kfa[m])]
         row["kf_mean"] = float(kw.mean()) if kw.size else math.nan
         row["kf_max"] = float(kw.max()) if kw.size else math.nan
         for mode in (1, 2):
-            row[f"mode_{mode}"] = (math.nan if modes is None
-                                   else int(np.count_nonzero(np.asarray(modes)[m] == mode)))
+            row[f"mode_{mode}"] = (math.nan if md is None
+                                   else int(np.count_nonzero(md[m] == mode)))
         out.append(row)
     return out
