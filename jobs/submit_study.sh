@@ -5,7 +5,8 @@
 # and analyses exactly these sweeps:
 #   rpy        trefoil_table2 (29 cases), candycane (3 cases)
 #   multipole  trefoil_table2_multipole (29), candycane_multipole (3), candycane_seeds_multipole (4),
-#              candycane_epslub_multipole (1, the probe of issue 11)
+#              candycane_epslub_multipole (1) and candycane_order3_multipole (1), the probes of
+#              issue 11
 #   bash jobs/submit_study.sh slurm|pbs [rpy|multipole] [options]
 # Options:
 #   --time-scale F       a shortened trial: every t_end times F (0 < F <= 1), into its own

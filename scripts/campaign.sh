@@ -23,7 +23,8 @@
 #               warning loses at most MIN minutes of progress when the ledger lives on storage
 #               that outlasts it (the repository's checkout); commit the ledger as before.
 #   --workdir   where knotflow runs (default: the repository): the case files go where the
-#               inputs say, DIR/results/<sweep>/; --ledger: default
+#               inputs say, DIR/results/<sweep>/ (and DIR/inputs, if missing, becomes a link to
+#               the repository's inputs, for their coordinate files); --ledger: default
 #               docs/reproduction_multipole/ledger of the repository.
 # Positions kept in the ledger: the candy-canes and the probe every 10 time units (the knot
 # matrices of the slipknot search, snapshots), the further rotations every 50, the trefoils
@@ -75,6 +76,9 @@ kf_study_arrays multipole 1 || exit 1
 mkdir -p "$workdir/results" "$ledger"
 ledger="$(cd "$ledger" && pwd)"
 # Everything from here on in the work directory: the inputs' output directories are relative.
+# Their coordinate files are relative to the repository's top (where they are run by hand): in
+# another work directory a link inputs -> the repository's inputs resolves them.
+[ -e "$workdir/inputs" ] || ln -s "$KF_ROOT/inputs" "$workdir/inputs"
 cd "$workdir"
 results=results
 

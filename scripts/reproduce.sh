@@ -10,9 +10,10 @@
 #   --hydro multipole  the campaign of issue 11 with the study's model (multipole L = 2 +
 #                      lubrication): inputs/trefoil_table2_multipole.nml, candycane_multipole.nml
 #                      and candycane_seeds_multipole.nml (A = 1, 3 from two further rotations:
-#                      part of this study, not an extra) and the probe
-#                      candycane_epslub_multipole.nml (A = 1 with eps_lub = 1e-2); hours per
-#                      case (a cluster job: jobs/README.md).
+#                      part of this study, not an extra) and the probes
+#                      candycane_epslub_multipole.nml (A = 1 with eps_lub = 1e-2) and
+#                      candycane_order3_multipole.nml (A = 1 with L = 3 from t = 1100); hours
+#                      per case (a cluster job: jobs/README.md).
 #   --no-run           only analyse what the sweeps already wrote (e.g. after cluster jobs).
 #   --no-extras        (rpy) skip the two checks beyond the study's inputs: the candy-cane with 5
 #                      random rotations (inputs/candycane_seeds.nml) and Table 2 with the open

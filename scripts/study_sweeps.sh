@@ -27,8 +27,10 @@
 #            and trefoil_table2_p24 are checks beyond the study's inputs.
 # multipole: the campaign of issue 11: trefoil_table2_multipole (with the k_f(0) = 0.98
 #            trefoil), candycane_multipole, candycane_seeds_multipole (A = 1, 3 from two
-#            further rotations) and the probe candycane_epslub_multipole (A = 1 with
-#            eps_lub = 1e-2) - the last two are part of the study, whatever EXTRAS says.
+#            further rotations) and the probes candycane_epslub_multipole (A = 1 with
+#            eps_lub = 1e-2) and candycane_order3_multipole (A = 1 with L = 3 from t = 1100 of
+#            the L = 2 run, after the window probe candycane_order3_window_multipole that is run
+#            by hand) - the last three are part of the study, whatever EXTRAS says.
 
 kf_study_sweeps() {
   local hydro="$1" extras="${2:-1}"
@@ -41,7 +43,8 @@ kf_study_sweeps() {
       ;;
     multipole)
       printf '%s\n' "trefoil trefoil_table2_multipole" "candycane candycane_multipole" \
-                    "ensemble candycane_seeds_multipole" "probe candycane_epslub_multipole"
+                    "ensemble candycane_seeds_multipole" "probe candycane_epslub_multipole" \
+                    "probe candycane_order3_multipole"
       ;;
     *)
       printf 'ERROR: hydro %s is unknown (allowed: rpy, multipole)\n' "$hydro" >&2

@@ -16,7 +16,10 @@
 #      by a knotflow that waits 15 s after the case before it exits; the digest every 3 s puts
 #      the finished case into the ledger while the run goes on, and the run ends with its worker;
 #   5. a digest skips a file unchanged since its last digest (the ledger stays as it is) and
-#      digests it again once it has changed (touched).
+#      digests it again once it has changed (touched);
+#   6. --workdir elsewhere: the second probe (candycane_order3_multipole, a chain from a
+#      coordinate file named relative to the repository's top, as inputs/ does) runs there
+#      through the link DIR/inputs the script makes, and is digested into the ledger again.
 # Exit status 77 (ctest: skipped) without the system's numpy/h5py/matplotlib for the tools.
 # Usage: check_campaign_script.sh SOURCE_DIR BUILD_DIR WORKDIR
 set -uo pipefail
@@ -32,6 +35,11 @@ kf_small_sweep trefoil_table2_multipole "shape = 'trefoil'" "&sweep orientation 
 kf_small_sweep candycane_multipole "shape = 'candycane'" "&sweep bending_a = 1.0 /" 20.0
 kf_small_sweep candycane_seeds_multipole "shape = 'candycane'" "&sweep bending_a = 1.0, 3.0, seed = 1 /" 2.0
 kf_small_sweep candycane_epslub_multipole "shape = 'candycane'" "&sweep bending_a = 1.0 /" 2.0
+mkdir -p inputs/configs
+awk 'BEGIN { for (i = 0; i < 30; i++) printf "%.4f 0.0 %.4f\n", 1.02 * i, 0.3 * sin(i / 3.0) }' \
+  >inputs/configs/small_chain.xyz
+kf_small_sweep candycane_order3_multipole "shape = 'file', coordinate_file = 'inputs/configs/small_chain.xyz'" \
+  "&sweep bending_a = 1.0 /" 2.0
 ledger="docs/reproduction_multipole/ledger"
 
 # 1. Killed part-way, digested.
@@ -64,7 +72,7 @@ bash scripts/campaign.sh --workers 2 --digest >"${work}/run2.log" 2>&1 \
   || fail "campaign.sh --digest after the loss: $(tail -n 10 "${work}/run2.log")"
 grep -q "candycane_multipole/A1.00 (continue: results/candycane_multipole/continued/A1.00_from" "${work}/run2.log" \
   || fail "A1.00 was not continued from the ledger: $(cat "${work}/run2.log")"
-grep -q "^campaign: 6 of 6 cases finished; about 0.0 h of one worker left" "${work}/run2.log" \
+grep -q "^campaign: 7 of 7 cases finished; about 0.0 h of one worker left" "${work}/run2.log" \
   || fail "knotflow-campaign status after the campaign: $(tail -n 8 "${work}/run2.log")"
 "$py" - "$ledger" <<'PY' || fail "the ledger after the loss is not the whole campaign"
 import sys
@@ -74,7 +82,7 @@ ledger = sys.argv[1]
 cases = {"trefoil_table2_multipole": {"ora": 3.0, "orc": 3.0},
          "candycane_multipole": {"A1.00": 20.0},
          "candycane_seeds_multipole": {"A1.00_s1": 2.0, "A3.00_s1": 2.0},
-         "candycane_epslub_multipole": {"A1.00": 2.0}}
+         "candycane_epslub_multipole": {"A1.00": 2.0}, "candycane_order3_multipole": {"A1.00": 2.0}}
 for sweep, names in cases.items():
     for name, t_end in names.items():
         e = campaign.load(ledger, sweep, name)
@@ -176,4 +184,14 @@ grep -q "unchanged since its last digest" "${work}/digest5c.log" \
 grep -q "^candycane_epslub_multipole/A1.00: finished" "${work}/digest5c.log" \
   || fail "the changed file was not digested: $(cat "${work}/digest5c.log")"
 
-echo "campaign.sh: killed at t = ${t_kill}, continued from the ledger on a new results directory, every case finished once; a digest every 3 s during a run; unchanged files skipped"
+# 6. Another work directory: its inputs link resolves the probe's coordinate file.
+rm -rf "${ledger}/candycane_order3_multipole"
+bash scripts/campaign.sh --workers 1 --digest --workdir "${work}/elsewhere" >"${work}/run6.log" 2>&1 \
+  || fail "campaign.sh --workdir: $(tail -n 5 "${work}/run6.log")"
+[ "$(readlink "${work}/elsewhere/inputs")" = "${proj}/inputs" ] || fail "no link ${work}/elsewhere/inputs -> ${proj}/inputs"
+grep -q "^==> 1 case(s) to run" "${work}/run6.log" || fail "not the second probe alone: $(cat "${work}/run6.log")"
+[ -f "${work}/elsewhere/results/candycane_order3_multipole/A1.00.h5" ] || fail "the probe did not run in the work directory"
+grep -q "^candycane_order3_multipole/A1.00: finished, t = 2 of 2" "${work}/run6.log" \
+  || fail "the probe run elsewhere is not in the ledger: $(cat "${work}/run6.log")"
+
+echo "campaign.sh: killed at t = ${t_kill}, continued from the ledger on a new results directory, every case finished once; a digest every 3 s during a run; unchanged files skipped; a chain from a coordinate file in another work directory"

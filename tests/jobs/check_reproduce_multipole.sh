@@ -9,8 +9,8 @@
 #     subchain) every 10 time units: frames 0, 10, 20 of a run to t = 20 without close pairs;
 #   - reproduction_multipole/results.json lists the ensemble's cases and holds the three-column
 #     comparison (the RPY results.json of docs/reproduction*); nothing else is analysed;
-#   - the probe (candycane_epslub_multipole) has k_f on every frame (1000 closures) and its own
-#     comparison, reproduction_multipole_candycane_epslub_multipole/results.json, as a
+#   - each probe (candycane_epslub_multipole, candycane_order3_multipole) has k_f on every frame
+#     (1000 closures) and its own comparison, reproduction_multipole_<probe>/results.json, as a
 #     candy-cane sweep of one case.
 # The case files are RPY runs (seconds): the analysis does not depend on the model.
 # Exit status 77 (ctest: skipped) without the system's numpy/h5py/matplotlib for the tools.
@@ -34,6 +34,7 @@ scene trefoil_table2_multipole "shape = 'trefoil'" "&sweep orientation = 'a', 'c
 scene candycane_seeds_multipole "shape = 'candycane'" "&sweep bending_a = 1.0, 3.0 /" 2.0
 scene candycane_multipole "shape = 'candycane'" "&sweep bending_a = 1.0 /" 20.0
 scene candycane_epslub_multipole "shape = 'candycane'" "&sweep bending_a = 1.0 /" 2.0
+scene candycane_order3_multipole "shape = 'candycane'" "&sweep bending_a = 1.0 /" 3.0
 
 KNOTFLOW_NP=1 KNOTFLOW_NO_INSTALL=1 bash scripts/reproduce.sh --hydro multipole --no-run --no-build \
   >"${work}/reproduce.log" 2>&1 || fail "reproduce.sh --hydro multipole: $(tail -n 15 "${work}/reproduce.log")"
@@ -44,7 +45,7 @@ import h5py
 import numpy as np
 res = sys.argv[1]
 for sweep, n in (("trefoil_table2_multipole", 2), ("candycane_seeds_multipole", 2),
-                 ("candycane_epslub_multipole", 1)):
+                 ("candycane_epslub_multipole", 1), ("candycane_order3_multipole", 1)):
     files = sorted(glob.glob(os.path.join(res, sweep, "*.h5")))
     assert len(files) == n, (sweep, files)
     for path in files:
@@ -56,7 +57,7 @@ for sweep, n in (("trefoil_table2_multipole", 2), ("candycane_seeds_multipole", 
             if sweep.startswith("trefoil"):
                 last = h["analysis/knot_matrix"][f"frame_{nframes - 1}"]
                 assert int(last.attrs["closures"]) == 100, (path, dict(last.attrs))
-print("stored: 1000 closures on every frame of the trefoils, the ensemble and the probe")
+print("stored: 1000 closures on every frame of the trefoils, the ensemble and the probes")
 (cane,) = glob.glob(os.path.join(res, "candycane_multipole", "*.h5"))
 with h5py.File(cane, "r") as h:
     nframes = h["frames/time"].shape[0]
@@ -76,12 +77,14 @@ cmp = out.get("comparison", {})
 assert set(cmp) == {"trefoil", "candycane"}, sorted(cmp)
 assert len(cmp["trefoil"]["columns"]) == 3 and len(cmp["candycane"]["columns"]) == 3, cmp
 print("results.json: the ensemble's 2 cases and the three-column comparison")
-with open(os.path.join(res, "reproduction_multipole_candycane_epslub_multipole", "results.json")) as f:
-    probe = json.load(f)
-assert [c["case"] for c in probe.get("candycane", [])] == ["A1.00"], probe.get("candycane")
-assert "ensemble" not in probe and "trefoil" not in probe, sorted(probe)
-print("the probe: its own results.json, one candy-cane case")
+for name, t_end in (("candycane_epslub_multipole", 2.0), ("candycane_order3_multipole", 3.0)):
+    with open(os.path.join(res, f"reproduction_multipole_{name}", "results.json")) as f:
+        probe = json.load(f)
+    assert [c["case"] for c in probe.get("candycane", [])] == ["A1.00"], (name, probe.get("candycane"))
+    assert probe["candycane"][0]["t_reached"] == t_end, (name, probe["candycane"][0]["t_reached"])
+    assert "ensemble" not in probe and "trefoil" not in probe, (name, sorted(probe))
+print("each probe: its own results.json, one candy-cane case")
 PY
 ! grep -qE "results/(trefoil_table2|candycane|candycane_seeds|trefoil_table2_p24)/" "${work}/reproduce.log" \
   || fail "the multipole analysis looked at RPY sweeps: $(grep -E 'results/(trefoil_table2|candycane)' "${work}/reproduce.log" | head -n 3)"
-echo "reproduce.sh --hydro multipole: trefoils, the rotations ensemble and the probe with 1000 closures on every frame"
+echo "reproduce.sh --hydro multipole: trefoils, the rotations ensemble and the probes with 1000 closures on every frame"

@@ -14,10 +14,10 @@
 #   4. a sweep whose case fails for good (max_steps): exit status 3, the follow-up cancelled;
 #   5. jobs/submit_study.sh with a refused analysis job (too many tasks): exit 2, no job queued;
 #   5b. the multipole study submitted held (--hold; its runs take hours): a sweep job for each of
-#      its four sweeps (trefoil_table2_multipole, candycane_multipole, candycane_seeds_multipole,
-#      candycane_epslub_multipole, the list of issue 11 written out here) with its scaled input
-#      and --ntasks-*, all held, and the analysis job depending on all four; then cancelled,
-#      nothing ran;
+#      its five sweeps (trefoil_table2_multipole, candycane_multipole, candycane_seeds_multipole,
+#      candycane_epslub_multipole, candycane_order3_multipole, the list of issue 11 written out
+#      here) with its scaled input and --ntasks-*, all held, and the analysis job depending on all
+#      five; then cancelled, nothing ran;
 #   6. the shortened study (--time-scale) with a follow-up per sweep: in its own directory, the
 #      analysis job starts only after every sweep job (follow-ups included) has ended, COMPLETED,
 #      analysing exactly the two sweeps it submitted (results.json); nothing written to results/;
@@ -187,24 +187,25 @@ grep -q "refuses the analysis job" <<<"${out}" || fail "no reason given: ${out}"
 [[ "$(squeue -h | wc -l)" -eq "${before}" ]] || fail "submit_study.sh left jobs queued: $(squeue)"
 log "submit_study.sh with a refused analysis job: exit 2, nothing queued ($(tail -n 1 <<<"${out}"))"
 
-# --- 5b. the multipole study, held: four sweep jobs, the analysis after all of them ------------
+# --- 5b. the multipole study, held: five sweep jobs, the analysis after all of them ------------
 out=$(as_user "bash jobs/submit_study.sh slurm multipole --time-scale 0.001 --hold --ntasks-trefoil 1 --ntasks-ensemble 1 --ntasks-analysis 1 2>&1") \
   || fail "submit_study.sh slurm multipole --hold: ${out}"
 mp="results/study_multipole_t0.001"
 held=()
-for s in trefoil_table2_multipole candycane_multipole candycane_seeds_multipole candycane_epslub_multipole; do
+for s in trefoil_table2_multipole candycane_multipole candycane_seeds_multipole candycane_epslub_multipole candycane_order3_multipole; do
   j=$(sed -n "s/^submitted: sweep ${s} \([0-9]*\)\$/\1/p" <<<"${out}")
   [[ -n "${j}" ]] || fail "the multipole study submitted no ${s} sweep: ${out}"
   held+=("${j}")
   [[ "$(scontrol show job "${j}" | grep -o 'Command=.*')" == *"/jobs/slurm_sweep.sh ${mp}/inputs/${s}.nml" ]] \
     || fail "job ${j} does not run the sweep ${mp}/inputs/${s}.nml: $(scontrol show job "${j}" | grep Command)"
   [[ "$(state "${j}")" == PENDING && "$(field "${j}" Reason)" == JobHeldUser ]] || fail "sweep job ${j} is not held: $(state "${j}") $(field "${j}" Reason)"
-  want=1   # --ntasks-trefoil 1, --ntasks-ensemble 1; the candy-canes and the probe the script's 2 per node
-  [[ "${s}" == candycane_multipole || "${s}" == candycane_epslub_multipole ]] && want=2
+  want=1   # --ntasks-trefoil 1, --ntasks-ensemble 1; the candy-canes and the probes the script's 2 per node
+  [[ "${s}" == candycane_multipole || "${s}" == candycane_*_multipole && "${s}" != candycane_seeds_multipole ]] && want=2
   [[ "$(field "${j}" NumTasks)" == "${want}" ]] || fail "sweep job ${j} (${s}): NumTasks=$(field "${j}" NumTasks), expected ${want}"
-  grep -q "t_end = $([[ ${s} == trefoil* ]] && echo 1 || echo 2)," "${proj}/${mp}/inputs/${s}.nml" || fail "${mp}/inputs/${s}.nml: t_end not scaled"
+  case "${s}" in trefoil*) te=1 ;; candycane_order3_multipole) te=0.9 ;; *) te=2 ;; esac
+  grep -q "t_end = ${te}," "${proj}/${mp}/inputs/${s}.nml" || fail "${mp}/inputs/${s}.nml: t_end not scaled"
 done
-[[ "$(grep -c '^submitted: sweep ' <<<"${out}")" -eq 4 ]] || fail "the multipole study submitted other sweeps too: ${out}"
+[[ "$(grep -c '^submitted: sweep ' <<<"${out}")" -eq 5 ]] || fail "the multipole study submitted other sweeps too: ${out}"
 ma=$(sed -n 's/^submitted: analysis \([0-9]*\) .*/\1/p' <<<"${out}")
 [[ -n "${ma}" ]] || fail "no analysis job: ${out}"
 dep="$(field "${ma}" Dependency)"
@@ -215,7 +216,7 @@ for j in "${held[@]}" "${ma}"; do
   wait_end "${j}" 30 >/dev/null
   [[ "$(state "${j}")" == CANCELLED && "$(field "${j}" RunTime)" == 00:00:00 ]] || fail "held job ${j} ran or was not cancelled: $(state "${j}")"
 done
-log "multipole study (held): sweeps ${held[*]} (trefoil_table2_multipole, candycane_multipole, candycane_seeds_multipole, candycane_epslub_multipole), analysis ${ma} after all four; cancelled unrun"
+log "multipole study (held): sweeps ${held[*]} (trefoil_table2_multipole, candycane_multipole, candycane_seeds_multipole, candycane_epslub_multipole, candycane_order3_multipole), analysis ${ma} after all five; cancelled unrun"
 
 # --- 6. the shortened study with its analysis job ---------------------------------------------
 out=$(as_user "bash jobs/submit_study.sh slurm rpy --time-scale 0.004 --ntasks-trefoil 2 --ntasks-candycane 1 --ntasks-analysis 2 --max-resubmits 1 --quick-analysis 2>&1") \

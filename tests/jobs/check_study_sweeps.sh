@@ -4,7 +4,8 @@
 # SLURM). Expected lists from issue 11 and docs/REPRODUCTION.md, written out here:
 #   1. scripts/reproduce.sh --list-sweeps: rpy = trefoil_table2, candycane (+ candycane_seeds,
 #      trefoil_table2_p24 unless --no-extras); multipole = trefoil_table2_multipole,
-#      candycane_multipole, candycane_seeds_multipole, with or without --no-extras;
+#      candycane_multipole, candycane_seeds_multipole and the probes candycane_epslub_multipole,
+#      candycane_order3_multipole, with or without --no-extras;
 #   2. sourcing scripts/study_sweeps.sh sets no variable and runs no command (a login node);
 #   3. submit_study.sh pbs multipole --time-scale: one sweep job per multipole sweep, each with
 #      its scaled input (t_end x F, output in the trial's directory) and its --ntasks-*; the
@@ -29,14 +30,14 @@ check_list() {   # check_list "EXPECTED" ARGS...
 }
 check_list "trefoil_table2 candycane candycane_seeds trefoil_table2_p24"
 check_list "trefoil_table2 candycane" --no-extras
-check_list "trefoil_table2_multipole candycane_multipole candycane_seeds_multipole candycane_epslub_multipole" --hydro multipole
-check_list "trefoil_table2_multipole candycane_multipole candycane_seeds_multipole candycane_epslub_multipole" --hydro multipole --no-extras
+check_list "trefoil_table2_multipole candycane_multipole candycane_seeds_multipole candycane_epslub_multipole candycane_order3_multipole" --hydro multipole
+check_list "trefoil_table2_multipole candycane_multipole candycane_seeds_multipole candycane_epslub_multipole candycane_order3_multipole" --hydro multipole --no-extras
 out=$(bash "${src}/scripts/reproduce.sh" --list-sweeps --hydro lattice 2>&1) && fail "an unknown --hydro was accepted: ${out}"
 [[ "${out}" == *"lattice is unknown (allowed: rpy, multipole)"* ]] || fail "unknown --hydro: ${out}"
-for s in trefoil_table2_multipole candycane_multipole candycane_seeds_multipole candycane_epslub_multipole; do
+for s in trefoil_table2_multipole candycane_multipole candycane_seeds_multipole candycane_epslub_multipole candycane_order3_multipole; do
   [[ -r "${src}/inputs/${s}.nml" ]] || fail "the listed sweep has no input inputs/${s}.nml"
 done
-echo "sweep lists: rpy 4 (2 without extras), multipole 4 with the seeds ensemble and the probe"
+echo "sweep lists: rpy 4 (2 without extras), multipole 5 with the seeds ensemble and the two probes"
 
 # --- 2. sourcing without side effects ---------------------------------------------------------
 mkdir -p "${work}/shims"
@@ -80,13 +81,13 @@ rm -f "${work}/qsub.calls" "${work}/qdel.calls"
 out=$(submit multipole --time-scale 0.001 --ntasks-trefoil 29 --ntasks-ensemble 4 --ntasks-analysis 8) \
   || fail "submit_study.sh pbs multipole: ${out}"
 study=results/study_multipole_t0.001
-[[ "$(wc -l < "${work}/qsub.calls")" -eq 5 ]] || fail "expected 4 sweep jobs and the analysis, qsub got: $(cat "${work}/qsub.calls")"
+[[ "$(wc -l < "${work}/qsub.calls")" -eq 6 ]] || fail "expected 5 sweep jobs and the analysis, qsub got: $(cat "${work}/qsub.calls")"
 declare -A t_end=([trefoil_table2_multipole]=1 [candycane_multipole]=2 [candycane_seeds_multipole]=2
-                  [candycane_epslub_multipole]=2)
+                  [candycane_epslub_multipole]=2 [candycane_order3_multipole]=0.9)
 declare -A select=([trefoil_table2_multipole]=29 [candycane_multipole]="" [candycane_seeds_multipole]=4
-                   [candycane_epslub_multipole]="")
+                   [candycane_epslub_multipole]="" [candycane_order3_multipole]="")
 found=""
-for k in 1 2 3 4; do
+for k in 1 2 3 4 5; do
   c="$(call "${k}")"
   [[ "${c}" == *"-N knotflow-multipole-t0.001-sweep "* && "${c}" == *jobs/pbs_sweep.sh ]] || fail "qsub call ${k} is not a sweep job: ${c}"
   s=$(sed -n "s|.*SWEEP=${study}/inputs/\([a-z0-9_]*\)\.nml.*|\1|p" <<<"${c}")
@@ -102,16 +103,16 @@ for k in 1 2 3 4; do
   fi
   grep -qx "submitted: sweep ${s} ${k}.pbs" <<<"${out}" || fail "no 'submitted: sweep ${s} ${k}.pbs' line: ${out}"
 done
-[[ "$(tr ' ' '\n' <<<"${found}" | sort | paste -sd' ')" == " candycane_epslub_multipole candycane_multipole candycane_seeds_multipole trefoil_table2_multipole" ]] \
-  || fail "the multipole sweeps submitted: ${found}, expected each of trefoil_table2_multipole candycane_multipole candycane_seeds_multipole candycane_epslub_multipole once"
-c="$(call 5)"
-[[ "${c}" == *"-N knotflow-multipole-t0.001-analysis "* && "${c}" == *jobs/pbs_study.sh ]] || fail "qsub call 5 is not the analysis: ${c}"
-[[ "${c}" == *"-W depend=afterany:1.pbs:2.pbs:3.pbs:4.pbs "* ]] || fail "the analysis does not wait for the 4 sweep jobs: ${c}"
+[[ "$(tr ' ' '\n' <<<"${found}" | sort | paste -sd' ')" == " candycane_epslub_multipole candycane_multipole candycane_order3_multipole candycane_seeds_multipole trefoil_table2_multipole" ]] \
+  || fail "the multipole sweeps submitted: ${found}, expected each of trefoil_table2_multipole candycane_multipole candycane_seeds_multipole candycane_epslub_multipole candycane_order3_multipole once"
+c="$(call 6)"
+[[ "${c}" == *"-N knotflow-multipole-t0.001-analysis "* && "${c}" == *jobs/pbs_study.sh ]] || fail "qsub call 6 is not the analysis: ${c}"
+[[ "${c}" == *"-W depend=afterany:1.pbs:2.pbs:3.pbs:4.pbs:5.pbs "* ]] || fail "the analysis does not wait for the 5 sweep jobs: ${c}"
 [[ "${c}" == *"-l select=1:ncpus=8:mpiprocs=8 "* && "${c}" == *"HYDRO=multipole,STUDY_DIR=${study},WAIT_FOR=knotflow-multipole-t0.001-sweep,"* ]] \
   || fail "the analysis job's ranks or settings: ${c}"
-grep -q "^submitted: analysis 5.pbs (runs after the 4 sweep jobs" <<<"${out}" || fail "no analysis line: ${out}"
+grep -q "^submitted: analysis 6.pbs (runs after the 5 sweep jobs" <<<"${out}" || fail "no analysis line: ${out}"
 [[ ! -e "${work}/qdel.calls" ]] || fail "jobs deleted after a successful submission: $(cat "${work}/qdel.calls")"
-echo "pbs multipole: 4 sweep jobs (scaled inputs, ranks per role), the analysis after all 4 ids"
+echo "pbs multipole: 5 sweep jobs (scaled inputs, ranks per role), the analysis after all 5 ids"
 
 rm -f "${work}/qsub.calls"
 out=$(submit rpy --time-scale 0.001 --hold) || fail "submit_study.sh pbs rpy: ${out}"
