@@ -14,7 +14,8 @@
 #               frame (results/<sweep>/continued/<case>_from<T>). Runs until every case has
 #               finished; killing it loses nothing but the frames since the last digest.
 #   --digest    then (with --no-run: only) add every case file here to the ledger: a copy,
-#               k_f of every frame (knotflow-analyze, closures of scripts/study_sweeps.sh),
+#               k_f of every frame (knotflow-analyze, closures of scripts/study_sweeps.sh; the
+#               frames unchanged since the last digest's copy are taken from it, not recomputed),
 #               knotflow-campaign digest; a file unchanged since its last digest is skipped.
 #               Run it before the machine goes (it may run beside the campaign: it reads
 #               copies), then commit the ledger.
@@ -134,13 +135,18 @@ digest_all() {
         continue
       fi
       mkdir -p "$copies/$(dirname "$rel")"
-      cp "$f" "$copies/$rel.tmp" && mv "$copies/$rel.tmp" "$copies/$rel"
+      # The copy of the last digest (analysed) lends the k_f of the frames the file still holds
+      # unchanged (knotflow-analyze --reuse): a digest computes only the frames added since.
+      reuse=()
+      [ -f "$copies/$rel" ] && reuse=(--reuse "$copies/$rel")
+      cp "$f" "$copies/$rel.new.h5"
       # A file killed before its first frame was whole has nothing to digest (the next run
       # starts it again).
-      if ! "$analyze" "$copies/$rel" --closures "$closures" --stride 1 >/dev/null; then
+      if ! "$analyze" "$copies/$rel.new.h5" --closures "$closures" --stride 1 "${reuse[@]}"; then
         kf_log "not digested: $f (knotflow-analyze refused it, above)"
         continue
       fi
+      mv "$copies/$rel.new.h5" "$copies/$rel"
       if ! knotflow-campaign digest "$copies/$rel" --copies "$copies" --results "$results" \
           --ledger "$ledger" --sweep "$sweep" --closures "$closures" --positions-every "$every"; then
         kf_log "not digested: $f (above)"

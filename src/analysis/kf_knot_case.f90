@@ -32,7 +32,7 @@ module kf_knot_case
   end type shape_analysis_t
 
   public :: select_frames, analyse_frame_knots, analyse_shapes, frame_stream, stored_positions, &
-    merge_frame_knots
+    merge_frame_knots, same_frames
 
 contains
 
@@ -142,6 +142,27 @@ contains
       end do
     end do
   end function stored_positions
+
+  !> keep(m): whether a result stored for frame old_index(m) (0-based) of the trajectory t_old,
+  !> r_old(3, N, frames) holds for the trajectory t, r as well: that frame is in both, with the
+  !> same time and the same positions, bit for bit (an earlier copy of a case file that has
+  !> grown since, or a resumed run that rewrote its last frames: those differ).
+  pure function same_frames(old_index, t_old, r_old, t, r) result(keep)
+    integer(i8), intent(in) :: old_index(:)
+    real(wp), intent(in) :: t_old(:), r_old(:, :, :), t(:), r(:, :, :)
+    logical :: keep(size(old_index))
+    integer(i8) :: k, last
+    integer :: m
+    keep = .false.
+    if (size(r_old, 1) /= size(r, 1) .or. size(r_old, 2) /= size(r, 2)) return
+    last = min(size(t_old), size(t), size(r_old, 3), size(r, 3))
+    do m = 1, size(old_index)
+      k = old_index(m) + 1
+      if (k < 1 .or. k > last) cycle
+      keep(m) = t_old(k) == t(k)
+      if (keep(m)) keep(m) = all(r_old(:, :, k) == r(:, :, k))
+    end do
+  end function same_frames
 
   !> The knots of the frames `todo` (0-based) of a trajectory with frame times t: frame todo(k)
   !> from the stored results (kf, spectrum(:, m) at m = pos_of(k) > 0) or, where pos_of(k) = 0,

@@ -28,7 +28,7 @@ program knotflow_analyze
   use kf_analysis_store, only: analysis_store_t, knots_record_t, matrix_record_t
   use kf_analysis_records, only: knots_record, events_record, shape_record
   use kf_knot_case, only: frame_knots_t, shape_analysis_t, select_frames, analyse_frame_knots, analyse_shapes, &
-    stored_positions, merge_frame_knots
+    stored_positions, merge_frame_knots, same_frames
   use kf_transitions, only: detect_transitions, default_low, default_high
   implicit none
 
@@ -37,7 +37,8 @@ program knotflow_analyze
     'usage: knotflow-analyze chain.xyz [--closures N] [--seed S] [--matrix] [--matrix-closures N]'//new_line('a')// &
     '                        [--min-length M] [--closure-points FILE] [--json] [--per-closure]'//new_line('a')// &
     '       knotflow-analyze CASE.h5 [CASE2.h5 ...] [--closures N] [--seed S] [--stride K]'//new_line('a')// &
-    '                        [--matrix-frames k1,k2|last] [--min-length M] [--force]'//new_line('a')// &
+    '                        [--matrix-frames k1,k2|last] [--min-length M] [--force] [--reuse OLD.h5]'// &
+    new_line('a')// &
     '       knotflow-analyze ROWS.csv [--json]   (the case mode of frame rows with columns mode, phi)'// &
     new_line('a')// &
     '       knotflow-analyze --help | --version'
@@ -57,6 +58,7 @@ program knotflow_analyze
     integer :: stride = 1
     character(len=path_len) :: matrix_frames = ''
     logical :: force = .false.
+    character(len=path_len) :: reuse = ''   !< --reuse: an earlier copy of the one case file
     integer :: nfiles = 0
     character(len=path_len) :: files(max_files)
   end type options_t
@@ -175,7 +177,7 @@ contains
       case ('--force')
         opt%force = .true.
       case ('--closures', '--seed', '--min-length', '--closure-points', '--stride', '--matrix-frames', &
-            '--matrix-closures')
+            '--matrix-closures', '--reuse')
         if (i == n) then
           call fatal_error(error, 'option '//trim(arg)//': missing value')
           return
@@ -204,6 +206,8 @@ contains
             call bad(error, arg, val, 'an integer >= 1')
         case ('--closure-points')
           opt%closure_points = val
+        case ('--reuse')
+          opt%reuse = val
         case ('--matrix-frames')
           opt%matrix_frames = val
           if (verify(trim(val), '0123456789,last') /= 0) &
@@ -214,7 +218,7 @@ contains
         if (arg(1:1) == '-') then
           call fatal_error(error, 'unknown option '//trim(arg)//' (allowed: --closures, --seed, --matrix, '// &
             '--matrix-closures, --min-length, --closure-points, --json, --per-closure, --stride, '// &
-            '--matrix-frames, --force)')
+            '--matrix-frames, --force, --reuse)')
           return
         end if
         if (opt%nfiles == max_files) then
@@ -231,7 +235,7 @@ contains
     end if
     if (is_table(opt%files(1))) then
       if (opt%nfiles > 1 .or. opt%matrix .or. opt%per_closure .or. len_trim(opt%closure_points) > 0 .or. &
-          opt%stride /= 1 .or. opt%force .or. len_trim(opt%matrix_frames) > 0) then
+          opt%stride /= 1 .or. opt%force .or. len_trim(opt%matrix_frames) > 0 .or. len_trim(opt%reuse) > 0) then
         call fatal_error(error, 'a table of frame rows (.csv) is read alone, with --json at most')
         return
       end if
@@ -248,8 +252,9 @@ contains
           return
         end if
       end do
-    else if (opt%stride /= 1 .or. opt%force .or. len_trim(opt%matrix_frames) > 0) then
-      call fatal_error(error, 'options --stride, --force and --matrix-frames apply to case files (.h5), '// &
+      if (len_trim(opt%reuse) > 0) call check_reuse(opt, error)
+    else if (opt%stride /= 1 .or. opt%force .or. len_trim(opt%matrix_frames) > 0 .or. len_trim(opt%reuse) > 0) then
+      call fatal_error(error, 'options --stride, --force, --matrix-frames and --reuse apply to case files (.h5), '// &
         'not to the coordinate file '//trim(opt%files(1)))
       return
     else if (opt%nfiles > 1) then
@@ -259,6 +264,24 @@ contains
   end subroutine parse_options
 
   !> The error for an invalid option value.
+  !> --reuse OLD.h5: with one case file, without --force; OLD an existing case file other than it.
+  subroutine check_reuse(opt, error)
+    type(options_t), intent(in) :: opt
+    type(error_t), allocatable, intent(out) :: error
+    logical :: exists
+    if (opt%nfiles > 1 .or. opt%force) then
+      call fatal_error(error, 'option --reuse '//trim(opt%reuse)//': takes the k_f of an earlier copy of '// &
+        'one case file (allowed: one case file, without --force)')
+      return
+    end if
+    if (.not. is_case_file(opt%reuse) .or. trim(opt%reuse) == trim(opt%files(1))) then
+      call bad(error, '--reuse', opt%reuse, 'a case file (.h5) other than '//trim(opt%files(1)))
+      return
+    end if
+    inquire (file=trim(opt%reuse), exist=exists)
+    if (.not. exists) call bad(error, '--reuse', opt%reuse, 'an existing case file (not found)')
+  end subroutine check_reuse
+
   subroutine bad(error, name, value, allowed)
     type(error_t), allocatable, intent(out) :: error
     character(len=*), intent(in) :: name, value, allowed
@@ -484,7 +507,7 @@ contains
     type(shape_analysis_t) :: shapes
     type(matrix_record_t), allocatable :: mats(:)
     logical :: found
-    integer :: nframes, n, k
+    integer :: nframes, n, k, carried
     nframes = size(t)
     if (nframes < 1) call fatal_error(error, 'case file '//path//': /frames is empty (nothing to analyse)')
     if (.not. allocated(error)) call matrix_frame_list(opt%matrix_frames, nframes, path, mframes, error)
@@ -501,6 +524,9 @@ contains
       else
         call store%read_knots(int(opt%closures, i8), opt%seed, prev, found, error)
       end if
+      carried = 0
+      if (.not. allocated(error) .and. len_trim(opt%reuse) > 0) &
+        call carry_stored(trim(opt%reuse), t, r, opt, prev, carried, error)
       if (.not. allocated(error)) then
         pos_of = stored_positions(todo, prev%frame_index)
         need = pack(todo, pos_of == 0)
@@ -546,7 +572,54 @@ contains
                                                  events_record(all, ev_kind, ev_pos), mats, shape_record(shapes), error)
     if (.not. allocated(error)) write (output_unit, '(a,i0,a,i0,a,i0,a)') trim(path)//': ', size(todo), &
       ' frames (', size(need), ' new), ', size(ev_kind), ' events written to /analysis'
+    if (.not. allocated(error) .and. len_trim(opt%reuse) > 0) write (output_unit, '(a,i0,a)') &
+      trim(path)//': k_f of ', carried, ' frame(s) taken from '//trim(opt%reuse)
   end subroutine analyse_frames
+
+  !> --reuse: add to `prev` the k_f and spectra that the case file `old` stores with the same
+  !> closures and seed for frames that are the same here (kf_knot_case `same_frames`: each
+  !> frame's closures depend only on the seed and the frame's index and positions, so these are
+  !> the values a computation here would give) and that `prev` does not hold yet; n: how many.
+  subroutine carry_stored(old, t, r, opt, prev, n, error)
+    character(len=*), intent(in) :: old
+    real(wp), intent(in) :: t(:), r(:, :, :)
+    type(options_t), intent(in) :: opt
+    type(knots_record_t), intent(inout) :: prev
+    integer, intent(out) :: n
+    type(error_t), allocatable, intent(out) :: error
+    type(analysis_store_t) :: store
+    type(knots_record_t) :: rec
+    type(error_t), allocatable :: close_error
+    real(wp), allocatable :: t_old(:), r_old(:, :, :), sp(:, :)
+    logical, allocatable :: keep(:)
+    integer, allocatable :: idx(:)
+    logical :: found
+    integer :: m, np
+    n = 0
+    call store%open(old, error)
+    if (.not. allocated(error)) call store%read_frames(t_old, r_old, error)
+    if (.not. allocated(error)) call store%read_knots(int(opt%closures, i8), opt%seed, rec, found, error)
+    call store%close(close_error)
+    if (.not. allocated(error) .and. allocated(close_error)) call move_alloc(close_error, error)
+    if (allocated(error)) then
+      error%message = '--reuse '//old//': '//error%message
+      return
+    end if
+    if (.not. found) return
+    keep = same_frames(rec%frame_index, t_old, r_old, t, r)
+    keep = keep .and. stored_positions(rec%frame_index, prev%frame_index) == 0
+    n = count(keep)
+    if (n == 0) return
+    idx = pack([(m, m=1, size(keep))], keep)
+    np = size(prev%frame_index)
+    allocate (sp(size(rec%spectrum, 1), np + n))
+    if (np > 0) sp(:, :np) = prev%spectrum
+    sp(:, np + 1:) = rec%spectrum(:, idx)
+    call move_alloc(sp, prev%spectrum)
+    prev%frame_index = [prev%frame_index, rec%frame_index(idx)]
+    prev%time = [prev%time, rec%time(idx)]
+    prev%kf = [prev%kf, rec%kf(idx)]
+  end subroutine carry_stored
 
   !> Merge the partial knot matrices of the ranks (NaN where a rank computed nothing).
   subroutine merge_matrix(farm, k, error)

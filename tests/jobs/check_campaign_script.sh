@@ -16,7 +16,8 @@
 #      by a knotflow that waits 15 s after the case before it exits; the digest every 3 s puts
 #      the finished case into the ledger while the run goes on, and the run ends with its worker;
 #   5. a digest skips a file unchanged since its last digest (the ledger stays as it is) and
-#      digests it again once it has changed (touched);
+#      digests it again once it has changed (touched), taking the k_f of its unchanged frames
+#      from the last digest's copy (knotflow-analyze --reuse: no frame computed again);
 #   6. --workdir elsewhere: the second probe (candycane_order3_multipole, a chain from a
 #      coordinate file named relative to the repository's top, as inputs/ does) runs there
 #      through the link DIR/inputs the script makes, and is digested into the ledger again.
@@ -183,6 +184,10 @@ grep -q "unchanged since its last digest" "${work}/digest5c.log" \
   && fail "a changed file was skipped: $(cat "${work}/digest5c.log")"
 grep -q "^candycane_epslub_multipole/A1.00: finished" "${work}/digest5c.log" \
   || fail "the changed file was not digested: $(cat "${work}/digest5c.log")"
+# ... from the copy of the last digest: its frames are the same, so none is computed again
+grep -q "A1.00.h5.new.h5: 3 frames (0 new)" "${work}/digest5c.log" \
+  && grep -q "k_f of 3 frame(s) taken from .*candycane_epslub_multipole/A1.00.h5$" "${work}/digest5c.log" \
+  || fail "the digest of the touched file computed k_f again: $(cat "${work}/digest5c.log")"
 
 # 6. Another work directory: its inputs link resolves the probe's coordinate file.
 rm -rf "${ledger}/candycane_order3_multipole"

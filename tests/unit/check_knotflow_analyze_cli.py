@@ -106,6 +106,7 @@ def check_case_file(exe, work):
     check_python_reads(path)
     check_mode_two(exe, work)
     check_bad_frames(exe, work, pos)
+    check_reuse(exe, work, pos)
     for opt in ('--help', '--version'):
         p = run(exe, opt)
         assert p.returncode == 0 and 'knotflow-analyze' in p.stdout and 'Backtrace' not in p.stderr, (opt, p)
@@ -190,6 +191,62 @@ def check_bad_frames(exe, work, pos):
     lines = p.stderr.strip().splitlines()
     assert p.returncode != 0 and len(lines) == 1, p.stderr
     assert "/frames/positions" in lines[0] and 'damaged.h5' in lines[0] and 'checksum mismatch' in lines[0], lines[0]
+
+
+def check_reuse(exe, work, pos):
+    """--reuse OLD.h5 (an earlier copy of the case file): k_f of the frames whose time and
+    positions are the same in both is taken from OLD, every other frame is computed, and the
+    result is the one of an analysis from scratch, bit for bit. OLD's frame 2 is another chain
+    (unknotted, where the file's is a trefoil) and its frame 3 has another time: only frames 0
+    and 1 are taken. Other closures take nothing; bad usage is refused before anything is
+    written."""
+    import shutil
+    import h5py
+    import numpy as np
+
+    def case(path, times, frames):
+        with h5py.File(path, 'w') as f:
+            f.attrs['status'] = 'running'
+            f.create_dataset('frames/time', data=times, maxshape=(None,), chunks=True)
+            f.create_dataset('frames/positions', data=frames, maxshape=(None,) + frames.shape[1:], chunks=True)
+
+    nf = pos.shape[0]
+    times = np.arange(nf) * 0.5
+    old_pos = pos[:4].copy()
+    old_pos[2] = pos[3]
+    old_times = times[:4].copy()
+    old_times[3] += 0.1
+    old, new, scratch = (os.path.join(work, f'{x}.h5') for x in ('reuse_old', 'reuse_new', 'reuse_scratch'))
+    case(old, old_times, old_pos)
+    case(new, times, pos)
+    shutil.copy(new, scratch)
+    assert run(exe, old, '--closures', '60').returncode == 0
+    with h5py.File(old, 'r') as f:
+        old_kf = f['analysis/knots/kf'][:]
+    p = run(exe, scratch, '--closures', '60')
+    assert p.returncode == 0, p.stderr
+    with h5py.File(scratch, 'r') as f:
+        want = {k: f['analysis/knots/' + k][:] for k in ('kf', 'spectrum', 'frame_index')}
+    assert old_kf[2] == 0.0 and want['kf'][2] > 0.8, (old_kf, want['kf'])   # frame 2 differs
+    for bad_args, word in [(['--reuse', old, '--force'], '--force'),
+                           (['--reuse', os.path.join(work, 'absent.h5')], 'absent.h5'),
+                           (['--reuse', new], '--reuse'),
+                           (['--reuse', old, scratch], 'one case file')]:
+        p = run(exe, new, '--closures', '60', *bad_args)
+        lines = p.stderr.strip().splitlines()
+        assert p.returncode == 2 and len(lines) == 1 and word in lines[0], (bad_args, p.stderr)
+    with h5py.File(new, 'r') as f:
+        assert 'analysis' not in f
+    p = run(exe, new, '--closures', '60', '--reuse', old)
+    assert p.returncode == 0, p.stderr
+    assert f'{nf} frames ({nf - 2} new)' in p.stdout and 'k_f of 2 frame(s) taken from' in p.stdout, p.stdout
+    with h5py.File(new, 'r') as f:
+        for k, v in want.items():
+            assert np.array_equal(f['analysis/knots/' + k][:], v), (k, f['analysis/knots/' + k][:], v)
+    os.remove(new)
+    case(new, times, pos)
+    p = run(exe, new, '--closures', '50', '--reuse', old)
+    assert p.returncode == 0 and f'({nf} new)' in p.stdout and 'k_f of 0 frame(s)' in p.stdout, p.stdout
 
 
 def check_case_mode_table(exe, work):
