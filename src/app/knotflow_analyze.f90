@@ -264,7 +264,7 @@ contains
   end subroutine parse_options
 
   !> The error for an invalid option value.
-  !> --reuse OLD.h5: with one case file, without --force; OLD an existing case file other than it.
+  !> Check the option --reuse OLD.h5: one case file, no --force, OLD an existing case file other than it.
   subroutine check_reuse(opt, error)
     type(options_t), intent(in) :: opt
     type(error_t), allocatable, intent(out) :: error
@@ -576,7 +576,7 @@ contains
       trim(path)//': k_f of ', carried, ' frame(s) taken from '//trim(opt%reuse)
   end subroutine analyse_frames
 
-  !> --reuse: add to `prev` the k_f and spectra that the case file `old` stores with the same
+  !> For --reuse, add to `prev` the k_f and spectra that the case file `old` stores with the same
   !> closures and seed for frames that are the same here (kf_knot_case `same_frames`: each
   !> frame's closures depend only on the seed and the frame's index and positions, so these are
   !> the values a computation here would give) and that `prev` does not hold yet; n: how many.
