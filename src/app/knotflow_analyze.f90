@@ -263,7 +263,6 @@ contains
     end if
   end subroutine parse_options
 
-  !> The error for an invalid option value.
   !> Check the option --reuse OLD.h5: one case file, no --force, OLD an existing case file other than it.
   subroutine check_reuse(opt, error)
     type(options_t), intent(in) :: opt
@@ -282,6 +281,7 @@ contains
     if (.not. exists) call bad(error, '--reuse', opt%reuse, 'an existing case file (not found)')
   end subroutine check_reuse
 
+  !> The error for an invalid option value.
   subroutine bad(error, name, value, allowed)
     type(error_t), allocatable, intent(out) :: error
     character(len=*), intent(in) :: name, value, allowed
