@@ -97,6 +97,31 @@ def refused(fn, text):
     raise AssertionError(f"not refused (expected '{text}')")
 
 
+def check_status(entries, t_left):
+    """`knotflow-campaign status` of the ledger against the run records of its entries: the
+    sweep's rate is the wall time of its runs over the time they covered (one BLAS kernel
+    here), the time left that rate times t_left; the markdown row (--markdown) says the same."""
+    runs = [r for e in entries for seg in e["segments"] for r in seg["runs"]]
+    assert len({r["blas"] for r in runs}) == 1, runs
+    rate = sum(r["wall_seconds"] for r in runs) / sum(r["t_end"] - r["t_start"] for r in runs)
+    st = campaign.status("ledger", "status_scenes")
+    (w,) = st["sweeps"]
+    running = [(e["case"], e["t_reached"]) for e in entries if e["status"] == "running"]
+    assert w["cases"] == 2 and w["running"] == running, w
+    assert w["finished"] == sum(e["status"] == "finished" for e in entries), w
+    assert w["not_started"] == 2 - len(entries), w
+    assert np.isclose(w["rate"], rate, rtol=1e-12) and np.isclose(w["left"], rate * t_left), (w, rate)
+    assert st["campaign"]["left"] == w["left"] and st["campaign"]["counted"], st["campaign"]
+    md = run(sys.executable, "-c", "import sys; from knotflow_tools.cli import main_campaign; "
+             "sys.exit(main_campaign(sys.argv[1:]))", "status", "--ledger", "ledger", "--scenes",
+             "status_scenes", "--markdown").stdout.split("\n")
+    row = [ln for ln in md if ln.startswith(f"| `{SWEEP}` |")]
+    cells = [c.strip() for c in row[0].strip("|").split("|")]
+    assert cells[1:3] == ["2", str(w["finished"])] and cells[4] == str(2 - len(entries)), cells
+    assert cells[5].startswith(f"{rate:.2f} (") and cells[6] == f"{rate * t_left / 3600:.1f}", cells
+    assert cells[3] == (", ".join(f"{c} (t = {t:g})" for c, t in running) or "-"), cells
+
+
 # 1. The reference: the sweep uninterrupted.
 run(exe, "sw.nml")
 for c in ("A1.40", "A2.20"):
@@ -159,6 +184,9 @@ run(exe, "sw.nml", "--dry-run")
 e = digest("results/sw/A1.40.h5", "ledger")
 T = e["t_reached"]
 assert e["status"] == "running" and T >= 14.0, e
+# Status: A running at T, B not started (the campaign's scenes, <dir>/<sweep>/<case>.nml).
+shutil.copytree("scenes", f"status_scenes/{SWEEP}")
+check_status([e], (40.0 - T) + 40.0)
 kept = snapshot("ledger")
 refused(lambda: digest("results/sw/A1.40.h5", "ledger", closures=CLOSURES + 1),
         "closures per frame")
@@ -204,6 +232,7 @@ episodes = sum(s["diagnostic_totals"]["overlap_episodes"] for s in e["segments"]
 assert row["overlap"]["overlap_episodes"] == episodes, (row["overlap"], episodes)
 b = campaign.load("ledger", SWEEP, "A2.20")
 assert b["status"] == "finished" and len(b["segments"]) == 1
+check_status([e, b], 0.0)
 assert np.array_equal(campaign.read_rows("ledger", SWEEP, "A2.20"),
                       campaign.read_rows("ledger_ref", SWEEP, "A2.20"))
 pt, pos = campaign.read_positions("ledger", SWEEP, "A1.40")

@@ -418,15 +418,17 @@ def _newest_kernels_rate(runs: list) -> tuple[str, float, float, float, float] |
             sum(w * x for w, x in loaded), sum(w for w, _ in loaded))
 
 
-def status_lines(ledger: str, scenes: str | None = None) -> list:
-    """One line per case of the ledger: sweep/case, status, time reached of t_end, segments,
-    wall time and mean load of its runs (weighted by wall time), commits. Then one line per
-    sweep: cases finished, running and (with `scenes`, the campaign's scene directories
-    <scenes>/<sweep>/<case>.nml) not started; its measured rate (wall seconds of all its runs
-    per time unit reached, at their mean load; only the runs on the newest BLAS kernels when runs
-    recorded them, _newest_kernels_rate) and the wall time one worker still needs at that rate;
-    and a last line for the whole campaign."""
-    lines, summary = [], []
+def status(ledger: str, scenes: str | None = None) -> dict:
+    """Where a campaign stands, from its ledger: "cases", per case of the ledger (sweep, case,
+    status, t_reached, t_end, segments, wall seconds and mean load of its runs, weighted by wall
+    time, commits); "sweeps", per sweep (cases, finished, running and, with `scenes`, the
+    campaign's scene directories <scenes>/<sweep>/<case>.nml, not started; the running cases
+    with their time; its measured rate: wall seconds of its runs per time unit reached, at their
+    mean load, only the runs on the newest BLAS kernels when runs recorded them,
+    _newest_kernels_rate; the wall seconds one worker still needs at that rate, NaN without a
+    rate); "campaign" (with `scenes`): cases, finished, seconds left, whether every sweep with
+    time left had a rate."""
+    out: dict = {"cases": [], "sweeps": [], "campaign": None}
     sweeps = {d for d in os.listdir(ledger) if os.path.isdir(os.path.join(ledger, d))}
     if scenes is not None:
         sweeps |= {d for d in os.listdir(scenes) if os.path.isdir(os.path.join(scenes, d))}
@@ -441,6 +443,7 @@ def status_lines(ledger: str, scenes: str | None = None) -> list:
         count = {"finished": 0, "running": 0, "not started": 0}
         wall_sum = loaded_sum = load_sum = t_sum = t_left = 0.0
         sweep_runs: list = []
+        running = []
         for name in sorted(names):
             e = load(ledger, sweep, name)
             if e is None:   # a scene without a ledger entry
@@ -456,34 +459,79 @@ def status_lines(ledger: str, scenes: str | None = None) -> list:
             t_sum += float(e["t_reached"])
             if e["status"] != "finished":
                 t_left += max(float(e["t_end"]) - float(e["t_reached"]), 0.0)
-            lines.append(f"{sweep}/{e['case']}: {e['status']}, t = {e['t_reached']:g} of "
-                         f"{e['t_end']:g}, {len(e['segments'])} segment(s), wall "
-                         f"{wall / 3600:.2f} h, load {_ratio(load_w, loaded):.1f}, commits {commits}")
-        n = len(names)
-        cases_total += n
+                running.append((e["case"], float(e["t_reached"])))
+            out["cases"].append({"sweep": sweep, "case": e["case"], "status": e["status"],
+                                 "t_reached": float(e["t_reached"]), "t_end": float(e["t_end"]),
+                                 "segments": len(e["segments"]), "wall": wall,
+                                 "load": _ratio(load_w, loaded), "commits": commits})
+        cases_total += len(names)
         finished_total += count["finished"]
-        text = (f"{sweep}: {count['finished']} of {n} finished, {count['running']} running"
-                + (f", {count['not started']} not started" if scenes is not None else ""))
         newest = _newest_kernels_rate(sweep_runs)
         kernels = ""
         if newest is not None:
             kernels, wall_sum, t_sum, load_sum, loaded_sum = newest
+        rate = left = load_rate = math.nan
         if wall_sum > 0.0 and t_sum > 0.0:
-            rate = wall_sum / t_sum
+            rate, load_rate = wall_sum / t_sum, _ratio(load_sum, loaded_sum)
             left = rate * t_left
             left_total += left
-            text += (f"; {rate:.2f} s of wall per time unit (load {_ratio(load_sum, loaded_sum):.1f}"
-                     + (f", runs with {kernels}" if kernels else "") + "): "
-                     f"about {left / 3600:.1f} h of one worker left")
         else:
             counted = counted and t_left == 0.0
-            text += "; no rate measured yet"
-        summary.append(text)
+        out["sweeps"].append({"sweep": sweep, "cases": len(names), "finished": count["finished"],
+                              "running": running, "not_started": count["not started"],
+                              "rate": rate, "load": load_rate, "kernels": kernels,
+                              "left": left})
     if scenes is not None:
-        summary.append(f"campaign: {finished_total} of {cases_total} cases finished; about "
-                       f"{left_total / 3600:.1f} h of one worker left at the measured rates"
-                       + ("" if counted else " (sweeps without a measured rate not counted)"))
-    return lines + summary
+        out["campaign"] = {"cases": cases_total, "finished": finished_total, "left": left_total,
+                           "counted": counted}
+    return out
+
+
+def status_lines(ledger: str, scenes: str | None = None) -> list:
+    """`status` as text: one line per case of the ledger, then one per sweep (cases finished,
+    running and, with `scenes`, not started; rate and time left) and, with `scenes`, a last
+    line for the whole campaign."""
+    st = status(ledger, scenes)
+    lines = [f"{c['sweep']}/{c['case']}: {c['status']}, t = {c['t_reached']:g} of "
+             f"{c['t_end']:g}, {c['segments']} segment(s), wall {c['wall'] / 3600:.2f} h, load "
+             f"{c['load']:.1f}, commits {c['commits']}" for c in st["cases"]]
+    for w in st["sweeps"]:
+        text = (f"{w['sweep']}: {w['finished']} of {w['cases']} finished, {len(w['running'])} "
+                "running" + (f", {w['not_started']} not started" if scenes is not None else ""))
+        if math.isnan(w["rate"]):
+            text += "; no rate measured yet"
+        else:
+            text += (f"; {w['rate']:.2f} s of wall per time unit (load {w['load']:.1f}"
+                     + (f", runs with {w['kernels']}" if w["kernels"] else "") + "): "
+                     f"about {w['left'] / 3600:.1f} h of one worker left")
+        lines.append(text)
+    c = st["campaign"]
+    if c is not None:
+        lines.append(f"campaign: {c['finished']} of {c['cases']} cases finished; about "
+                     f"{c['left'] / 3600:.1f} h of one worker left at the measured rates"
+                     + ("" if c["counted"] else " (sweeps without a measured rate not counted)"))
+    return lines
+
+
+def status_markdown(ledger: str, scenes: str | None = None) -> list:
+    """`status` as a markdown table, one row per sweep (the running cases with the time they
+    reached), and, with `scenes`, a line for the whole campaign: what a document shows."""
+    st = status(ledger, scenes)
+    lines = ["| sweep | cases | finished | running (time reached) | not started | wall time per "
+             "time unit, s (load) | left, hours of one worker |", "|---|---|---|---|---|---|---|"]
+    for w in st["sweeps"]:
+        running = ", ".join(f"{c} (t = {t:g})" for c, t in w["running"]) or "-"
+        ns = str(w["not_started"]) if scenes is not None else "?"
+        rate = "-" if math.isnan(w["rate"]) else f"{w['rate']:.2f} ({w['load']:.1f})"
+        left = "-" if math.isnan(w["left"]) else f"{w['left'] / 3600:.1f}"
+        lines.append(f"| `{w['sweep']}` | {w['cases']} | {w['finished']} | {running} | {ns} "
+                     f"| {rate} | {left} |")
+    c = st["campaign"]
+    if c is not None:
+        lines += ["", f"All: {c['finished']} of {c['cases']} cases finished, about "
+                  f"{c['left'] / 3600:.1f} h of one worker left at the measured rates"
+                  + ("" if c["counted"] else " (sweeps without a measured rate not counted)") + "."]
+    return lines
 
 
 def set_case_mode(ledger: str, sweep: str, case: str, analyze_json: str) -> dict:

@@ -561,6 +561,8 @@ def _campaign(argv: Argv) -> int:
     st.add_argument("--scenes", metavar="DIR",
                     help="the campaign's scenes (DIR/<sweep>/<case>.nml, knotflow --write-scenes):"
                     " count the cases not started and the time they need")
+    st.add_argument("--markdown", action="store_true",
+                    help="one markdown table row per sweep instead (for a document)")
     md = sub.add_parser("mode", help="record a case's mode: knotflow-analyze <case>.csv --json")
     md.add_argument("--case", required=True)
     md.add_argument("--analyze-json", required=True, metavar="TEXT",
@@ -609,7 +611,8 @@ def _campaign(argv: Argv) -> int:
     else:
         if args.scenes is not None and not os.path.isdir(args.scenes):
             p.error(f"--scenes {args.scenes}: not a directory")
-        for line in campaign.status_lines(args.ledger, args.scenes):
+        render = campaign.status_markdown if args.markdown else campaign.status_lines
+        for line in render(args.ledger, args.scenes):
             print(line)
     return 0
 
