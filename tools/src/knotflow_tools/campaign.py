@@ -507,9 +507,7 @@ def status_lines(ledger: str, scenes: str | None = None) -> list:
         lines.append(text)
     c = st["campaign"]
     if c is not None:
-        lines.append(f"campaign: {c['finished']} of {c['cases']} cases finished; about "
-                     f"{c['left'] / 3600:.1f} h of one worker left at the measured rates"
-                     + ("" if c["counted"] else " (sweeps without a measured rate not counted)"))
+        lines.append(f"campaign: {c['finished']} of {c['cases']} cases finished; {_left_text(c)}")
     return lines
 
 
@@ -528,10 +526,14 @@ def status_markdown(ledger: str, scenes: str | None = None) -> list:
                      f"| {rate} | {left} |")
     c = st["campaign"]
     if c is not None:
-        lines += ["", f"All: {c['finished']} of {c['cases']} cases finished, about "
-                  f"{c['left'] / 3600:.1f} h of one worker left at the measured rates"
-                  + ("" if c["counted"] else " (sweeps without a measured rate not counted)") + "."]
+        lines += ["", f"All: {c['finished']} of {c['cases']} cases finished, {_left_text(c)}."]
     return lines
+
+
+def _left_text(campaign: dict) -> str:
+    """The time a campaign (`status`'s "campaign") still needs, as both renderings say it."""
+    return (f"about {campaign['left'] / 3600:.1f} h of one worker left at the measured rates"
+            + ("" if campaign["counted"] else " (sweeps without a measured rate not counted)"))
 
 
 def set_case_mode(ledger: str, sweep: str, case: str, analyze_json: str) -> dict:

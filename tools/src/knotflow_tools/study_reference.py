@@ -14,10 +14,11 @@ STUDY_TREFOIL_CASES, STUDY_REKNOT_EVENTS, STUDY_REKNOT_SIMULATIONS = 29, 13, 4
 #: The study's stiff trefoils (A >= 2.2) tumble (mode II): docs/REPRODUCTION.md, the summary table.
 STUDY_STIFF_A, STUDY_STIFF_MODE = 2.2, "tumble (mode II)"
 
-#: The study's candy-canes (docs/REPRODUCTION.md, "Candy-cane, RPY + EV", "What does not"): A = 1 coils and
-#: rolls about the vorticity axis (mode I), A = 3 stays open and tumbles (mode II); about 4 times
-#: more close pairs at A = 1 than at A = 3; a slipknot found at A = 1.4; whole-chain k_f about 0
-#: (the summary table). The mode at A = 1.4 and the close-pair numbers per A are not stated there.
+#: The study's candy-canes (docs/REPRODUCTION.md, "Candy-cane, RPY + EV", "What does not"):
+#: A = 1 coils and rolls about the vorticity axis (mode I), A = 3 stays open and tumbles (mode II);
+#: about 4 times more close pairs at A = 1 than at A = 3; a slipknot found at A = 1.4; whole-chain
+#: k_f about 0 (the summary table). The mode at A = 1.4 and the close-pair numbers per A are not
+#: stated there.
 STUDY_CANDYCANE_A = (1.0, 1.4, 3.0)
 STUDY_CANDYCANE_MODES = {1.0: "I", 3.0: "II"}
 STUDY_CLOSE_PAIR_RATIO = "about 4"
