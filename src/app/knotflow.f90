@@ -13,7 +13,7 @@ program knotflow
   use kf_scene, only: scene_t
   use kf_scene_items, only: scene_text
   use kf_sweep, only: sweep_t, read_sweep
-  use kf_fs, only: make_directory, check_writable_directory, lock_directory, lock_case, rename_file, &
+  use kf_fs, only: make_directory, check_writable_directory, check_directory_creatable, lock_directory, lock_case, rename_file, &
                    ignore_file_size_signal
   use kf_h5, only: h5_initialize, h5_finalize
   use kf_case_runner, only: case_path
@@ -74,10 +74,14 @@ program knotflow
   call agree(error)
   if (allocated(error)) call stop_all(error%message, 2)
   directory = trim(sw%base%output%directory)
-  if (me == 0) then
+  if (me == 0 .and. dry_run) then
+    ! A dry run writes nothing but the scenes asked for: it only checks that the directory
+    ! could be made.
+    call check_directory_creatable(directory, error)
+  else if (me == 0) then
     call make_directory(directory, error)
     if (.not. allocated(error)) call check_writable_directory(directory, error)
-    if (.not. (allocated(error) .or. dry_run)) then
+    if (.not. allocated(error)) then
       ! One case: other single cases may share the directory (kf_fs: lock_case).
       if (sw%n_cases() == 1) then
         call lock_case(directory, single_case_name(), error)

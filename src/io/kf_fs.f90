@@ -8,7 +8,7 @@ module kf_fs
   implicit none
   private
 
-  public :: make_directory, check_writable_directory, file_exists, remove_file, lock_directory, lock_case
+  public :: make_directory, check_writable_directory, check_directory_creatable, file_exists, remove_file, lock_directory, lock_case
   public :: rename_file, move_aside, clear_os_error, os_error_text, ignore_file_size_signal
 
   interface
@@ -100,6 +100,43 @@ contains
     end if
     close (unit, status='delete')
   end subroutine check_writable_directory
+
+  !> Fails unless `path` is a writable directory or could be created as one: its nearest
+  !> existing ancestor is a writable directory. Creates nothing (for runs that must not write,
+  !> e.g. a dry run); `make_directory` and `check_writable_directory` still decide at the run.
+  subroutine check_directory_creatable(path, error)
+    character(len=*), intent(in) :: path
+    type(error_t), allocatable, intent(out) :: error
+    character(len=:), allocatable :: p, existing
+    integer :: k
+    p = trim(path)
+    do while (len(p) > 1)
+      if (p(len(p):len(p)) /= '/') exit
+      p = p(1:len(p) - 1)
+    end do
+    existing = p
+    do while (c_access(existing//c_null_char, f_ok) /= 0)
+      if (existing == '.' .or. existing == '/') exit
+      k = index(existing, '/', back=.true.)
+      if (k == 0) then
+        existing = '.'
+      else if (k == 1) then
+        existing = '/'
+      else
+        existing = existing(1:k - 1)
+      end if
+    end do
+    ! "name/." exists only when name is a directory (or a link to one).
+    if (c_access(existing//'/.'//c_null_char, f_ok) /= 0) then
+      if (existing == p) then
+        call fatal_error(error, ''''//p//''' is not a directory')
+      else
+        call fatal_error(error, 'cannot create directory '''//p//''': '''//existing//''' is not a directory')
+      end if
+    else if (c_access(existing//c_null_char, ior(w_ok, x_ok)) /= 0) then
+      call fatal_error(error, 'directory '''//existing//''' is not writable')
+    end if
+  end subroutine check_directory_creatable
 
   !> Does a file (or directory) exist at `path`?
   logical function file_exists(path)

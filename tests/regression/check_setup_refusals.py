@@ -269,4 +269,36 @@ for path, frag in [(work, "is a directory"), (binary, "not a text file"),
     assert lines[0].startswith("knotflow: error: " + path + ": "), lines[0]
     assert os.listdir(scratch) == [], os.listdir(scratch)
     ran += 1
-print("set-up refusals: %d refused as expected, %d skipped" % (ran, skipped))
+
+# A dry run writes nothing, not even the output directory: a valid scene whose directory does
+# not exist yet is listed and the directory stays absent (--write-scenes writes only the scenes
+# asked for); a directory that could not be made (below a regular file) is refused all the same.
+dry = os.path.join(work, "dry")
+os.makedirs(dry)
+valid = os.path.join(dry, "valid.nml")
+out = os.path.join(dry, "deep", "out")
+with open(valid, "w") as f:
+    f.write("&output directory = '%s' /\n&sweep bending_a = 1.0, 2.0 /\n" % out)
+for extra in ([], ["--write-scenes", os.path.join(dry, "scenes")]):
+    r = subprocess.run([exe, valid, "--dry-run"] if not extra else [exe, valid] + extra,
+                       capture_output=True, text=True, timeout=120, cwd=dry)
+    assert r.returncode == 0, (extra, r.returncode, r.stderr)
+    assert "2 case(s) from " + valid in r.stdout and "output in " + out in r.stdout, r.stdout
+    assert not os.path.exists(os.path.dirname(out)), (extra, "a dry run created the output directory")
+    ran += 1
+assert sorted(os.listdir(os.path.join(dry, "scenes"))) == ["A1.00.nml", "A2.00.nml"], os.listdir(dry)
+blocker = os.path.join(dry, "plain_file")
+open(blocker, "w").close()
+for name, directory, message in [
+        ("dry_below_file", os.path.join(blocker, "out"),
+         "cannot create directory '%s': '%s' is not a directory" % (os.path.join(blocker, "out"), blocker)),
+        ("dry_is_file", blocker, "'%s' is not a directory" % blocker)]:
+    path = os.path.join(dry, name + ".nml")
+    with open(path, "w") as f:
+        f.write("&output directory = '%s' /\n" % directory)
+    r = subprocess.run([exe, path, "--dry-run"], capture_output=True, text=True, timeout=120, cwd=dry)
+    assert r.returncode == 2, (name, r.returncode, r.stdout, r.stderr)
+    assert r.stderr.strip() == "knotflow: error: %s: &output: directory = '%s': %s" % (path, directory, message), \
+        (name, r.stderr)
+    ran += 1
+print("set-up refusals and dry runs: %d as expected, %d skipped" % (ran, skipped))
