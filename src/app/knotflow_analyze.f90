@@ -23,7 +23,7 @@ program knotflow_analyze
   use kf_modes, only: case_mode, mode_none, mode_one, mode_two
   use kf_analysis_farm, only: analysis_farm_t, farm_start, farm_stop, farm_max, farm_sum, farm_any, &
     farm_share
-  use kf_fs, only: lock_directory
+  use kf_fs, only: lock_directory, parent_directory
   use kf_h5, only: h5_initialize, h5_finalize
   use kf_analysis_store, only: analysis_store_t, knots_record_t, matrix_record_t
   use kf_analysis_records, only: knots_record, events_record, shape_record
@@ -445,9 +445,9 @@ contains
     allocate (dirs(opt%nfiles))
     ndirs = 0
     do i = 1, opt%nfiles
-      if (any(dirs(1:ndirs) == directory_of(opt%files(i)))) cycle
+      if (any(dirs(1:ndirs) == parent_directory(opt%files(i)))) cycle
       ndirs = ndirs + 1
-      dirs(ndirs) = directory_of(opt%files(i))
+      dirs(ndirs) = parent_directory(opt%files(i))
       call lock_directory(trim(dirs(ndirs)), error)
       if (allocated(error)) then
         error%message = 'directory '''//trim(dirs(ndirs))//''' of '//trim(opt%files(i))//': '//error%message
@@ -455,21 +455,6 @@ contains
       end if
     end do
   end subroutine lock_directories
-
-  !> The directory part of `path` ('.' for a bare file name).
-  function directory_of(path) result(dir)
-    character(len=*), intent(in) :: path
-    character(len=path_len) :: dir
-    integer :: k
-    k = index(trim(path), '/', back=.true.)
-    if (k == 0) then
-      dir = '.'
-    else if (k == 1) then
-      dir = '/'
-    else
-      dir = path(1:k - 1)
-    end if
-  end function directory_of
 
   !> Analyse one case file. Every rank reads the frames; rank 0 alone reads what a previous run
   !> stored and decides what is left to compute (shared with the others), and writes /analysis.

@@ -8,7 +8,7 @@ module kf_fs
   implicit none
   private
 
-  public :: make_directory, check_writable_directory, check_directory_creatable, file_exists, remove_file, lock_directory, lock_case
+  public :: make_directory, check_writable_directory, check_directory_creatable, parent_directory, file_exists, remove_file, lock_directory, lock_case
   public :: rename_file, move_aside, clear_os_error, os_error_text, ignore_file_size_signal
 
   interface
@@ -108,7 +108,6 @@ contains
     character(len=*), intent(in) :: path
     type(error_t), allocatable, intent(out) :: error
     character(len=:), allocatable :: p, existing
-    integer :: k
     p = trim(path)
     do while (len(p) > 1)
       if (p(len(p):len(p)) /= '/') exit
@@ -117,14 +116,7 @@ contains
     existing = p
     do while (c_access(existing//c_null_char, f_ok) /= 0)
       if (existing == '.' .or. existing == '/') exit
-      k = index(existing, '/', back=.true.)
-      if (k == 0) then
-        existing = '.'
-      else if (k == 1) then
-        existing = '/'
-      else
-        existing = existing(1:k - 1)
-      end if
+      existing = parent_directory(existing)
     end do
     ! "name/." exists only when name is a directory (or a link to one).
     if (c_access(existing//'/.'//c_null_char, f_ok) /= 0) then
@@ -137,6 +129,21 @@ contains
       call fatal_error(error, 'directory '''//existing//''' is not writable')
     end if
   end subroutine check_directory_creatable
+
+  !> The directory part of `path`: '.' for a bare name, '/' for a name in the root.
+  pure function parent_directory(path) result(dir)
+    character(len=*), intent(in) :: path
+    character(len=:), allocatable :: dir
+    integer :: k
+    k = index(trim(path), '/', back=.true.)
+    if (k == 0) then
+      dir = '.'
+    else if (k == 1) then
+      dir = '/'
+    else
+      dir = path(1:k - 1)
+    end if
+  end function parent_directory
 
   !> Does a file (or directory) exist at `path`?
   logical function file_exists(path)
