@@ -13,8 +13,8 @@ program knotflow
   use kf_scene, only: scene_t
   use kf_scene_items, only: scene_text
   use kf_sweep, only: sweep_t, read_sweep
-  use kf_fs, only: make_directory, check_writable_directory, check_directory_creatable, lock_directory, lock_case, rename_file, &
-                   ignore_file_size_signal
+  use kf_fs, only: make_directory, check_writable_directory, check_directory_creatable, lock_directory, lock_case, &
+                   rename_file, ignore_file_size_signal
   use kf_h5, only: h5_initialize, h5_finalize
   use kf_case_runner, only: case_path
   use kf_case_match, only: check_reusable

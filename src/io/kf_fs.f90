@@ -8,7 +8,8 @@ module kf_fs
   implicit none
   private
 
-  public :: make_directory, check_writable_directory, check_directory_creatable, parent_directory, file_exists, remove_file, lock_directory, lock_case
+  public :: make_directory, check_writable_directory, check_directory_creatable, parent_directory
+  public :: file_exists, remove_file, lock_directory, lock_case
   public :: rename_file, move_aside, clear_os_error, os_error_text, ignore_file_size_signal
 
   interface

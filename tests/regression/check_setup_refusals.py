@@ -279,9 +279,8 @@ valid = os.path.join(dry, "valid.nml")
 out = os.path.join(dry, "deep", "out")
 with open(valid, "w") as f:
     f.write("&output directory = '%s' /\n&sweep bending_a = 1.0, 2.0 /\n" % out)
-for extra in ([], ["--write-scenes", os.path.join(dry, "scenes")]):
-    r = subprocess.run([exe, valid, "--dry-run"] if not extra else [exe, valid] + extra,
-                       capture_output=True, text=True, timeout=120, cwd=dry)
+for extra in (["--dry-run"], ["--write-scenes", os.path.join(dry, "scenes")]):
+    r = subprocess.run([exe, valid] + extra, capture_output=True, text=True, timeout=120, cwd=dry)
     assert r.returncode == 0, (extra, r.returncode, r.stderr)
     assert "2 case(s) from " + valid in r.stdout and "output in " + out in r.stdout, r.stdout
     assert not os.path.exists(os.path.dirname(out)), (extra, "a dry run created the output directory")
