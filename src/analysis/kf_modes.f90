@@ -25,16 +25,20 @@ module kf_modes
   integer, parameter, public :: mode_many_close_pairs = 3      !< mode I at least, mode II fewer
   integer, parameter, public :: mode_none = 0, mode_one = 1, mode_two = 2
 
-  public :: frame_mode, case_mode
+  public :: frame_mode, case_mode, long_time_start
 
 contains
 
-  !> Mode of one frame.
-  elemental integer function frame_mode(s) result(mode)
+  !> Mode of one frame; `elongation` replaces the a/b threshold mode_elongation (both modes), to
+  !> measure how a verdict depends on reading "a >> b" (knotflow-analyze ROWS.csv --elongation).
+  elemental integer function frame_mode(s, elongation) result(mode)
     type(shape_t), intent(in) :: s
-    real(wp) :: ct
+    real(wp), intent(in), optional :: elongation
+    real(wp) :: ct, ab
     mode = mode_none
-    if (s%a <= 0.0_wp .or. s%a < mode_elongation*s%b) return
+    ab = mode_elongation
+    if (present(elongation)) ab = elongation
+    if (s%a <= 0.0_wp .or. s%a < ab*s%b) return
     ct = abs(cos(s%theta))
     if (ct >= mode1_cos_theta .and. s%close_pairs >= mode_many_close_pairs) then
       mode = mode_one
@@ -51,16 +55,23 @@ contains
     real(wp), allocatable :: rolled(:)
     integer :: first, nhalf, n1, n2
     mode = mode_none
-    first = size(modes)/2 + 1
+    first = long_time_start(size(modes))
     nhalf = size(modes) - first + 1
     n1 = count(modes(first:) == mode_one)
     n2 = count(modes(first:) == mode_two)
     if (nhalf == 0 .or. n1 + n2 < max(1, nhalf/2)) return
     mode = merge(mode_one, mode_two, n1 >= n2)
     if (mode == mode_one .and. size(phi) >= 4) then
-      rolled = unwrap_phase(phi(size(phi)/2 + 1:))
+      rolled = unwrap_phase(phi(long_time_start(size(phi)):))
       if (rolled(size(rolled)) <= rolled(1)) mode = mode_none
     end if
   end function case_mode
+
+  !> The first of n frames (in time order) of the long-time state that case_mode classifies:
+  !> the second half.
+  pure integer function long_time_start(n)
+    integer, intent(in) :: n
+    long_time_start = n/2 + 1
+  end function long_time_start
 
 end module kf_modes

@@ -8,7 +8,7 @@
 !> stored analysis and writes /analysis, holding the directory lock knotflow's sweeps take.
 program knotflow_analyze
   use, intrinsic :: iso_fortran_env, only: output_unit
-  use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_nan, ieee_is_finite
   use kf_kinds, only: wp, i8
   use kf_cli, only: standard_option, argument, die
   use kf_strings, only: to_str
@@ -20,7 +20,8 @@ program knotflow_analyze
     default_matrix_closures, for_max_merge, after_max_merge
   use kf_text_coords, only: read_coordinates
   use kf_frame_table, only: read_table_columns
-  use kf_modes, only: case_mode, mode_none, mode_one, mode_two
+  use kf_modes, only: frame_mode, case_mode, long_time_start, mode_elongation, mode_none, mode_one, mode_two
+  use kf_shape, only: shape_t
   use kf_analysis_farm, only: analysis_farm_t, farm_start, farm_stop, farm_max, farm_sum, farm_any, &
     farm_share
   use kf_fs, only: lock_directory, parent_directory
@@ -41,6 +42,9 @@ program knotflow_analyze
     new_line('a')// &
     '       knotflow-analyze ROWS.csv [--json]   (the case mode of frame rows with columns mode, phi)'// &
     new_line('a')// &
+    '       knotflow-analyze ROWS.csv --elongation X [--json]   (modes again from the shape columns,'// &
+    new_line('a')// &
+    '                        a/b threshold X instead of 3)'//new_line('a')// &
     '       knotflow-analyze --help | --version'
   integer, parameter :: max_files = 4096
   integer, parameter :: path_len = 1024
@@ -59,6 +63,8 @@ program knotflow_analyze
     character(len=path_len) :: matrix_frames = ''
     logical :: force = .false.
     character(len=path_len) :: reuse = ''   !< --reuse: an earlier copy of the one case file
+    logical :: reclassify = .false.         !< --elongation given: frame modes from the shapes
+    real(wp) :: elongation = mode_elongation
     integer :: nfiles = 0
     character(len=path_len) :: files(max_files)
   end type options_t
@@ -109,33 +115,97 @@ contains
 
   !> Mode 3: the case mode of frame rows (columns `mode`, the mode of each frame, and `phi`;
   !> every frame in time order), by the one rule of kf_modes: the whole case's long-time mode
-  !> when its frames come from several runs (the case ledger). Every rank reads; rank 0 prints.
+  !> when its frames come from several runs (the case ledger). With --elongation the frame modes
+  !> are classified again from the columns a, b, c, theta, phi and close_pairs with that a/b
+  !> threshold. Every rank reads; rank 0 prints, with the frames of each mode (all and the
+  !> long-time half that the case mode counts).
   subroutine analyse_table(opt, farm, error)
     type(options_t), intent(in) :: opt
     type(analysis_farm_t), intent(in) :: farm
     type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: v(:, :), phi(:)
+    integer, allocatable :: modes(:)
+    integer :: mode, k, late
+    character(len=:), allocatable :: counts, late_counts, rule
+    if (opt%reclassify) then
+      call frame_modes_from_shapes(opt%files(1), opt%elongation, modes, phi, error)
+      if (allocated(error)) return
+    else
+      call read_table_columns(opt%files(1), [character(len=4) :: 'mode', 'phi'], v, error)
+      if (allocated(error)) return
+      do k = 1, size(v, 1)
+        if (ieee_is_nan(v(k, 1)) .or. ieee_is_nan(v(k, 2)) .or. &
+            .not. any(v(k, 1) == [real(wp) :: mode_none, mode_one, mode_two])) then
+          call fatal_error(error, "table '"//trim(opt%files(1))//"' row "//to_str(k)//': mode '// &
+            to_str(v(k, 1), '(g0.6)')//', phi '//to_str(v(k, 2), '(g0.6)')// &
+            ' (allowed: mode 0, 1 or 2 and a number for phi)')
+          return
+        end if
+      end do
+      modes = nint(v(:, 1))
+      phi = v(:, 2)
+    end if
+    mode = case_mode(modes, phi)
+    if (farm%rank /= 0) return
+    late = long_time_start(size(modes))
+    counts = mode_counts(modes)
+    late_counts = mode_counts(modes(late:))
+    if (opt%json) then
+      write (output_unit, '(a)') '{"file": "'//trim(opt%files(1))//'", "frames": '//to_str(size(modes))// &
+        ', "case_mode": '//to_str(mode)//', "mode_frames": ['//counts//'], "late_mode_frames": ['// &
+        late_counts//'], "elongation": '//to_str(opt%elongation, '(g0.6)')//'}'
+    else
+      rule = ''
+      if (opt%reclassify) rule = ', classified again with a/b >= '//to_str(opt%elongation, '(g0.6)')
+      write (output_unit, '(a)') trim(opt%files(1))//': '//to_str(size(modes))//' frames, case mode '// &
+        to_str(mode)//'; frames of no mode, mode I, mode II: '//counts//' (from frame '//to_str(late)// &
+        ': '//late_counts//')'//rule
+    end if
+  end subroutine analyse_table
+
+  !> "n0, n1, n2": the frames of no mode, mode I and mode II.
+  function mode_counts(modes) result(text)
+    integer, intent(in) :: modes(:)
+    character(len=:), allocatable :: text
+    text = to_str(count(modes == mode_none))//', '//to_str(count(modes == mode_one))//', '// &
+      to_str(count(modes == mode_two))
+  end function mode_counts
+
+  !> The modes of frame rows classified again from their shape columns with the a/b threshold
+  !> `elongation`, and their phi. Refused: a row with a value that is not a number, a negative
+  !> semi-axis, or close_pairs that is not a whole number >= 0.
+  subroutine frame_modes_from_shapes(path, elongation, modes, phi, error)
+    character(len=*), intent(in) :: path
+    real(wp), intent(in) :: elongation
+    integer, allocatable, intent(out) :: modes(:)
+    real(wp), allocatable, intent(out) :: phi(:)
+    type(error_t), allocatable, intent(out) :: error
+    character(len=*), parameter :: names(6) = [character(len=11) :: 'a', 'b', 'c', 'theta', 'phi', 'close_pairs']
     real(wp), allocatable :: v(:, :)
-    integer :: mode, k
-    call read_table_columns(opt%files(1), [character(len=4) :: 'mode', 'phi'], v, error)
+    type(shape_t), allocatable :: s(:)
+    integer :: k
+    call read_table_columns(path, names, v, error)
     if (allocated(error)) return
     do k = 1, size(v, 1)
-      if (ieee_is_nan(v(k, 1)) .or. ieee_is_nan(v(k, 2)) .or. &
-          .not. any(v(k, 1) == [real(wp) :: mode_none, mode_one, mode_two])) then
-        call fatal_error(error, "table '"//trim(opt%files(1))//"' row "//to_str(k)//': mode '// &
-          to_str(v(k, 1), '(g0.6)')//', phi '//to_str(v(k, 2), '(g0.6)')// &
-          ' (allowed: mode 0, 1 or 2 and a number for phi)')
+      if (.not. all(ieee_is_finite(v(k, :))) .or. any(v(k, 1:3) < 0.0_wp) .or. v(k, 6) < 0.0_wp .or. &
+          v(k, 6) /= aint(v(k, 6)) .or. v(k, 6) > real(huge(0), wp)) then
+        call fatal_error(error, "table '"//trim(path)//"' row "//to_str(k)//': a '//to_str(v(k, 1), '(g0.6)')// &
+          ', b '//to_str(v(k, 2), '(g0.6)')//', c '//to_str(v(k, 3), '(g0.6)')//', theta '// &
+          to_str(v(k, 4), '(g0.6)')//', phi '//to_str(v(k, 5), '(g0.6)')//', close_pairs '// &
+          to_str(v(k, 6), '(g0.6)')//' (allowed: finite numbers, semi-axes >= 0, close_pairs a whole number >= 0)')
         return
       end if
     end do
-    mode = case_mode(nint(v(:, 1)), v(:, 2))
-    if (farm%rank /= 0) return
-    if (opt%json) then
-      write (output_unit, '(a)') '{"file": "'//trim(opt%files(1))//'", "frames": '//to_str(size(v, 1))// &
-        ', "case_mode": '//to_str(mode)//'}'
-    else
-      write (output_unit, '(a)') trim(opt%files(1))//': '//to_str(size(v, 1))//' frames, case mode '//to_str(mode)
-    end if
-  end subroutine analyse_table
+    allocate (s(size(v, 1)))
+    s%a = v(:, 1)
+    s%b = v(:, 2)
+    s%c = v(:, 3)
+    s%theta = v(:, 4)
+    s%phi = v(:, 5)
+    s%close_pairs = nint(v(:, 6))
+    modes = frame_mode(s, elongation)
+    phi = v(:, 5)
+  end subroutine frame_modes_from_shapes
 
   !> True on every rank when `error` is set on any rank (a collective call: every rank makes it
   !> at the same point); a rank without an error of its own gets one naming `what`.
@@ -177,7 +247,7 @@ contains
       case ('--force')
         opt%force = .true.
       case ('--closures', '--seed', '--min-length', '--closure-points', '--stride', '--matrix-frames', &
-            '--matrix-closures', '--reuse')
+            '--matrix-closures', '--reuse', '--elongation')
         if (i == n) then
           call fatal_error(error, 'option '//trim(arg)//': missing value')
           return
@@ -208,6 +278,14 @@ contains
           opt%closure_points = val
         case ('--reuse')
           opt%reuse = val
+        case ('--elongation')
+          read (val, *, iostat=stat) opt%elongation
+          opt%reclassify = .true.
+          if (stat /= 0 .or. verify(trim(val), '0123456789.eE+-') /= 0) then
+            call bad(error, arg, val, 'a number >= 1')
+          else if (.not. ieee_is_finite(opt%elongation) .or. opt%elongation < 1.0_wp) then
+            call bad(error, arg, val, 'a number >= 1')
+          end if
         case ('--matrix-frames')
           opt%matrix_frames = val
           if (verify(trim(val), '0123456789,last') /= 0) &
@@ -218,7 +296,7 @@ contains
         if (arg(1:1) == '-') then
           call fatal_error(error, 'unknown option '//trim(arg)//' (allowed: --closures, --seed, --matrix, '// &
             '--matrix-closures, --min-length, --closure-points, --json, --per-closure, --stride, '// &
-            '--matrix-frames, --force, --reuse)')
+            '--matrix-frames, --force, --reuse, --elongation)')
           return
         end if
         if (opt%nfiles == max_files) then
@@ -236,9 +314,13 @@ contains
     if (is_table(opt%files(1))) then
       if (opt%nfiles > 1 .or. opt%matrix .or. opt%per_closure .or. len_trim(opt%closure_points) > 0 .or. &
           opt%stride /= 1 .or. opt%force .or. len_trim(opt%matrix_frames) > 0 .or. len_trim(opt%reuse) > 0) then
-        call fatal_error(error, 'a table of frame rows (.csv) is read alone, with --json at most')
+        call fatal_error(error, 'a table of frame rows (.csv) is read alone, with --json and --elongation at most')
         return
       end if
+    else if (opt%reclassify) then
+      call fatal_error(error, 'option --elongation applies to a table of frame rows (.csv), not to '// &
+        trim(opt%files(1)))
+      return
     else if (is_case_file(opt%files(1))) then
       if (opt%matrix .or. opt%json .or. opt%per_closure .or. len_trim(opt%closure_points) > 0) then
         call fatal_error(error, 'options --matrix, --json, --per-closure and --closure-points apply to '// &

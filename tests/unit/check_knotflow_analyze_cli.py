@@ -291,8 +291,67 @@ def check_case_mode_table(exe, work):
     assert p.returncode == 2 and "no column 'phi'" in p.stderr, p.stderr
     p = run(exe, table("extra_option", [1] * 10, up), "--stride", "2")
     assert p.returncode == 2 and "read alone" in p.stderr, p.stderr
+    p = run(exe, table("counts", [0] * 4 + [2] * 2 + [1] * 4, up), "--json")
+    d = json.loads(p.stdout)
+    assert d["mode_frames"] == [4, 4, 2] and d["late_mode_frames"] == [0, 4, 1], d
+
+
+def check_elongation(exe, work):
+    """--elongation: the frame modes classified again from the shape columns with another a/b
+    threshold. A coil along the vorticity (theta 0.2, 5 close pairs) with a = 2 b and phi rising
+    is mode I from a threshold of 2 down and no mode above; its stored mode column (all 0) is
+    then ignored. The finished candy-canes of the committed case ledger classified again with
+    the rule's own threshold 3 from their rows (7 digits) give the modes knotflow-analyze stored
+    from the full-precision case files (the mode column)."""
+    path = os.path.join(work, "coil.csv")
+    with open(path, "w") as f:
+        f.write("t,a,b,c,theta,phi,close_pairs,mode\n")
+        for k in range(10):
+            f.write(f"{k},4,2,0.9,0.2,{0.3 * k!r},5,0\n")
+    for value, case, frames in (("1.5", 1, [0, 10, 0]), ("2", 1, [0, 10, 0]), ("2.01", 0, [10, 0, 0]),
+                                ("3", 0, [10, 0, 0])):
+        p = run(exe, path, "--elongation", value, "--json")
+        assert p.returncode == 0, (value, p.stderr)
+        d = json.loads(p.stdout)
+        assert d["case_mode"] == case and d["mode_frames"] == frames and float(d["elongation"]) == float(value), d
+    p = run(exe, path, "--elongation", "1.5")
+    assert "case mode 1" in p.stdout and "classified again with a/b >= 1.5" in p.stdout, p.stdout
+    for value in ("0.99", "nan", "inf", "x", "-2"):
+        p = run(exe, path, "--elongation", value)
+        lines = p.stderr.strip().splitlines()
+        assert p.returncode == 2 and len(lines) == 1 and f'--elongation: invalid value "{value}"' in lines[0] \
+            and "a number >= 1" in lines[0], (value, p.stderr)
+    bad = os.path.join(work, "coil_bad.csv")
+    for name, row, text in (("nan", "10,4,2,nan,0.2,0.1,5,0", "c NaN"),
+                            ("negative", "10,4,-2,0.9,0.2,0.1,5,0", "b -2.0"),
+                            ("fraction", "10,4,2,0.9,0.2,0.1,2.5,0", "close_pairs 2.5")):
+        with open(path) as f, open(bad, "w") as g:
+            g.write(f.read() + row + "\n")
+        p = run(exe, bad, "--elongation", "2")
+        lines = p.stderr.strip().splitlines()
+        assert p.returncode == 2 and len(lines) == 1 and "row 11" in lines[0] and text in lines[0] \
+            and "close_pairs a whole number >= 0" in lines[0], (name, p.stderr)
+    with open(os.path.join(work, "chain.xyz"), "w") as f:
+        f.write("0 0 0\n1 0 0\n2 0 0\n")
+    p = run(exe, os.path.join(work, "chain.xyz"), "--elongation", "2")
+    assert p.returncode == 2 and "applies to a table of frame rows" in p.stderr, p.stderr
+    ledger = os.path.join(os.path.dirname(__file__), "..", "..", "docs", "reproduction_multipole", "ledger")
+    for case in ("candycane_multipole/A1.00", "candycane_multipole/A1.40", "candycane_seeds_multipole/A1.00_s1",
+                 "candycane_seeds_multipole/A1.00_s2", "candycane_epslub_multipole/A1.00"):
+        rows = os.path.join(ledger, case + ".csv")
+        with open(rows) as f:
+            header = f.readline().strip().split(",")
+            stored = [int(float(line.split(",")[header.index("mode")])) for line in f]
+        p = run(exe, rows, "--elongation", "3", "--json")
+        assert p.returncode == 0, (case, p.stderr)
+        d = json.loads(p.stdout)
+        late = stored[len(stored) // 2:]
+        assert d["frames"] == len(stored) == 2001, (case, d)
+        assert d["mode_frames"] == [stored.count(m) for m in range(3)], (case, d)
+        assert d["late_mode_frames"] == [late.count(m) for m in range(3)], (case, d)
 
 
 if __name__ == '__main__':
     main()
     check_case_mode_table(sys.argv[1], sys.argv[2])
+    check_elongation(sys.argv[1], sys.argv[2])
