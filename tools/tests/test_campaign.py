@@ -242,8 +242,10 @@ def test_windows_table_of_two_runs(tmp_path, capsys):
                                      ["40-60", "late/A1", "2"]]
     rg = shape_series(frames)["rg"]
     assert float(rows[1][3]) == pytest.approx(rg[2:4].mean(), abs=0.05)
-    assert rows[1][3:10] == rows[2][3:10]
-    assert rows[0][10:] == ["nan", "nan", "-", "-"]
+    assert rows[1][3:11] == rows[2][3:11]
+    bc = shape_series(frames)["b"] / shape_series(frames)["c"]
+    assert float(rows[1][8]) == pytest.approx(bc[2:4].min(), abs=0.05)
+    assert rows[0][11:] == ["nan", "nan", "-", "-"]
     assert cli.main_campaign(["windows", full, late, "--width", "20", "--offset", "5"]) == 2
     assert "--offset: 1 value(s) for 2 case(s)" in capsys.readouterr().err
     assert cli.main_campaign(["windows", full, "--width", "0"]) == 2

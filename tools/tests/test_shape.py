@@ -84,6 +84,8 @@ def test_window_means_exact_values():
     assert [(x["t0"], x["t1"], x["frames"]) for x in w] == [(0.0, 5.0, 5), (5.0, 10.0, 6)]
     assert w[0]["rg"] == pytest.approx(2.0) and w[1]["rg"] == pytest.approx(7.5)
     assert w[0]["a_over_b"] == pytest.approx(2.0) and w[1]["c"] == pytest.approx(0.5)
+    # b / c = 2 (t + 1): smallest at the first frame of each window
+    assert w[0]["b_over_c_min"] == pytest.approx(2.0) and w[1]["b_over_c_min"] == pytest.approx(12.0)
     # |cos theta| alternates 1 and 1/2: frames 0..4 -> (3 + 1) / 5, frames 5..10 -> (3 + 1.5) / 6
     assert w[0]["abs_cos_theta"] == pytest.approx(4.0 / 5.0)
     assert w[1]["abs_cos_theta"] == pytest.approx(4.5 / 6.0)

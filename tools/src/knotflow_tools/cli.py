@@ -527,12 +527,12 @@ def _window_table(args) -> list:
                                     campaign.frame_kf(case), case.modes, offset, args.t_from,
                                     args.t_to):
             rows.append((w["t0"], k, label, w))
-    head = ("| window | case | frames | R_g | a | b | c | a/b | mean abs(cos theta) | close pairs "
-            "| k_f mean | k_f max | mode I | mode II |")
+    head = ("| window | case | frames | R_g | a | b | c | a/b | min b/c | mean abs(cos theta) "
+            "| close pairs | k_f mean | k_f max | mode I | mode II |")
     lines = [head, "|" + "---|" * head.count(" | ") + "---|"]
     for t0, _, label, w in sorted(rows, key=lambda r: (r[0], r[1])):
         vals = [f"{w[c]:.2f}" if c in ("c", "a_over_b", "abs_cos_theta", "kf_mean", "kf_max")
-                else f"{w[c]:.1f}" for c in shape.WINDOW_COLUMNS[1:10]]
+                else f"{w[c]:.1f}" for c in shape.WINDOW_COLUMNS[1:11]]
         modes = ["-" if math.isnan(w[c]) else str(w[c]) for c in ("mode_1", "mode_2")]
         lines.append(f"| {t0:g}-{w['t1']:g} | {label} | {w['frames']} | " + " | ".join(vals + modes)
                      + " |")

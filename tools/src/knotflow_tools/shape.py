@@ -110,8 +110,8 @@ def spectra(time: np.ndarray, positions: np.ndarray, obs: dict) -> dict:
 
 
 #: The columns of `window_means`, in table order.
-WINDOW_COLUMNS = ("frames", "rg", "a", "b", "c", "a_over_b", "abs_cos_theta", "close_pairs",
-                  "kf_mean", "kf_max", "mode_1", "mode_2")
+WINDOW_COLUMNS = ("frames", "rg", "a", "b", "c", "a_over_b", "b_over_c_min", "abs_cos_theta",
+                  "close_pairs", "kf_mean", "kf_max", "mode_1", "mode_2")
 
 
 def window_means(time, obs: dict, width: float, kf=None, modes=None, offset: float = 0.0,
@@ -123,9 +123,10 @@ def window_means(time, obs: dict, width: float, kf=None, modes=None, offset: flo
     also holds the frames at its end up to t_to (so 0..2000 in windows of 100 is 20 windows,
     t = 2000 in the last). A window without frames is left out. Per window (WINDOW_COLUMNS):
     the number of frames, the means of R_g, a, b, c, a/b and |cos theta| and of the close
-    pairs, the mean and maximum of k_f over the frames that have one (NaN if none: kf None or
-    all NaN), and the frames of mode I and mode II (NaN when modes is None). Raises ValueError
-    on a width that is not positive and finite or on non-finite times.
+    pairs, the smallest b/c of a frame (how round the roundest frame's cross-section is: mode
+    I asks b >~ c; inf where c = 0), the mean and maximum of k_f over the frames that have one
+    (NaN if none: kf None or all NaN), and the frames of mode I and mode II (NaN when modes is
+    None). Raises ValueError on a width that is not positive and finite or on non-finite times.
     """
     if not (math.isfinite(width) and width > 0.0):
         raise ValueError(f"window width {width}: must be positive and finite")
@@ -140,6 +141,8 @@ def window_means(time, obs: dict, width: float, kf=None, modes=None, offset: flo
     md = None if modes is None else np.asarray(modes)
     o = {key: np.asarray(obs[key], dtype=float) for key in ("rg", "a", "b", "c", "close_pairs")}
     a_over_b = o["a"] / o["b"]
+    with np.errstate(divide="ignore"):
+        b_over_c = o["b"] / o["c"]
     abs_cos = np.abs(np.cos(np.asarray(obs["theta"], dtype=float)))
     out = []
     k = 0
@@ -154,6 +157,7 @@ def window_means(time, obs: dict, width: float, kf=None, modes=None, offset: flo
         for key, values in o.items():
             row[key] = float(np.mean(values[m]))
         row["a_over_b"] = float(np.mean(a_over_b[m]))
+        row["b_over_c_min"] = float(np.min(b_over_c[m]))
         row["abs_cos_theta"] = float(np.mean(abs_cos[m]))
         kw = np.array([]) if kfa is None else kfa[m][np.isfinite(kfa[m])]
         row["kf_mean"] = float(kw.mean()) if kw.size else math.nan
