@@ -250,3 +250,21 @@ def test_windows_table_of_two_runs(tmp_path, capsys):
     assert "--offset: 1 value(s) for 2 case(s)" in capsys.readouterr().err
     assert cli.main_campaign(["windows", full, "--width", "0"]) == 2
     assert "window width 0.0" in capsys.readouterr().err
+
+
+def test_shape_map_figure(tmp_path, capsys):
+    """`knotflow-campaign shapes`: a PNG of the frames of two runs in the plane of b/c and a/b;
+    a case without a frame in the time range and a wrong number of offsets are refused."""
+    from knotflow_tools import cli
+    frames = unknotting_trefoil_frames(6)
+    (tmp_path / "full").mkdir()
+    full = str(write_case(tmp_path / "full" / "A1.h5", frames, time=10.0 * np.arange(6)))
+    out = tmp_path / "map.png"
+    assert cli.main_campaign(["shapes", full, full, "--offset", "0", "20", "--from", "20",
+                              "--out", str(out)]) == 0
+    assert capsys.readouterr().out.strip() == str(out)
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert cli.main_campaign(["shapes", full, "--from", "60", "--out", str(out)]) == 2
+    assert "no frame in the time range" in capsys.readouterr().err
+    assert cli.main_campaign(["shapes", full, full, "--offset", "5", "--out", str(out)]) == 2
+    assert "--offset: 1 value(s) for 2 case(s)" in capsys.readouterr().err

@@ -96,6 +96,19 @@ def test_window_means_exact_values():
     assert np.isnan(S.window_means(t, _window_series(t), 5.0)[0]["mode_1"])
 
 
+def test_frame_ratios_exact_values():
+    # a/b = 2 everywhere, b/c = 2 (t + 1); offset 100, range [103, 105] holds t = 3, 4, 5
+    t = np.arange(11.0)
+    ab, bc = S.frame_ratios(t, _window_series(t), offset=100.0, t_from=103.0, t_to=105.0)
+    assert np.allclose(ab, 2.0) and np.allclose(bc, [8.0, 10.0, 12.0])
+    assert len(S.frame_ratios(t, _window_series(t))[0]) == 11
+    series = _window_series(t)
+    series["c"] = np.zeros(11)
+    assert np.all(np.isinf(S.frame_ratios(t, series)[1]))
+    with pytest.raises(ValueError):
+        S.frame_ratios(np.array([0.0, np.nan]), _window_series([0.0, 1.0]))
+
+
 def test_window_means_offset_and_range():
     # a run started at t = 800 of another: its times 0..30 are 800..830
     t = np.arange(31.0)

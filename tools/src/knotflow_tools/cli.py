@@ -511,16 +511,21 @@ def main_campaign(argv: Argv = None) -> int:
     return run_reporting_errors("knotflow-campaign", _campaign, argv)
 
 
-def _window_table(args) -> list:
-    """The lines of `knotflow-campaign windows`: cases interleaved window by window."""
-    from . import campaign, shape
+def _case_offsets(args) -> list:
+    """The time offset of each of args.cases (--offset, default 0), with --from and --to checked."""
     offsets = args.offset or [0.0] * len(args.cases)
     if len(offsets) != len(args.cases):
         raise ValueError(f"--offset: {len(offsets)} value(s) for {len(args.cases)} case(s)")
     if not all(math.isfinite(x) for x in offsets + [args.t_from or 0.0, args.t_to or 0.0]):
         raise ValueError("--offset, --from and --to need finite values")
+    return offsets
+
+
+def _window_table(args) -> list:
+    """The lines of `knotflow-campaign windows`: cases interleaved window by window."""
+    from . import campaign, shape
     rows = []
-    for k, (path, offset) in enumerate(zip(args.cases, offsets)):
+    for k, (path, offset) in enumerate(zip(args.cases, _case_offsets(args))):
         case = campaign.load_case(path)
         label = f"{os.path.basename(os.path.dirname(path))}/{case.name}"
         for w in shape.window_means(case.time, case.observables, args.width,
@@ -537,6 +542,22 @@ def _window_table(args) -> list:
         lines.append(f"| {t0:g}-{w['t1']:g} | {label} | {w['frames']} | " + " | ".join(vals + modes)
                      + " |")
     return lines
+
+
+def _shape_map(args) -> str:
+    """`knotflow-campaign shapes`: the frames of cases in the plane of b/c and a/b (a PNG)."""
+    from . import campaign, plot, shape
+    series = []
+    for path, offset in zip(args.cases, _case_offsets(args)):
+        case = campaign.load_case(path)
+        label = f"{os.path.basename(os.path.dirname(path))}/{case.name}"
+        ab, bc = shape.frame_ratios(case.time, case.observables, offset, args.t_from, args.t_to)
+        if len(ab) == 0:
+            raise ValueError(f"{path}: no frame in the time range")
+        series.append((label, ab, bc))
+    span = (f"t = {'start' if args.t_from is None else format(args.t_from, 'g')}–"
+            f"{'end' if args.t_to is None else format(args.t_to, 'g')}")
+    return plot.plot_shape_map(series, args.out, f"shape of every frame, {span}")
 
 
 def _campaign(argv: Argv) -> int:
@@ -574,14 +595,22 @@ def _campaign(argv: Argv) -> int:
     wn.add_argument("cases", nargs="+", metavar="CASE",
                     help="ledger entries (<ledger>/<sweep>/<case>.json) or case files (.h5)")
     wn.add_argument("--width", type=float, required=True, help="the window length")
-    wn.add_argument("--offset", type=float, nargs="+", metavar="T",
-                    help="added to each case's time (one value per case; default 0): a run "
-                    "started from a frame of another at its time")
     wn.add_argument("--from", dest="t_from", type=float, metavar="T",
                     help="the first window's start (default: each case's first time rounded "
                     "down to a multiple of --width)")
-    wn.add_argument("--to", dest="t_to", type=float, metavar="T",
-                    help="the last time included (default: each case's last)")
+    sm = sub.add_parser("shapes", help="the frames of cases in the plane of b/c and a/b, with "
+                        "the thresholds of the mode rule (a PNG): how far from each mode")
+    sm.add_argument("--out", required=True, metavar="PNG", help="the figure to write")
+    sm.add_argument("cases", nargs="+", metavar="CASE",
+                    help="ledger entries (<ledger>/<sweep>/<case>.json) or case files (.h5)")
+    for q in (wn, sm):
+        q.add_argument("--offset", type=float, nargs="+", metavar="T",
+                       help="added to each case's time (one value per case; default 0): a run "
+                       "started from a frame of another at its time")
+        q.add_argument("--to", dest="t_to", type=float, metavar="T",
+                       help="the last time included (default: each case's last)")
+    sm.add_argument("--from", dest="t_from", type=float, metavar="T",
+                    help="the first time included (default: each case's first)")
     for q in (pl, dg, st, md):
         q.add_argument("--ledger", required=True, help="the ledger directory")
     for q in (pl, dg):
@@ -604,6 +633,8 @@ def _campaign(argv: Argv) -> int:
     elif args.command == "windows":
         for line in _window_table(args):
             print(line)
+    elif args.command == "shapes":
+        print(_shape_map(args))
     elif args.command == "mode":
         e = campaign.set_case_mode(args.ledger, args.sweep, args.case, args.analyze_json)
         print(f"{args.sweep}/{args.case}: case mode {e['case_mode']['mode']} of "

@@ -1,5 +1,5 @@
 """Figures of one case: k_f(t) with events, shape panels, the rheology (files with the stresslet),
-knot matrices, 3D snapshots, movie."""
+knot matrices, 3D snapshots, movie; and the shape map of several cases (a/b against b/c)."""
 
 from __future__ import annotations
 
@@ -171,6 +171,29 @@ def plot_knot_matrix(mat: np.ndarray, path, title: str = "") -> str:
     ax.set_ylabel("start bead i")
     ax.set_title(title + "\n(pale blue: not computed)", fontsize=9)
     fig.colorbar(im, ax=ax, label="$k_f$ of subchain i..j")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return str(path)
+
+
+def plot_shape_map(series: list, path, title: str = "") -> str:
+    """Every frame of each (label, a/b, b/c) of `series` as a point in the plane of b/c and a/b
+    (both logarithmic), with the lines that separate the modes of knotflow's rule (a = 3 b;
+    mode II asks b >= 2 c) and of its former one (a = 1.5 b), and the band b <= 2 c where the
+    cross-section is nearly round, as the study's mode I (a >> b >~ c) has it."""
+    fig, ax = plt.subplots(figsize=(6.4, 6.0), layout="constrained")
+    ax.axvspan(0.9, 2.0, color="0.9", zorder=0, label="b ≤ 2 c: round cross-section (mode I: b ≳ c)")
+    for label, ab, bc in series:
+        ax.scatter(np.minimum(bc, 1e3), ab, s=4, alpha=0.35, label=f"{label} ({len(ab)} frames)")
+    ax.axhline(3.0, color="k", lw=0.9, label="a = 3 b (knotflow's a ≫ b)")
+    ax.axhline(1.5, color="k", lw=0.9, ls="--", label="a = 1.5 b (its former rule)")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlim(left=0.9)
+    ax.set_xlabel("b / c")
+    ax.set_ylabel("a / b")
+    ax.set_title(title, fontsize=9)
+    fig.legend(loc="outside lower center", ncols=2, fontsize=7, markerscale=3)
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return str(path)

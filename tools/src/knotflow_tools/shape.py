@@ -114,6 +114,24 @@ WINDOW_COLUMNS = ("frames", "rg", "a", "b", "c", "a_over_b", "b_over_c_min", "ab
                   "close_pairs", "kf_mean", "kf_max", "mode_1", "mode_2")
 
 
+def frame_ratios(time, obs: dict, offset: float = 0.0, t_from: float | None = None,
+                 t_to: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(a/b, b/c) of the frames whose time offset + time lies in [t_from, t_to] (default: all):
+    where a frame lies between the study's mode I (a >> b >~ c) and mode II (a >> b >> c).
+    b/c is inf where c = 0. Raises ValueError on non-finite times."""
+    t = offset + np.asarray(time, dtype=float)
+    if not np.all(np.isfinite(t)):
+        raise ValueError("non-finite frame times")
+    m = np.ones(len(t), dtype=bool)
+    if t_from is not None:
+        m &= t >= t_from
+    if t_to is not None:
+        m &= t <= t_to
+    a, b, c = (np.asarray(obs[k], dtype=float)[m] for k in ("a", "b", "c"))
+    with np.errstate(divide="ignore"):
+        return a / b, b / c
+
+
 def window_means(time, obs: dict, width: float, kf=None, modes=None, offset: float = 0.0,
                  t_from: float | None = None, t_to: float | None = None) -> list:
     """Means of the shape observables over consecutive windows of the case time offset + time.
