@@ -82,3 +82,30 @@ def test_confirmation_with_more_closures_replaces_the_screen(tmp_path):
     assert m["slipknot"] and m["max_K"] == 0.6
     assert m["recomputed_max_K"] == 0.35 and not m["recomputed_slipknot"]
     assert study_slipknots.slip_verdict(m) == study_slipknots.REJECTED and "confirmed_slipknot" not in m
+
+
+def _cane(case, a, kf, status="finished"):
+    from types import SimpleNamespace
+    t = np.arange(len(kf), dtype=float)
+    return {"case": case, "A": a, "status": status, "t_reached": t[-1], "t_end": 2000.0,
+            "_ana": SimpleNamespace(time=t, kf=np.asarray(kf, dtype=float))}
+
+
+def test_ensemble_kf_series_puts_each_seeded_case_beside_its_rotations(tmp_path):
+    rows = [_cane("A1.00", 1.0, [0.0, 0.1]), _cane("A1.40", 1.4, [0.0, 0.0]),
+            _cane("A3.00", 3.0, [0.0, 0.8])]
+    ensemble = [_cane("A3.00_s1", 3.0, [0.0, 1.0]), _cane("A1.00_s1", 1.0, [0.2, 0.3]),
+                _cane("A3.00_s2", 3.0, [0.1], status="running")]
+    panels = study.ensemble_kf_series(rows, ensemble)
+    # one panel per A of the rotations, ascending; A = 1.4 has no rotation and no panel
+    assert list(panels) == [1.0, 3.0]
+    assert [s[0] for s in panels[1.0]] == ["A1.00 (seeded rotation)", "A1.00_s1"]
+    assert [s[0] for s in panels[3.0]] == ["A3.00 (seeded rotation)", "A3.00_s1",
+                                           "A3.00_s2 (running, t = 0 of 2000)"]
+    # each series is its case's own k_f(t)
+    assert panels[3.0][1][2].tolist() == [0.0, 1.0] and panels[1.0][1][1].tolist() == [0.0, 1.0]
+    # without the sweep's cases the rotations stand alone; without rotations there is no figure
+    assert [s[0] for s in study.ensemble_kf_series([], ensemble)[1.0]] == ["A1.00_s1"]
+    assert study.plot_ensemble_kf(rows, [], str(tmp_path / "none.png")) is None
+    path = study.plot_ensemble_kf(rows, ensemble, str(tmp_path / "e.png"))
+    assert path == str(tmp_path / "e.png") and (tmp_path / "e.png").stat().st_size > 10000

@@ -68,6 +68,8 @@ from .study_rows import (  # noqa: E402
 )
 from .study_slipknots import SLIPKNOT_FIGURE, load_json, plot_slipknots, slipknot_caption, slipknot_tables  # noqa: E402
 
+ENSEMBLE_KF_FIGURE = "candycane_ensemble_kf.png"
+
 
 def time_frames(time, every_time):
     """Frames of the time axis `time` (increasing) at the multiples of `every_time` (> 0) in
@@ -161,6 +163,43 @@ def plot_candycane_kf(rows, path):
     ax.set_xlabel(r"time $\dot\gamma t$")
     ax.set_ylabel("$k_f$ (whole chain)")
     ax.legend(fontsize=8)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def ensemble_kf_series(rows, ensemble):
+    """Per bending stiffness A of the rotations `ensemble` (ascending): (label, time, k_f) of
+    the candy-cane sweep's case of that A in `rows` (labelled as the seeded rotation) and then
+    of each rotation, in their order; a case not finished says so in its label. An A of `rows`
+    without rotations has no panel."""
+    def series(r, what=""):
+        notes = [n for n in (what, "" if finished(r) else status_text(r)) if n]
+        label = f"{r['case']} ({', '.join(notes)})" if notes else r["case"]
+        return label, r["_ana"].time, r["_ana"].kf
+
+    panels = {}
+    for a in sorted({r["A"] for r in ensemble}):
+        panels[a] = ([series(r, "seeded rotation") for r in rows if r["A"] == a]
+                     + [series(r) for r in ensemble if r["A"] == a])
+    return panels
+
+
+def plot_ensemble_kf(rows, ensemble, path):
+    """candycane_ensemble_kf.png: whole-chain k_f(t) of every rotation, one panel per A."""
+    panels = ensemble_kf_series(rows, ensemble)
+    if not panels:
+        return None
+    fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.6 * len(panels)), sharex=True,
+                             squeeze=False, constrained_layout=True)
+    for ax, (a, series) in zip(axes[:, 0], panels.items()):
+        for label, t, kf in series:
+            ax.plot(t, kf, lw=0.8, label=label)
+        ax.set_ylim(-0.03, 1.03)
+        ax.set_ylabel("$k_f$ (whole chain)")
+        ax.set_title(f"Candy-cane A = {a:g}: the random rotations", fontsize=9)
+        ax.legend(fontsize=7)
+    axes[-1, 0].set_xlabel(r"time $\dot\gamma t$")
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return path
@@ -429,6 +468,7 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
           f"Trefoil sweep: `{trefoil_dir}`; candy-cane sweep: `{candycane_dir}`.", ""]
     result = {}
     comparison = {}
+    cane_rows = []  # the candy-cane sweep's rows, beside the rotations in their k_f figure
     # A directory of case files, or one sweep of a case ledger (campaign.py).
     files = {d: find_case_files(d) or find_ledger_cases(d)
              for d in (trefoil_dir, candycane_dir, ensemble_dir) if d}
@@ -453,7 +493,8 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
     if candycane_dir and not files[candycane_dir]:
         md += ["## Candy-cane", "", no_case_files(candycane_dir), ""]
     elif candycane_dir:
-        rows = candycane_rows(files[candycane_dir], closures, confirm_dir, ledger_matrices)
+        rows = cane_rows = candycane_rows(files[candycane_dir], closures, confirm_dir,
+                                          ledger_matrices)
         figs = [plot_candycane_shapes(rows, os.path.join(out, "candycane_shape.png")),
                 plot_candycane_kf(rows, os.path.join(out, "candycane_kf.png")),
                 plot_candycane_snapshots(rows, os.path.join(out, "candycane_snapshots.png")),
@@ -474,7 +515,11 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
     if ensemble_dir and not files[ensemble_dir]:
         md += ["## Candy-cane ensemble", "", no_case_files(ensemble_dir), ""]
     elif ensemble_dir:
-        md += ["## Candy-cane ensemble", ""] + ensemble_tables(ensemble) + [""]
+        md += ["## Candy-cane ensemble", ""]
+        fig = plot_ensemble_kf(cane_rows, ensemble, os.path.join(out, ENSEMBLE_KF_FIGURE))
+        if fig:
+            md += [f"![{ENSEMBLE_KF_FIGURE}]({ENSEMBLE_KF_FIGURE})", ""]
+        md += ensemble_tables(ensemble) + [""]
         md += sweep_records(ensemble)
         result["ensemble"] = _public(ensemble)
     if comparison:
