@@ -1,5 +1,7 @@
 """knotflow-study: the Table 2 comparison and the slipknot scan on constructed inputs."""
 
+from types import SimpleNamespace
+
 import numpy as np
 
 from knotflow_tools import study, study_reference, study_rows, study_slipknots
@@ -85,7 +87,6 @@ def test_confirmation_with_more_closures_replaces_the_screen(tmp_path):
 
 
 def _cane(case, a, kf, status="finished"):
-    from types import SimpleNamespace
     t = np.arange(len(kf), dtype=float)
     return {"case": case, "A": a, "status": status, "t_reached": t[-1], "t_end": 2000.0,
             "_ana": SimpleNamespace(time=t, kf=np.asarray(kf, dtype=float))}

@@ -155,14 +155,19 @@ def plot_candycane_shapes(rows, path):
     return path
 
 
+def _draw_kf(ax, series, legend_size):
+    """Whole-chain k_f(t) of each (label, time, k_f) of `series` on the axes `ax`."""
+    for label, t, kf in series:
+        ax.plot(t, kf, lw=0.8, label=label)
+    ax.set_ylim(-0.03, 1.03)
+    ax.set_ylabel("$k_f$ (whole chain)")
+    ax.legend(fontsize=legend_size)
+
+
 def plot_candycane_kf(rows, path):
     fig, ax = plt.subplots(figsize=(9, 3), constrained_layout=True)
-    for r in rows:
-        ax.plot(r["_ana"].time, r["_ana"].kf, lw=0.8, label=f"A = {r['A']:g}")
-    ax.set_ylim(-0.03, 1.03)
+    _draw_kf(ax, [(f"A = {r['A']:g}", r["_ana"].time, r["_ana"].kf) for r in rows], 8)
     ax.set_xlabel(r"time $\dot\gamma t$")
-    ax.set_ylabel("$k_f$ (whole chain)")
-    ax.legend(fontsize=8)
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return path
@@ -193,12 +198,8 @@ def plot_ensemble_kf(rows, ensemble, path):
     fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.6 * len(panels)), sharex=True,
                              squeeze=False, constrained_layout=True)
     for ax, (a, series) in zip(axes[:, 0], panels.items()):
-        for label, t, kf in series:
-            ax.plot(t, kf, lw=0.8, label=label)
-        ax.set_ylim(-0.03, 1.03)
-        ax.set_ylabel("$k_f$ (whole chain)")
+        _draw_kf(ax, series, 7)
         ax.set_title(f"Candy-cane A = {a:g}: the random rotations", fontsize=9)
-        ax.legend(fontsize=7)
     axes[-1, 0].set_xlabel(r"time $\dot\gamma t$")
     fig.savefig(path, dpi=100)
     plt.close(fig)
