@@ -85,6 +85,14 @@ def test_three_column_trefoil_cells_and_counts():
     assert row["| 3"].startswith("| 3 | - / **U->K** / - |")
     assert "U->K / **-*** / ?" in row["| 2.1"]           # running, no RPY case
     assert row["| 0.8"] == "| 0.8 |   |   |   | - / ? / - |"   # (d, 0.8): not run here
+    # "Every case": a case not run by one model still fills its four cells, so that every row
+    # has the header's eleven cells and the other model's columns stay under their heads
+    cases = [ln for ln in lines if ln.startswith("| A") and "_or" in ln]
+    assert len(cases) == 5
+    assert {ln.count("|") for ln in cases} == {lines[lines.index("Every case:") + 2].count("|")}
+    assert "| A0.80_ord | - | no | not run | | | | none | 0 | knotted | - |" in cases
+    assert "| A2.10_orc | running, t = 400 of 1000 | yes | unknot 5 | 0 | unknotted | - | not run | | | |" \
+        in cases
     assert (doc["ours"]["agree"], doc["ours"]["cases"]) == (1, 4)
     assert (doc["rpy"]["agree"], doc["rpy"]["cases"]) == (3, 4)
     assert (doc["ours"]["events"], doc["ours"]["simulations"]) == (3, 2)

@@ -180,7 +180,7 @@ def trefoil_comparison(rows, rpy):
 
         def part(x):
             if x is None:
-                return "not run | | |"
+                return "not run | | | |"
             ev = ", ".join(f"{k} {t:g}" for k, t in x["events"]) or "none"
             return f"{ev} | {reknottings(x['events'])} | {x['final_state']} | {x['mode']} |"
 
