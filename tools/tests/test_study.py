@@ -110,3 +110,17 @@ def test_ensemble_kf_series_puts_each_seeded_case_beside_its_rotations(tmp_path)
     assert study.plot_ensemble_kf(rows, [], str(tmp_path / "none.png")) is None
     path = study.plot_ensemble_kf(rows, ensemble, str(tmp_path / "e.png"))
     assert path == str(tmp_path / "e.png") and (tmp_path / "e.png").stat().st_size > 10000
+
+
+def test_overlap_table_rounds_the_min_distance_down():
+    # An overlap just below d = 1 must not print as 1 (rounding to nearest gave 1.0000 for
+    # 0.99998); rounding down keeps the digits that are certain; an unrecorded one is '-'.
+    def row(case, dist):
+        return {"case": case, "status": "finished", "t_end": 1000.0, "t_reached": 1000.0,
+                "overlap": {"source": "file", "overlap_episodes": 1, "overlap_mean_duration": 0.5,
+                            "overlap_max_duration": 0.5, "max_overlapping_pairs": 1,
+                            "min_distance": dist, "strand_passages": 0}}
+    rows = [row("near", 0.999989), row("tiny", 1.0 - 1e-9), row("apart", 1.0213), row("none", -1.0)]
+    cells = {line.split(" | ")[0].lstrip("| "): line.split(" | ")[6]
+             for line in study.overlap_table(rows)[2:]}
+    assert cells == {"near": "0.99998", "tiny": "0.99999", "apart": "1.02130", "none": "-"}

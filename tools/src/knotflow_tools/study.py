@@ -38,6 +38,7 @@ furthest, labelled not confirmed. A sweep directory without case files is named 
 
 from __future__ import annotations
 
+import decimal
 import json
 import math
 import os
@@ -300,8 +301,17 @@ def trefoil_tables(rows):
     return out, agree, total
 
 
+def min_distance_text(d) -> str:
+    """A smallest distance rounded down to 5 decimals, so that an overlap (below d = 1) never
+    prints as 1; '-' when not recorded (None or negative)."""
+    if d is None or d < 0:
+        return "-"
+    return str(decimal.Decimal(repr(d)).quantize(decimal.Decimal("1e-5"), rounding=decimal.ROUND_FLOOR))
+
+
 def overlap_table(rows) -> list:
-    """Overlap statistics under BWE of every case (the run diagnostics' totals)."""
+    """Overlap statistics under BWE of every case (the run diagnostics' totals); the min distance
+    rounded down (min_distance_text)."""
     out = ["| case | status | overlap episodes | mean duration | max duration | "
            "max overlapping pairs | min distance | strand passages |",
            "|---|---|---|---|---|---|---|---|"]
@@ -313,7 +323,7 @@ def overlap_table(rows) -> list:
         out.append(f"| {r['case']} | {status_text(r)} | {d.get('overlap_episodes', '-')} | "
                    f"{fmt(d.get('overlap_mean_duration'), '.2f')} | "
                    f"{fmt(d.get('overlap_max_duration'), '.2f')} | "
-                   f"{d.get('max_overlapping_pairs', '-')} | {fmt(d.get('min_distance'), '.4f')} | "
+                   f"{d.get('max_overlapping_pairs', '-')} | {min_distance_text(d.get('min_distance'))} | "
                    f"{d.get('strand_passages', '-')} |")
     if any(r["overlap"] and r["overlap"]["source"] == "checkpoint" for r in rows):
         out += ["", "A case not finished: its totals from the state in its newest checkpoint "
