@@ -62,6 +62,8 @@ def test_reknot_totals_and_the_line_with_the_study():
     assert "| A1.00_orc | running, t = 400 of 1000 |" in text
     assert "U->K* / -" in text                          # the running case's cell is marked
     assert (agree, total) == (1, 3)
+    # (1, a) and the running (1, c) re-knot where Table 2 has none; only (1, b) agrees
+    assert "Agreement: 1 of 2 finished cases (1 of 3 with those not finished)." in text
 
 
 # ---------------------------------------------------------------------- three-column tables
@@ -101,6 +103,9 @@ def test_three_column_trefoil_cells_and_counts():
     assert "| unknot-then-knot events | 13 | 3 | 1 |" in text
     assert "| simulations with one or more | 4 of 29 | 2 of 4 | 1 of 4 |" in text
     assert "| cases finished | 29 | 3 of 29 | 4 of 4 |" in text
+    # agreement: ours (2.2, c) of the finished three, the running (2.1, c) differs; RPY 3 of 4
+    assert ("| cells agreeing with the study | - | 1 of 3 finished cases (1 of 4 with those not "
+            "finished) | 3 of 4 cases |") in text
     assert "| final state knotted / unknotted / undecided | not stated | 1 / 3 / 0 | 1 / 3 / 0 |" \
         in text
     # stiff (A >= 2.2): ours (2.2, c) '-' and (3, a) II; RPY (2.2, c) '-' and (3, a) II
@@ -224,7 +229,7 @@ def test_overlap_statistics_of_a_running_case_come_from_its_checkpoint(tmp_path)
              "overlap": study_rows.overlap_stats(case)},
             {"case": "old", "status": "finished", "overlap": None}]
     text = "\n".join(study.overlap_table(rows))
-    assert "| run | running, t = 2 of 10 | 7 | 2.50 | 6.00 | 3 | 0.9000 | 1 |" in text
+    assert "| run | running, t = 2 of 10 | 7 | 2.50 | 6.00 | 3 | 0.90000 | 1 |" in text
     assert "| old | finished | not recorded |" in text
 
 

@@ -343,7 +343,7 @@ def _study(argv: Argv) -> int:
                             rpy_trefoil, rpy_candycane, args.ledger_matrices)
     if "trefoil" in res:
         t, k = res["trefoil"], res["trefoil"]["reknottings"]
-        print(f"trefoils: {t['agree']} of {t['total']} cases agree with the study on "
+        print(f"trefoils: {t['agreement']} agree with the study on "
               f"unknot-then-knot transitions; {k['events']} re-knottings in {k['simulations']} "
               f"of {k['cases']} cases; {k['finished']} finished")
     print(f"wrote {os.path.join(args.out, 'results.md')}")

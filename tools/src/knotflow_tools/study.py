@@ -56,6 +56,7 @@ from .report import find_case_files  # noqa: E402
 from .study_compare import candycane_comparison, trefoil_comparison  # noqa: E402
 from .study_reference import STUDY_REKNOT_EVENTS, STUDY_REKNOT_SIMULATIONS, STUDY_TREFOIL_CASES  # noqa: E402
 from .study_rows import (  # noqa: E402
+    agreement_text,
     candycane_rows,
     close_pair_ratio,
     finished,
@@ -288,7 +289,7 @@ def trefoil_tables(rows):
             cell = f"{ours}{_star(r)} / {study}"
             cells.append(cell if ours == study else f"**{cell}**")
         out.append(f"| {a:g} | " + " | ".join(cells) + " |")
-    out += ["", f"Agreement: {agree} of {total} cases.", "", _reknot_line(reknot_totals(rows)), "",
+    out += ["", f"Agreement: {agreement_text(rows)}.", "", _reknot_line(reknot_totals(rows)), "",
             "### Every trefoil case", "",
             "| case | status | k_f(0) | events (time) | re-knottings | final k_f | final state | "
             "mode | study U->K |",
@@ -499,7 +500,8 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
             lines, comparison["trefoil"] = trefoil_comparison(rows, rpy_trefoil["trefoil"])
             md += lines + [""]
         md += sweep_records(rows)
-        result["trefoil"] = {"agree": agree, "total": total, "reknottings": reknot_totals(rows),
+        result["trefoil"] = {"agree": agree, "total": total, "agreement": agreement_text(rows),
+                             "reknottings": reknot_totals(rows),
                              "cases": _public(rows)}
     if candycane_dir and not files[candycane_dir]:
         md += ["## Candy-cane", "", no_case_files(candycane_dir), ""]

@@ -23,6 +23,8 @@ from .study_reference import (
     in_study,
 )
 from .study_rows import (
+    agreement_text,
+    agrees,
     close_pair_ratio,
     finished,
     finished_line,
@@ -103,8 +105,7 @@ def _summary(rows) -> dict:
     """Counts of one model's trefoil cases: agreement, re-knottings, final states, modes."""
     tot = reknot_totals(rows)
     stiff = [r for r in rows if r["A"] >= STUDY_STIFF_A - 1e-9]
-    return {**tot, "agree": sum(utk(r) == ("U->K" if in_study(r["A"], r["orientation"]) else "-")
-                                for r in rows),
+    return {**tot, "agree": sum(agrees(r) for r in rows),
             "final_states": {s: sum(r["final_state"] == s for r in rows)
                              for s in ("knotted", "unknotted", "undecided")},
             "modes": {m: sum(r["mode"] == m for r in rows) for m in ("I", "II", "-", "?")},
@@ -159,8 +160,7 @@ def trefoil_comparison(rows, rpy):
     out += ["", *_head3("", head),
             _row3("cases finished", STUDY_TREFOIL_CASES,
                   f"{sm['finished']} of {STUDY_TREFOIL_CASES}", f"{sr['finished']} of {sr['cases']}"),
-            _row3("cells agreeing with the study", "-", f"{sm['agree']} of {sm['cases']}",
-                  f"{sr['agree']} of {sr['cases']}"),
+            _row3("cells agreeing with the study", "-", agreement_text(rows), agreement_text(rpy)),
             _row3("unknot-then-knot events", STUDY_REKNOT_EVENTS, sm["events"], sr["events"]),
             _row3("simulations with one or more",
                   f"{STUDY_REKNOT_SIMULATIONS} of {STUDY_TREFOIL_CASES}",

@@ -176,6 +176,24 @@ def reknot_totals(rows) -> dict:
             "cases": len(rows), "finished": sum(finished(r) for r in rows)}
 
 
+def agrees(row) -> bool:
+    """Whether a trefoil case has the study's Table 2 outcome (an unknot-then-knot transition or
+    none)."""
+    return utk(row) == ("U->K" if in_study(row["A"], row["orientation"]) else "-")
+
+
+def agreement_text(rows) -> str:
+    """'a of n cases' agreeing with Table 2; with cases not finished, the finished ones first (a
+    running case's outcome may still change): 'a of n finished cases (b of m with those not
+    finished)'."""
+    done = [r for r in rows if finished(r)]
+    n_all = sum(agrees(r) for r in rows)
+    if len(done) == len(rows):
+        return f"{n_all} of {len(rows)} cases"
+    return (f"{sum(agrees(r) for r in done)} of {len(done)} finished cases "
+            f"({n_all} of {len(rows)} with those not finished)")
+
+
 def close_pair_ratio(rows, key="close_pairs_mean"):
     """Mean of `key` over the cases with A = 1 over that with A = 3 (None without either or
     with none at A = 3)."""
