@@ -57,6 +57,7 @@ from .study_compare import candycane_comparison, trefoil_comparison  # noqa: E40
 from .study_reference import STUDY_REKNOT_EVENTS, STUDY_REKNOT_SIMULATIONS, STUDY_TREFOIL_CASES  # noqa: E402
 from .study_rows import (  # noqa: E402
     agreement_text,
+    agrees,
     candycane_rows,
     close_pair_ratio,
     finished,
@@ -274,7 +275,6 @@ def trefoil_tables(rows):
            "**bold** where they differ. Every case starts as an open trefoil (knotted); an "
            "untying is k_f falling below 0.1, a re-knotting k_f rising above 0.9 afterwards.", "",
            "| A | " + " | ".join(o_vals) + " |", "|---|" + "---|" * len(o_vals)]
-    agree = total = 0
     for a in a_vals:
         cells = []
         for o in o_vals:
@@ -284,8 +284,6 @@ def trefoil_tables(rows):
                 continue
             ours = utk(r)
             study = "U->K" if r["study_transition"] else "-"
-            total += 1
-            agree += ours == study
             cell = f"{ours}{_star(r)} / {study}"
             cells.append(cell if ours == study else f"**{cell}**")
         out.append(f"| {a:g} | " + " | ".join(cells) + " |")
@@ -299,7 +297,7 @@ def trefoil_tables(rows):
         out.append(f"| {r['case']} | {status_text(r)} | {r['kf0']:.2f} | {ev} | "
                    f"{reknottings(r['events'])} | {r['final_kf']:.2f} | {r['final_state']} | "
                    f"{r['mode']} | {'yes' if r['study_transition'] else 'no'} |")
-    return out, agree, total
+    return out, sum(agrees(r) for r in rows), len(rows)
 
 
 def min_distance_text(d) -> str:
