@@ -268,3 +268,25 @@ def test_shape_map_figure(tmp_path, capsys):
     assert "no frame in the time range" in capsys.readouterr().err
     assert cli.main_campaign(["shapes", full, full, "--offset", "5", "--out", str(out)]) == 2
     assert "--offset: 1 value(s) for 2 case(s)" in capsys.readouterr().err
+
+
+def test_ledger_case_names_its_overlap_rule(tmp_path):
+    """A ledger entry carries the overlap rule of its scene (`&hydro overlap`), so the study's
+    tables name the rule a case ran with: a multipole case with overlap = 'relax' is 'relax',
+    a model without an overlap rule has none."""
+    from knotflow_tools import study_rows
+    multipole = SCENE + "&hydro\n  model = 'multipole'\n  overlap = 'relax'\n/\n"
+    rpy = SCENE + "&hydro\n  model = 'rpy'\n  overlap = 'pair'\n/\n"
+    for scene, rule in ((multipole, "relax"), (rpy, None)):
+        path = str(write_case(tmp_path / "A1.00.h5", unknotting_trefoil_frames(3),
+                              attrs={"integrator.t_end": 2.0, "scene": scene}))
+        with h5py.File(path, "r+") as f:
+            g = f.create_group("analysis/knots")
+            g.attrs["closures"] = np.int64(10)
+            g["frame_index"] = np.arange(3, dtype=np.int64)
+            g["time"] = np.arange(3.0)
+            g["kf"] = np.zeros(3)
+        ledger = tmp_path / f"ledger_{rule}"
+        campaign.digest(path, str(ledger), "cc", 10)
+        case = campaign.ledger_case(str(ledger / "cc" / "A1.00.json"))
+        assert study_rows.overlap_rule(case) == rule

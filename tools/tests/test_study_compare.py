@@ -109,7 +109,9 @@ def test_three_column_trefoil_cells_and_counts():
     assert "| final state knotted / unknotted / undecided | not stated | 1 / 3 / 0 | 1 / 3 / 0 |" \
         in text
     # stiff (A >= 2.2): ours (2.2, c) '-' and (3, a) II; RPY (2.2, c) '-' and (3, a) II
-    assert "| stiff trefoils (A >= 2.2) in mode II | tumble (mode II) | 1 of 2 | 1 of 2 |" in text
+    # the study reports no mode for its trefoils (tumbling only for stiff candy-canes)
+    assert ("| stiff trefoils (A >= 2.2) in mode II | not reported (tumbling is reported for stiff "
+            "candy-canes) | 1 of 2 | 1 of 2 |") in text
     assert doc["columns"] == ["the study", "knotflow multipole", "knotflow RPY + EV"]
 
 
@@ -146,6 +148,9 @@ def test_three_column_candycane_ratios_modes_and_slipknots():
     assert "| 1.4: slipknots | found | not run | 1 candidates, 1 recomputed, 0 still " \
            "slipknots, 0 confirmed (2 frames) |" in text
     assert "| 3: rotations: case mode I / II / neither | - | not run | 0 / 1 / 1 |" in text
+    # the study's slipknots: found at A = 1.4, described visually at A = 3, nothing said at A = 1
+    assert "| 3: slipknots | described visually |" in text
+    assert "| 1: slipknots | not stated |" in text
     per = {e["A"]: e for e in doc["per_A"]}
     assert per[1.4]["rpy"][0]["slip_candidates"] == 1 and per[1.4]["ours"] == []
     assert per[1.0]["rpy_rotations_modes"] == {"I": 1, "II": 0, "-": 1, "?": 0}
@@ -231,6 +236,24 @@ def test_overlap_statistics_of_a_running_case_come_from_its_checkpoint(tmp_path)
     text = "\n".join(study.overlap_table(rows))
     assert "| run | running, t = 2 of 10 | 7 | 2.50 | 6.00 | 3 | 0.90000 | 1 |" in text
     assert "| old | finished | not recorded |" in text
+
+
+def test_overlap_heading_names_each_rule_by_its_scene_name(tmp_path):
+    """The heading names the rules the cases ran with ('relax' is never called BWE); a model
+    without an overlap rule (RPY) is named as such; the rule is read from the case's attributes."""
+    def row(rule):
+        return {"case": "x", "overlap_rule": rule}
+    assert study.overlap_heading([row("relax")]) == "#### Overlap statistics (overlap = 'relax')"
+    assert study.overlap_heading([row("bwe"), row("pair"), row(None)]) == \
+        "#### Overlap statistics (overlap = 'bwe'; overlap = 'pair'; a model without an overlap rule)"
+    path = write_case(tmp_path / "m.h5", _straight(3))
+    with h5py.File(path, "a") as f:
+        f.attrs["hydro.model"] = "multipole"
+        f.attrs["hydro.overlap"] = "relax"
+    assert study_rows.overlap_rule(io.read_case(path)) == "relax"
+    with h5py.File(path, "a") as f:
+        f.attrs["hydro.model"] = "rpy"
+    assert study_rows.overlap_rule(io.read_case(path)) is None
 
 
 # ---------------------------------------------------------------------------- run records

@@ -627,7 +627,7 @@ def ledger_case(path: str, matrices_dir: str | None = None):
     for key, group, var in (("forces.bending_a", "forces", "bending_a"),
                             ("chain.orientation", "chain", "orientation"),
                             ("chain.seed", "chain", "seed"), ("chain.shape", "chain", "shape"),
-                            ("hydro.model", "hydro", "model")):
+                            ("hydro.model", "hydro", "model"), ("hydro.overlap", "hydro", "overlap")):
         attrs[key] = _scene_value(scene, group, var)
     case = Case(path=path, attrs=attrs, time=t, positions=pos,
                 observables={k: rows[:, col[k]] for k in FRAME_COLUMNS[2:9]})

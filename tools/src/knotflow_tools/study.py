@@ -11,7 +11,7 @@ Nothing is recomputed that /analysis already holds; k_f is computed here only fo
 
 Every trefoil table counts the re-knottings (knot events after an untying) per case and in
 total, against the study's 13 in 4 of 29 simulations. Per sweep, results.md has the overlap
-statistics under BWE (run diagnostics) and the run records (/runs: commit, wall time, load) of
+statistics, headed by the overlap rule each case ran with (run diagnostics), and the run records (/runs: commit, wall time, load) of
 every case. A sweep may be running: cases not 'finished' are included, marked with their status
 and the time reached, and the tables say how many cases are finished.
 
@@ -308,8 +308,17 @@ def min_distance_text(d) -> str:
     return str(decimal.Decimal(repr(d)).quantize(decimal.Decimal("1e-5"), rounding=decimal.ROUND_FLOOR))
 
 
+def overlap_heading(rows) -> str:
+    """The heading of the overlap statistics, naming the overlap rule(s) the cases ran with by
+    their scene names (only 'bwe' is the study's BWE rule)."""
+    rules = sorted({r.get("overlap_rule") for r in rows} - {None})
+    without = any(r.get("overlap_rule") is None for r in rows)
+    parts = [f"overlap = '{x}'" for x in rules] + (["a model without an overlap rule"] if without else [])
+    return "#### Overlap statistics (" + "; ".join(parts) + ")"
+
+
 def overlap_table(rows) -> list:
-    """Overlap statistics under BWE of every case (the run diagnostics' totals); the min distance
+    """Overlap statistics of every case (the run diagnostics' totals); the min distance
     rounded down (min_distance_text)."""
     out = ["| case | status | overlap episodes | mean duration | max duration | "
            "max overlapping pairs | min distance | strand passages |",
@@ -374,7 +383,7 @@ def runs_table(rows) -> list:
 
 def sweep_records(rows) -> list:
     """The overlap statistics and run records sections of a sweep."""
-    return (["#### Overlap statistics under BWE", ""] + overlap_table(rows)
+    return ([overlap_heading(rows), ""] + overlap_table(rows)
             + ["", "#### Runs", ""] + runs_table(rows) + [""])
 
 

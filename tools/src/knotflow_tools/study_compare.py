@@ -14,6 +14,7 @@ from .study_reference import (
     STUDY_REKNOT_EVENTS,
     STUDY_REKNOT_SIMULATIONS,
     STUDY_SLIPKNOT_A,
+    STUDY_VISUAL_SLIPKNOT_A,
     STUDY_STIFF_A,
     STUDY_STIFF_MODE,
     STUDY_TRANSITIONS,
@@ -195,6 +196,16 @@ def trefoil_comparison(rows, rpy):
     return out, doc
 
 
+def _study_slipknot(a):
+    """What the study says of a slipknot at bending stiffness `a`: 'found', 'described
+    visually' or None (nothing said)."""
+    if any(abs(a - x) < 1e-9 for x in STUDY_SLIPKNOT_A):
+        return "found"
+    if any(abs(a - x) < 1e-9 for x in STUDY_VISUAL_SLIPKNOT_A):
+        return "described visually"
+    return None
+
+
 def _by_a(rows, a):
     return [r for r in rows if abs(r["A"] - a) < 1e-9]
 
@@ -247,7 +258,7 @@ def candycane_comparison(rows, ensemble, rpy):
         g = [_cc_numbers(r) for r in _by_a(rows, a)]
         q = [_cc_numbers(r) for r in _by_a(r_cc, a)]
         study = {"case_mode": STUDY_CANDYCANE_MODES.get(a),
-                 "slipknot": "found" if any(abs(a - x) < 1e-9 for x in STUDY_SLIPKNOT_A) else None,
+                 "slipknot": _study_slipknot(a),
                  "whole_kf": STUDY_WHOLE_KF}
         entry = {"A": a, "study": study, "ours": g, "rpy": q}
         items = [

@@ -48,6 +48,7 @@ def status_of(case) -> dict:
     reached (the last frame read)."""
     t_end = case.attrs.get("integrator.t_end")
     return {"status": case.status, "model": str(case.attrs.get("hydro.model", "?")),
+            "overlap_rule": overlap_rule(case),
             "t_end": None if t_end is None else float(t_end),
             "t_reached": float(case.time[-1])}
 
@@ -66,8 +67,17 @@ def status_text(row) -> str:
     return f"{row['status']}, t = {reached:g}{of}"
 
 
+def overlap_rule(case) -> str | None:
+    """The overlap rule a case ran with, by its scene name (`&hydro overlap`): only the multipole
+    model has one; None for the others (and when the case does not record it)."""
+    if str(case.attrs.get("hydro.model", "")) != "multipole":
+        return None
+    rule = case.attrs.get("hydro.overlap")
+    return None if rule is None else str(rule)
+
+
 def overlap_stats(case) -> dict | None:
-    """The run totals of the diagnostics under BWE (io.DIAGNOSTIC_TOTALS; a running case's from
+    """The run totals of the overlap diagnostics (io.DIAGNOSTIC_TOTALS; a running case's from
     its newest checkpoint), None when the case file has none."""
     if case.diagnostic_totals is None:
         return None
