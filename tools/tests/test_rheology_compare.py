@@ -172,3 +172,32 @@ def test_cli_and_errors(tmp_path, capsys):
         with pytest.raises(SystemExit) as exc:
             cli.main_rheology(bad)
         assert exc.value.code == 2
+
+
+def test_a_case_ledger_gives_the_answer_of_its_case_files(tmp_path):
+    """knotflow-rheology on one sweep of a case ledger (knotflow-campaign digest of the case
+    files: k_f, modes and the stresslet's series per frame row) gives the comparison of the case
+    files themselves, and names the models the cases ran with."""
+    from knotflow_tools import campaign
+    kf = [0.98, 0.9, 0.7, 0.3, 0.1, 0.6, 0.2, 0.05]
+    modes = [1, 1, 0, 2, 2, 1, 0, 2]
+    sweep = tmp_path / "sweep"
+    sweep.mkdir()
+    ledger = tmp_path / "ledger"
+    for a, shift in ((1.0, 1.0), (2.0, 2.0), (3.0, 3.0)):
+        path = make_case(sweep / f"A{a:.2f}.h5", a, kf, modes, shift)
+        with h5py.File(path, "a") as f:
+            f.attrs["hydro.model"] = "multipole"
+            f.attrs["hydro.overlap"] = "relax"
+            f.attrs["scene"] = (f"&forces\n  bending_a = {a!r}\n/\n"
+                                "&hydro\n  model = 'multipole'\n  overlap = 'relax'\n/\n")
+        campaign.digest(str(path), str(ledger), "sw", 10)
+    direct = rheology.write_rheology([str(sweep)], [str(sweep)], str(tmp_path / "direct"))
+    via = rheology.write_rheology([str(ledger / "sw")], [str(ledger / "sw")], str(tmp_path / "via"))
+    for by in ("knot", "mode"):
+        for name in ("viscosity", "psi1", "psi2"):
+            d, v = direct[by]["all"][name], via[by]["all"][name]
+            assert v["difference_mean"] == pytest.approx(d["difference_mean"], rel=1e-6, abs=1e-9)
+            assert v["paired_cases"] == d["paired_cases"] == 3
+    md = (tmp_path / "via" / "rheology.md").read_text()
+    assert "Models: multipole with overlap = 'relax' (3 cases)." in md

@@ -348,6 +348,20 @@ def plot_against_mode(cases, path, series=("viscosity", "psi1"), t_from=0.0):
     return path
 
 
+def models_text(cases) -> str:
+    """The hydrodynamic models (and, for the multipole model, the overlap rules by their scene
+    names) of the cases, with how many cases ran with each."""
+    from collections import Counter
+
+    def name(case):
+        model = str(case.attrs.get("hydro.model", "?"))
+        if model == "multipole" and case.attrs.get("hydro.overlap") is not None:
+            return f"multipole with overlap = '{case.attrs['hydro.overlap']}'"
+        return model
+    return ", ".join(f"{m} ({n} case{'s' if n > 1 else ''})"
+                     for m, n in sorted(Counter(name(c) for c in cases).items()))
+
+
 def _jsonable(rows, summary):
     return {"cases": [{"case": r["case"], "A": r["A"], "orientation": r["orientation"],
                        "series": r["series"]} for r in rows], "all": summary}
@@ -355,12 +369,13 @@ def _jsonable(rows, summary):
 
 def write_rheology(knot_dirs, mode_dirs, out, t_from=0.0, threshold=KNOT_THRESHOLD,
                    hysteresis=None, samples=200000, seed=1) -> dict:
-    """Both comparisons for the case files of the given sweep directories: rheology.md,
-    rheology.json and the figures in out."""
+    """Both comparisons for the cases of the given sweep directories (case files, or one sweep
+    of a case ledger: its `<case>.json` entries, campaign.ledger_case, whose frame rows hold k_f,
+    the mode and the stresslet's series): rheology.md, rheology.json and the figures in out."""
     import json
     import os
 
-    from .io import read_case
+    from .campaign import find_ledger_cases, load_case
     from .report import find_case_files
     os.makedirs(out, exist_ok=True)
     rule = (f"knotted when k_f >= {threshold:g} (no hysteresis)" if hysteresis is None else
@@ -373,14 +388,15 @@ def write_rheology(knot_dirs, mode_dirs, out, t_from=0.0, threshold=KNOT_THRESHO
     result = {"t_from": t_from, "threshold": threshold, "hysteresis": hysteresis}
     for by, dirs, title in (("knot", knot_dirs, "Knotted and unknotted intervals"),
                             ("mode", mode_dirs, "Modes I and II")):
-        files = [f for d in dirs for f in find_case_files(d)]
+        files = [f for d in dirs for f in (find_case_files(d) or find_ledger_cases(d))]
         if not files:
             continue
-        cases = [read_case(f) for f in files]
+        cases = [load_case(f) for f in files]
         cases = [c for c in cases if c.nframes > 0]
         rows = [compare_case(c, by, t_from, threshold, hysteresis) for c in cases]
         summary = compare_cases(rows, by, samples, seed)
-        md += [f"## {title}", "", f"Case files: {', '.join(f'`{d}`' for d in dirs)}.", ""]
+        md += [f"## {title}", "", f"Cases: {', '.join(f'`{d}`' for d in dirs)}.", "",
+               f"Models: {models_text(cases)}.", ""]
         md += comparison_tables(rows, summary, by) + [""]
         if by == "knot":
             series = plot_series(rows, os.path.join(out, "rheology_time.png"))
