@@ -263,6 +263,16 @@ def _study(argv: Argv) -> int:
     p.add_argument("--trefoil", help="output directory of inputs/trefoil_table2*.nml")
     p.add_argument("--candycane", help="output directory of inputs/candycane*.nml")
     p.add_argument("--ensemble", help="output directory of inputs/candycane_seeds.nml (optional)")
+    p.add_argument("--samples", nargs="+", metavar="DIR",
+                   help="sweeps of perturbed Table 2 samples (several per cell): Table 2 as "
+                   "probabilities with exact 95 %% intervals and the scores of the study's "
+                   "table and of 'never' (study_statistics)")
+    p.add_argument("--rotations", nargs="+", metavar="DIR",
+                   help="sweeps of candy-canes from many starts: case and frame fractions in "
+                   "modes I and II per A with 95 %% intervals, late shape distributions, and "
+                   "the close-pair ratio A = 1 / A = 3 per --window")
+    p.add_argument("--window", type=float, default=250.0,
+                   help="with --rotations: the width of the close-pair ratio's time windows")
     p.add_argument("--out", default="docs/reproduction",
                    help="where figures, results.md, results.json, trefoil_kf.csv and "
                    "candycane_shape.csv go")
@@ -326,9 +336,13 @@ def _study(argv: Argv) -> int:
         print(",".join(str(k) for k in study.entangled_frames(args.select_frames,
                                                               every_time=args.every_time)))
         return 0
-    if not (args.trefoil or args.candycane or args.ensemble):
-        p.error("give --trefoil DIR, --candycane DIR and/or --ensemble DIR")
-    for d in (args.trefoil, args.candycane, args.ensemble):
+    if not (args.trefoil or args.candycane or args.ensemble or args.samples or args.rotations):
+        p.error("give --trefoil DIR, --candycane DIR, --ensemble DIR, --samples DIR ... "
+                "and/or --rotations DIR ...")
+    if not (math.isfinite(args.window) and args.window > 0):
+        p.error(f"--window {args.window:g} is not allowed (a positive number)")
+    for d in (args.trefoil, args.candycane, args.ensemble, *(args.samples or []),
+              *(args.rotations or [])):
         if d and not os.path.isdir(d):
             p.error(f"directory not found: {d}")
     if args.rpy_trefoil and not args.trefoil:
@@ -340,7 +354,9 @@ def _study(argv: Argv) -> int:
     rpy_candycane = (study_compare.load_rpy(args.rpy_candycane, ("candycane", "ensemble"))
                      if args.rpy_candycane else None)
     res = study.write_study(args.trefoil, args.candycane, args.out, args.closures, args.ensemble,
-                            rpy_trefoil, rpy_candycane, args.ledger_matrices)
+                            rpy_trefoil, rpy_candycane, args.ledger_matrices,
+                            samples_dirs=args.samples, rotation_dirs=args.rotations,
+                            window=args.window)
     if "trefoil" in res:
         t, k = res["trefoil"], res["trefoil"]["reknottings"]
         print(f"trefoils: {t['agreement']} agree with the study on "

@@ -11,9 +11,15 @@ Nothing is recomputed that /analysis already holds; k_f is computed here only fo
 
 Every trefoil table counts the re-knottings (knot events after an untying) per case and in
 total, against the study's 13 in 4 of 29 simulations. Per sweep, results.md has the overlap
-statistics, headed by the overlap rule each case ran with (run diagnostics), and the run records (/runs: commit, wall time, load) of
-every case. A sweep may be running: cases not 'finished' are included, marked with their status
-and the time reached, and the tables say how many cases are finished.
+statistics, headed by the overlap rule each case ran with (run diagnostics), and the run
+records (/runs: commit, wall time, load) of every case. A sweep may be running: cases not
+'finished' are included, marked with their status and the time reached, and the tables say how
+many cases are finished.
+
+`--samples DIR ...` (perturbed Table 2 samples) adds Table 2 as probabilities with exact 95 %
+intervals and the scores of the study's table and of 'never'; `--rotations DIR ...` (candy-canes
+from many starts) adds the per-A fractions in modes I and II with intervals, the late shape
+distributions and the close-pair ratio A = 1 / A = 3 per `--window` (study_statistics).
 
 `--rpy-trefoil JSON` and `--rpy-candycane JSON` take the results.json of an earlier
 knotflow-study run with RPY + excluded volume (its "trefoil" part, resp. its "candycane" and
@@ -49,6 +55,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from . import study_statistics  # noqa: E402
 from .campaign import find_ledger_cases, load_case  # noqa: E402
 from .io import write_xyz  # noqa: E402
 from .plot import _draw_chain  # noqa: E402
@@ -474,13 +481,16 @@ def no_case_files(directory) -> str:
 
 
 def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None,
-                rpy_trefoil=None, rpy_candycane=None, ledger_matrices=None):
+                rpy_trefoil=None, rpy_candycane=None, ledger_matrices=None, samples_dirs=None,
+                rotation_dirs=None, window=250.0):
     """Write figures, results.md, results.json and the per-frame CSV files into `out`.
     rpy_trefoil, rpy_candycane: `load_rpy` of earlier RPY + EV results (or None): three-column
     comparison tables and a "comparison" part in results.json. A sweep directory without case
     files gets the line `no_case_files` in its section (and in results.json under "missing")
     and nothing else. ledger_matrices: the knot matrices of the cases of a case ledger
-    (campaign.ledger_case)."""
+    (campaign.ledger_case). samples_dirs: sweeps of perturbed Table 2 samples, rotation_dirs:
+    sweeps of candy-canes from many starts (study_statistics; `window` the width of the
+    close-pair ratio's time windows)."""
     confirm_dir = os.path.join(out, "confirm")
     os.makedirs(out, exist_ok=True)
     md = ["# knotflow-study: generated results", "",
@@ -542,6 +552,12 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
         md += ensemble_tables(ensemble) + [""]
         md += sweep_records(ensemble)
         result["ensemble"] = _public(ensemble)
+    if samples_dirs:
+        lines, result["samples"] = samples_section(samples_dirs, closures)
+        md += lines
+    if rotation_dirs:
+        lines, result["rotations"] = rotations_section(rotation_dirs, closures, window)
+        md += lines
     if comparison:
         result["comparison"] = comparison
     with open(os.path.join(out, "results.md"), "w", encoding="utf-8") as fh:
@@ -549,6 +565,42 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
     with open(os.path.join(out, "results.json"), "w", encoding="utf-8") as fh:
         json.dump(result, fh, indent=1)
     return result
+
+
+def _sweep_files(dirs) -> list:
+    """Case files or ledger entries of several sweep directories."""
+    return [f for d in dirs for f in (find_case_files(d) or find_ledger_cases(d))]
+
+
+def samples_section(dirs, closures=200):
+    """Markdown and the results.json part of Table 2 as probabilities (study_statistics)."""
+    rows = trefoil_rows(_sweep_files(dirs), closures)
+    cells = study_statistics.cell_probabilities(rows)
+    scores = study_statistics.table2_scores(cells)
+    lines = ["## Table 2 as probabilities", "", f"Sweeps: {', '.join(f'`{d}`' for d in dirs)}.",
+             "", finished_line(rows), ""]
+    lines += study_statistics.probability_table(cells, scores) + [""] + sweep_records(rows)
+    return lines, {"cells": cells, "scores": scores, "level": study_statistics.LEVEL}
+
+
+def rotations_section(dirs, closures=200, window=250.0):
+    """Markdown and the results.json part of the candy-canes from many starts per A."""
+    rows = candycane_rows(_sweep_files(dirs), closures)
+    stats = study_statistics.mode_statistics(rows)
+    windows = study_statistics.close_pair_ratio_windows(rows, window)
+    lines = ["## Candy-canes from many starts, per bending stiffness", "",
+             f"Sweeps: {', '.join(f'`{d}`' for d in dirs)}.", "", finished_line(rows), "",
+             f"Late = second half of each run. Intervals: exact for fractions of cases, "
+             f"percentile bootstrap over cases ({study_statistics.BOOTSTRAP_SAMPLES} resamples, "
+             f"seed {study_statistics.BOOTSTRAP_SEED}) for fractions of frames.", ""]
+    lines += study_statistics.mode_table(stats) + [""]
+    if windows:
+        lines += [f"Close-pair ratio A = 1 / A = 3 per window of {window:g} time units (mean over "
+                  "the cases of each A):", ""] + study_statistics.ratio_table(windows) + [""]
+    lines += sweep_records(rows)
+    return lines, {"per_A": stats, "close_pair_windows": windows,
+                   "bootstrap": {"samples": study_statistics.BOOTSTRAP_SAMPLES,
+                                 "seed": study_statistics.BOOTSTRAP_SEED}}
 
 
 def write_frame(path, frame, xyz, core_of=None) -> None:

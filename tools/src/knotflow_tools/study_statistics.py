@@ -1,0 +1,280 @@
+"""The study's questions as statistics over samples (issue 36): Table 2 as probabilities of an
+unknot-then-knot transition per cell, scored against the study's table and the trivial "never"
+predictor, and the candy-cane's modes per bending stiffness over ensembles of starts.
+
+Intervals are exact (Clopper-Pearson) for proportions of cases; a fraction of frames is averaged
+per case first (frames of one trajectory are correlated) and its interval is a percentile
+bootstrap over the cases with a recorded seed. Every function takes the rows of `study_rows`
+(`trefoil_rows`, `candycane_rows`), so a sweep of case files and a sweep of a case ledger give
+the same numbers.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .study_reference import in_study
+
+#: The confidence level of every interval here.
+LEVEL = 0.95
+#: Bootstrap resamples and their seed (recorded in the output).
+BOOTSTRAP_SAMPLES, BOOTSTRAP_SEED = 10000, 20261205
+
+
+def binomial_cdf(k: int, n: int, p: float) -> float:
+    """P(X <= k) for X ~ Binomial(n, p), summed exactly in log space."""
+    if k < 0:
+        return 0.0
+    if k >= n:
+        return 1.0
+    if p <= 0.0:
+        return 1.0
+    if p >= 1.0:
+        return 0.0
+    logs = [math.lgamma(n + 1) - math.lgamma(i + 1) - math.lgamma(n - i + 1)
+            + i * math.log(p) + (n - i) * math.log1p(-p) for i in range(k + 1)]
+    top = max(logs)
+    return min(1.0, math.exp(top) * sum(math.exp(x - top) for x in logs))
+
+
+def _bisect(f, lo=0.0, hi=1.0, iterations=200) -> float:
+    """The root of a function increasing from f(lo) < 0 to f(hi) > 0."""
+    for _ in range(iterations):
+        mid = 0.5 * (lo + hi)
+        if f(mid) < 0.0:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+def clopper_pearson(k: int, n: int, level: float = LEVEL) -> tuple[float, float]:
+    """The exact (Clopper-Pearson) interval of a binomial proportion k/n: the lower end is the p
+    with P(X >= k | p) = (1 - level)/2 (0 when k = 0), the upper the p with
+    P(X <= k | p) = (1 - level)/2 (1 when k = n)."""
+    if not (0 <= k <= n and n >= 1):
+        raise ValueError(f"need 0 <= k <= n and n >= 1 (got k = {k}, n = {n})")
+    alpha = 0.5 * (1.0 - level)
+    lo = 0.0 if k == 0 else _bisect(lambda p: (1.0 - binomial_cdf(k - 1, n, p)) - alpha)
+    hi = 1.0 if k == n else _bisect(lambda p: alpha - binomial_cdf(k, n, p))
+    return lo, hi
+
+
+def bootstrap_mean_interval(values, level: float = LEVEL, samples: int = BOOTSTRAP_SAMPLES,
+                            seed: int = BOOTSTRAP_SEED) -> tuple[float, float]:
+    """Percentile bootstrap interval of the mean of `values` (one value per case)."""
+    v = np.asarray(values, dtype=float)
+    if v.size == 0:
+        return math.nan, math.nan
+    rng = np.random.default_rng(seed)
+    means = v[rng.integers(0, v.size, size=(samples, v.size))].mean(axis=1)
+    q = 0.5 * (1.0 - level)
+    return float(np.quantile(means, q)), float(np.quantile(means, 1.0 - q))
+
+
+# ----------------------------------------------------------------------- Table 2 as probabilities
+
+def cell_probabilities(rows) -> list:
+    """Per cell (A, orientation) of the trefoil samples: the samples, those with an
+    unknot-then-knot transition, the probability with its exact interval, the untie and
+    re-knot times of the samples, and what Table 2 says. Only finished samples count."""
+    cells: dict = {}
+    for r in rows:
+        if r.get("status", "finished") != "finished":
+            continue
+        cells.setdefault((round(float(r["A"]), 6), str(r["orientation"])), []).append(r)
+    out = []
+    for (a, o), g in sorted(cells.items()):
+        k = sum(bool(r["unknot_then_knot"]) for r in g)
+        lo, hi = clopper_pearson(k, len(g))
+        out.append({"A": a, "orientation": o, "samples": len(g), "transitions": k,
+                    "probability": k / len(g), "interval": [lo, hi],
+                    "t_unknot": sorted(r["t_unknot"] for r in g if r["t_unknot"] is not None),
+                    "t_reknot": sorted(r["t_reknot"] for r in g if r["t_reknot"] is not None),
+                    "never_untied": sum(r["t_unknot"] is None for r in g),
+                    "study": in_study(a, o), "uncertain": 0 < k < len(g)})
+    return out
+
+
+def brier_score(cells, forecast) -> float:
+    """The Brier score (mean squared difference between forecast probability and outcome, over
+    every sample of every cell; 0 is perfect) of `forecast(cell) -> probability`."""
+    total, count = 0.0, 0
+    for c in cells:
+        f = float(forecast(c))
+        total += c["transitions"] * (f - 1.0) ** 2 + (c["samples"] - c["transitions"]) * f ** 2
+        count += c["samples"]
+    return total / count if count else math.nan
+
+
+def log_score(cells, forecast, floor: float = 0.01) -> float:
+    """Mean log-likelihood per sample of the outcomes under `forecast(cell) -> probability`, the
+    probabilities kept in [floor, 1 - floor] (a forecast of 0 or 1 that is contradicted once
+    would otherwise score minus infinity). Higher is better."""
+    total, count = 0.0, 0
+    for c in cells:
+        f = min(max(float(forecast(c)), floor), 1.0 - floor)
+        total += c["transitions"] * math.log(f) + (c["samples"] - c["transitions"]) * math.log1p(-f)
+        count += c["samples"]
+    return total / count if count else math.nan
+
+
+def table2_scores(cells, floor: float = 0.01) -> dict:
+    """Table 2 (a transition where the study saw one, none elsewhere) and the trivial predictor
+    'never a transition' scored on the samples with the Brier and the floored log score."""
+    def study(c):
+        return 1.0 if c["study"] else 0.0
+
+    def never(c):
+        return 0.0
+    return {"brier": {"table2": brier_score(cells, study), "never": brier_score(cells, never)},
+            "log": {"table2": log_score(cells, study, floor), "never": log_score(cells, never, floor),
+                    "floor": floor},
+            "samples": sum(c["samples"] for c in cells), "cells": len(cells)}
+
+
+def probability_table(cells, scores) -> list:
+    """Markdown of Table 2 as probabilities and its scores."""
+    def times(ts):
+        return ", ".join(f"{t:g}" for t in ts) if ts else "-"
+    out = ["| A | orientation | samples | transitions | probability (95 % interval) | Table 2 | "
+           "untie times | re-knot times | never untied |",
+           "|---|---|---|---|---|---|---|---|---|"]
+    for c in cells:
+        lo, hi = c["interval"]
+        p = f"{c['probability']:.2f} ({lo:.2f}-{hi:.2f})"
+        if c["uncertain"]:
+            p = f"**{p}**"
+        out.append(f"| {c['A']:g} | {c['orientation']} | {c['samples']} | {c['transitions']} | {p} | "
+                   f"{'U->K' if c['study'] else '-'} | {times(c['t_unknot'])} | "
+                   f"{times(c['t_reknot'])} | {c['never_untied']} |")
+    b, lg = scores["brier"], scores["log"]
+    out += ["", f"Scores over {scores['samples']} samples in {scores['cells']} cells (Brier: lower "
+            f"is better; log: mean log-likelihood per sample, probabilities kept in "
+            f"[{lg['floor']:g}, {1 - lg['floor']:g}], higher is better):", "",
+            "| predictor | Brier | log score |", "|---|---|---|",
+            f"| the study's Table 2 | {b['table2']:.4f} | {lg['table2']:.4f} |",
+            f"| never a transition | {b['never']:.4f} | {lg['never']:.4f} |", "",
+            "Bold: a genuinely uncertain cell (some samples re-knot, some do not)."]
+    return out
+
+
+# ------------------------------------------------------------------ candy-canes by stiffness
+
+def _late(case_row):
+    """The late frames' observables of a candy-cane row (second half, as candycane_rows)."""
+    case = case_row["_case"]
+    t = np.asarray(case.time)
+    late = t >= t[0] + 0.5 * (t[-1] - t[0])
+    o = case.observables
+    return t[late], {k: np.asarray(o[k])[late] for k in ("a", "b", "c", "theta", "phi", "close_pairs")}
+
+
+def phi_rate(t, phi) -> float:
+    """The mean rate of the angle phi (its unwrapped change over the time span)."""
+    if len(t) < 2 or t[-1] <= t[0]:
+        return math.nan
+    u = np.unwrap(np.asarray(phi, dtype=float))
+    return float((u[-1] - u[0]) / (t[-1] - t[0]))
+
+
+def mode_statistics(rows) -> list:
+    """Per bending stiffness A of candy-cane rows (finished cases): the fraction of cases whose
+    case mode is I and II (exact intervals), the mean over cases of the fraction of late frames
+    in mode I and II (bootstrap intervals over cases), and per-case late means of a/b, b/c,
+    |cos theta|, the rate of phi and the close pairs (median and range over the cases)."""
+    out = []
+    done = [r for r in rows if r.get("status", "finished") == "finished"]
+    for a in sorted({round(float(r["A"]), 6) for r in done}):
+        g = [r for r in done if round(float(r["A"]), 6) == a]
+        n = len(g)
+        entry: dict = {"A": a, "cases": n}
+        for m in ("I", "II"):
+            k = sum(r["case_mode"] == m for r in g)
+            entry[f"case_mode_{m}"] = {"cases": k, "fraction": k / n,
+                                       "interval": list(clopper_pearson(k, n))}
+            fr = [r[f"mode_{m}_late"] for r in g if r.get(f"mode_{m}_late") is not None]
+            entry[f"frames_mode_{m}"] = {"mean": float(np.mean(fr)) if fr else math.nan,
+                                         "interval": list(bootstrap_mean_interval(fr)),
+                                         "cases": len(fr)}
+        per_case: dict[str, list[float]] = {"a_over_b": [], "b_over_c": [], "abs_cos_theta": [],
+                                             "phi_rate": [], "close_pairs": []}
+        for r in g:
+            if "_case" not in r:
+                continue
+            t, o = _late(r)
+            per_case["a_over_b"].append(float(np.mean(o["a"] / o["b"])))
+            per_case["b_over_c"].append(float(np.mean(o["b"] / o["c"])))
+            per_case["abs_cos_theta"].append(float(np.mean(np.abs(np.cos(o["theta"])))))
+            per_case["phi_rate"].append(phi_rate(t, o["phi"]))
+            per_case["close_pairs"].append(float(np.mean(o["close_pairs"])))
+        entry["late_per_case"] = {
+            k: ({"median": float(np.median(v)), "min": float(np.min(v)), "max": float(np.max(v))}
+                if v else None) for k, v in per_case.items()}
+        out.append(entry)
+    return out
+
+
+def close_pair_ratio_windows(rows, width: float, a_num: float = 1.0, a_den: float = 3.0) -> list:
+    """The close-pair ratio A = a_num / A = a_den per time window [t0, t0 + width): the mean over
+    the cases of each A of their mean close pairs in the window; nan where a side has no frame."""
+    def series(a):
+        return [r["_case"] for r in rows if abs(float(r["A"]) - a) < 1e-9 and "_case" in r]
+    num, den = series(a_num), series(a_den)
+    if not num or not den:
+        return []
+    t_max = min(max(float(c.time[-1]) for c in num), max(float(c.time[-1]) for c in den))
+    def window_mean(cases, t0):
+        means = []
+        for c in cases:
+            t = np.asarray(c.time)
+            sel = (t >= t0) & (t < t0 + width)
+            if np.any(sel):
+                means.append(float(np.mean(np.asarray(c.observables["close_pairs"])[sel])))
+        return float(np.mean(means)) if means else math.nan
+    out = []
+    t0 = 0.0
+    while t0 < t_max:
+        n, d = window_mean(num, t0), window_mean(den, t0)
+        out.append({"t_from": t0, "t_to": t0 + width, "numerator": n, "denominator": d,
+                    "ratio": n / d if d > 0 else math.nan})
+        t0 += width
+    return out
+
+
+def mode_table(stats) -> list:
+    """Markdown of mode_statistics."""
+    def frac(e):
+        lo, hi = e["interval"]
+        return f"{e['cases']} ({e['fraction']:.2f}, {lo:.2f}-{hi:.2f})"
+
+    def frames(e):
+        lo, hi = e["interval"]
+        return "-" if math.isnan(e["mean"]) else f"{e['mean']:.3f} ({lo:.3f}-{hi:.3f})"
+
+    def spread(e, spec=".2f"):
+        return "-" if e is None else f"{e['median']:{spec}} ({e['min']:{spec}}-{e['max']:{spec}})"
+    out = ["| A | cases | case mode I: cases (fraction, 95 % interval) | case mode II | "
+           "late frames in mode I: mean over cases (95 % bootstrap interval) | late frames in "
+           "mode II | a/b late: median over cases (range) | b/c late | abs cos theta late | "
+           "phi rate late | close pairs late |",
+           "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for s in stats:
+        lc = s["late_per_case"]
+        out.append(f"| {s['A']:g} | {s['cases']} | {frac(s['case_mode_I'])} | "
+                   f"{frac(s['case_mode_II'])} | {frames(s['frames_mode_I'])} | "
+                   f"{frames(s['frames_mode_II'])} | {spread(lc['a_over_b'])} | "
+                   f"{spread(lc['b_over_c'])} | {spread(lc['abs_cos_theta'])} | "
+                   f"{spread(lc['phi_rate'], '.3f')} | {spread(lc['close_pairs'])} |")
+    return out
+
+
+def ratio_table(windows) -> list:
+    """Markdown of close_pair_ratio_windows."""
+    out = ["| window | close pairs A = 1 | close pairs A = 3 | ratio |", "|---|---|---|---|"]
+    for w in windows:
+        out.append(f"| {w['t_from']:g}-{w['t_to']:g} | {w['numerator']:.2f} | "
+                   f"{w['denominator']:.2f} | {w['ratio']:.2f} |")
+    return out

@@ -1,0 +1,142 @@
+"""Statistics of the study's questions over samples (study_statistics): exact binomial
+intervals, proper scores of Table 2, and the candy-cane's modes per stiffness, on constructed
+rows whose answers are known."""
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from knotflow_tools import study_statistics as st
+
+
+def test_binomial_cdf_equals_the_direct_sum():
+    for n, k, p in ((10, 3, 0.2), (29, 0, 0.05), (7, 6, 0.9), (50, 25, 0.5)):
+        direct = sum(math.comb(n, i) * p ** i * (1 - p) ** (n - i) for i in range(k + 1))
+        assert st.binomial_cdf(k, n, p) == pytest.approx(direct, rel=1e-12)
+
+
+def test_clopper_pearson_exact_ends_symmetry_and_a_table_value():
+    n, alpha = 10, 0.025
+    lo, hi = st.clopper_pearson(0, n)
+    assert lo == 0.0 and hi == pytest.approx(1 - alpha ** (1 / n), abs=1e-12)
+    lo, hi = st.clopper_pearson(n, n)
+    assert hi == 1.0 and lo == pytest.approx(alpha ** (1 / n), abs=1e-12)
+    for k in range(n + 1):
+        lo, hi = st.clopper_pearson(k, n)
+        lo2, hi2 = st.clopper_pearson(n - k, n)
+        assert lo == pytest.approx(1 - hi2, abs=1e-12) and hi == pytest.approx(1 - lo2, abs=1e-12)
+    # the tabulated exact interval of 1 success in 10 trials: 0.0025 - 0.4450
+    lo, hi = st.clopper_pearson(1, 10)
+    assert round(lo, 4) == 0.0025 and round(hi, 4) == 0.4450
+    with pytest.raises(ValueError):
+        st.clopper_pearson(3, 2)
+
+
+def _tref(a, o, reknot, t_unknot=50.0, status="finished"):
+    return {"A": a, "orientation": o, "unknot_then_knot": reknot, "status": status,
+            "t_unknot": t_unknot, "t_reknot": 300.0 if reknot else None}
+
+
+def test_cell_probabilities_and_scores_of_table2_and_never():
+    rows = ([_tref(1.4, "b", True)] * 3 + [_tref(1.4, "b", False)] * 7
+            + [_tref(0.8, "a", False)] * 9 + [_tref(0.8, "a", False, t_unknot=None)]
+            + [_tref(0.8, "a", True, status="running")])
+    cells = st.cell_probabilities(rows)
+    by = {(c["A"], c["orientation"]): c for c in cells}
+    b = by[(1.4, "b")]
+    assert (b["samples"], b["transitions"], b["study"], b["uncertain"]) == (10, 3, True, True)
+    assert b["interval"] == pytest.approx(list(st.clopper_pearson(3, 10)))
+    a = by[(0.8, "a")]
+    assert (a["samples"], a["transitions"], a["never_untied"], a["uncertain"]) == (10, 0, 1, False)
+    s = st.table2_scores(cells)
+    # Table 2 says 1 for (1.4, b) and 0 for (0.8, a): squared errors 7 (of 20 samples)
+    assert s["brier"]["table2"] == pytest.approx(7 / 20)
+    assert s["brier"]["never"] == pytest.approx(3 / 20)
+    floor = s["log"]["floor"]
+    want = (3 * math.log(1 - floor) + 7 * math.log(floor) + 10 * math.log(1 - floor)) / 20
+    assert s["log"]["table2"] == pytest.approx(want)
+    text = "\n".join(st.probability_table(cells, s))
+    assert "| 1.4 | b | 10 | 3 | **0.30 (0.07-0.65)** | U->K |" in text
+
+
+def _cane(a, mode, fr1, fr2, t, obs, status="finished"):
+    case = SimpleNamespace(time=np.asarray(t, float), observables={k: np.asarray(v, float)
+                                                                     for k, v in obs.items()})
+    return {"A": a, "case_mode": mode, "mode_I_late": fr1, "mode_II_late": fr2,
+            "status": status, "_case": case}
+
+
+def test_mode_statistics_and_close_pair_windows():
+    t = np.arange(0.0, 101.0)
+    omega = 0.05
+    obs = {"a": np.full(t.size, 6.0), "b": np.full(t.size, 2.0), "c": np.full(t.size, 0.5),
+           "theta": np.zeros(t.size), "phi": np.angle(np.exp(1j * omega * t)),
+           "close_pairs": np.where(t < 50, 8.0, 4.0)}
+    rows = [_cane(1.0, "I", 0.6, 0.1, t, obs), _cane(1.0, "-", 0.2, 0.3, t, obs),
+            _cane(3.0, "II", 0.0, 0.9, t, {**obs, "close_pairs": np.full(t.size, 2.0)})]
+    stats = {s["A"]: s for s in st.mode_statistics(rows)}
+    one = stats[1.0]
+    assert one["cases"] == 2 and one["case_mode_I"]["cases"] == 1
+    assert one["case_mode_I"]["interval"] == pytest.approx(list(st.clopper_pearson(1, 2)))
+    assert one["frames_mode_I"]["mean"] == pytest.approx(0.4)
+    lo, hi = one["frames_mode_I"]["interval"]
+    assert 0.2 <= lo <= 0.4 <= hi <= 0.6
+    late = one["late_per_case"]
+    assert late["a_over_b"]["median"] == pytest.approx(3.0)
+    assert late["b_over_c"]["median"] == pytest.approx(4.0)
+    assert late["abs_cos_theta"]["median"] == pytest.approx(1.0)
+    assert late["phi_rate"]["median"] == pytest.approx(omega, rel=1e-9)
+    assert late["close_pairs"]["median"] == pytest.approx(4.0)
+    windows = st.close_pair_ratio_windows(rows, 50.0)
+    assert [w["ratio"] for w in windows[:2]] == pytest.approx([4.0, 2.0])
+    assert "| 0-50 | 8.00 | 2.00 | 4.00 |" in st.ratio_table(windows)
+    assert "| 1 | 2 | 1 (0.50, 0.01-0.99) |" in "\n".join(st.mode_table(list(stats.values())))
+
+
+def test_knotflow_study_samples_and_rotations_end_to_end(tmp_path):
+    """knotflow-study --samples: four perturbed samples of the cell (1.4, b), two of which re-knot
+    (k_f written into /analysis/knots), give probability 2/4 with the exact interval; --rotations
+    on candy-cane files gives one row per A and a results.json part."""
+    import json
+
+    import h5py
+    from analysis_fixture import write_knots
+
+    from knotflow_tools.cli import main_study
+
+    from conftest import unknotting_trefoil_frames, write_case
+    samples = tmp_path / "samples"
+    samples.mkdir()
+    t = np.arange(8) * 10.0
+    for s, kf in enumerate(([0.98, 0.9, 0.05, 0.02, 0.95, 0.97, 0.96, 0.95],
+                            [0.98, 0.9, 0.05, 0.02, 0.95, 0.97, 0.96, 0.95],
+                            [0.98, 0.9, 0.05, 0.02, 0.03, 0.01, 0.02, 0.02],
+                            [0.98, 0.9, 0.05, 0.02, 0.03, 0.01, 0.02, 0.02]), start=1):
+        path = write_case(samples / f"A1.40_orb_s{s}.h5", unknotting_trefoil_frames(8), time=t,
+                          attrs={"forces.bending_a": 1.4, "chain.orientation": "b",
+                                 "case_name": f"A1.40_orb_s{s}"})
+        write_knots(path, np.arange(8), t, kf, np.zeros((8, 10)), ["3_1"] * 8, closures=10, seed=s)
+    cane = tmp_path / "cane"
+    cane.mkdir()
+    for a in (1.0, 3.0):
+        path = write_case(cane / f"A{a:.2f}.h5", unknotting_trefoil_frames(8), time=t,
+                          attrs={"forces.bending_a": a, "case_name": f"A{a:.2f}"})
+        write_knots(path, np.arange(8), t, np.zeros(8), np.zeros((8, 10)), ["0_1"] * 8,
+                    closures=10, seed=1)
+    out = tmp_path / "out"
+    assert main_study(["--samples", str(samples), "--rotations", str(cane), "--window", "40",
+                       "--out", str(out)]) == 0
+    res = json.loads((out / "results.json").read_text())
+    (cell,) = res["samples"]["cells"]
+    assert (cell["samples"], cell["transitions"], cell["study"]) == (4, 2, True)
+    assert cell["interval"] == pytest.approx(list(st.clopper_pearson(2, 4)))
+    assert [c["A"] for c in res["rotations"]["per_A"]] == [1.0, 3.0]
+    assert len(res["rotations"]["close_pair_windows"]) == 2
+    md = (out / "results.md").read_text()
+    assert "## Table 2 as probabilities" in md and "| 1.4 | b | 4 | 2 | **0.50" in md
+    with h5py.File(samples / "A1.40_orb_s1.h5") as f:
+        assert f.attrs["case_name"] == "A1.40_orb_s1"
+    with pytest.raises(SystemExit):
+        main_study(["--rotations", str(cane), "--window", "0", "--out", str(out)])
