@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Accuracy and cost of the adaptive reuse of the multipole many-body part (&hydro update =
 # 'adaptive') against the exact solve at every stage ('stage'): knotflow-bench-reuse on the
-# study's model (L = 2 + lubrication, BWE, overlap = 'relax' as the campaign), one core, into
+# study's model (L = 2 + lubrication, overlap = 'relax' as the campaign), one core, into
 # $KNOTFLOW_REUSE_OUT (default build/accuracy/reuse), then the section between the reuse markers
 # of docs/accuracy.md.
 # A science command (about 1.5 h of one core), not a test.

@@ -10,7 +10,7 @@
 !>              tolerance 1e-4, and of the exact path between tolerances 1e-4 and 1e-6
 !>   speed      [--config C] [--t-end T]: wall time of both paths to T and their ratio
 !>   scaling    [--t-end T]: adaptive wall time per unit time for random chains N = 50..400
-!>   overlaps   [--config C] [--t-end T] [--eps-lub E]: BWE overlap statistics (run
+!>   overlaps   [--config C] [--t-end T] [--eps-lub E]: overlap statistics (run
 !>              diagnostics) of both paths
 !>   rigid      [--config C]: the reused part at rigidly moved and at deformed configurations
 !>              (overlap rule pair only: the model's reused part against its exact one, both
@@ -331,7 +331,7 @@ contains
     call print_stats('adaptive.', fast%model%statistics())
   end subroutine run_rigid
 
-  !> BWE overlap statistics of both paths (the run diagnostics at every accepted step).
+  !> Overlap statistics of both paths (the run diagnostics at every accepted step).
   subroutine run_overlaps()
     character(len=8), parameter :: paths(2) = [character(len=8) :: 'stage', 'adaptive']
     type(scene_t) :: scene
