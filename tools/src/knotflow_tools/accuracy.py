@@ -491,7 +491,7 @@ def update_reuse(markdown: str, directory: str) -> str:
 
 
 def build_report(directory: str, markdown: str, figdir: str, readme: str | None = None) -> dict:
-    """Write the markdown report and the figures; update the README block if asked."""
+    """Write the markdown report and the figures; update the summary block of docs/models.md if asked."""
     if not os.path.exists(os.path.join(directory, "meta.csv")):
         raise FileNotFoundError("%s: no meta.csv (run knotflow-accuracy first)" % directory)
     os.makedirs(figdir, exist_ok=True)
