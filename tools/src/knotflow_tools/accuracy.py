@@ -523,7 +523,7 @@ def build_report(directory: str, markdown: str, figdir: str, readme: str | None 
     if readme and summary:
         meta = _meta(directory)
         block = ("Measured by `bash scripts/accuracy.sh`%s (load average %s; details and "
-                 "figures in docs/accuracy.md):\n\n%s" % (
+                 "figures in [accuracy.md](accuracy.md)):\n\n%s" % (
                      " **--quick: smoke-test sizes, not the real figures**"
                      if meta.get("quick") == "1" else "",
                      meta.get("loadavg_start", "unknown") + (
