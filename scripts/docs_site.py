@@ -2,7 +2,8 @@
 """The documentation site's pages and its link checks (scripts/docs.sh; standard library only).
 
     docs_site.py check-md ROOT            every relative link of the Markdown pages points to an
-                                          existing file, and every #anchor to a heading there
+                                          existing file, and every #anchor to a heading there;
+                                          docs/index.md links every page under docs/
     docs_site.py pages ROOT OUT           the page tree FORD's page_dir reads: the pages with their
                                           title metadata, links to pages rewritten to .html
     docs_site.py check-html SITE          every relative link of the site's pages (SITE/page)
@@ -87,7 +88,7 @@ def anchors(text: str) -> list[str]:
         slug = github_slug(m.group(2))
         if slug in seen:
             seen[slug] += 1
-            slug = "%s-%d" % (slug, seen[slug])
+            slug = f"{slug}-{seen[slug]}"
         else:
             seen[slug] = 0
         out.append(slug)
@@ -112,14 +113,22 @@ def check_markdown(root: Path) -> list[str]:
                 continue
             path_part, _, anchor = target.partition("#")
             dest = (root / page).parent / path_part if path_part else root / page
-            where = "%s:%d: link '%s'" % (page, number, target)
+            where = f"{page}:{number}: link '{target}'"
             if not dest.exists():
                 problems.append(where + ": no such file")
                 continue
-            if anchor and dest.suffix == ".md":
-                if anchor not in anchors(dest.read_text(encoding="utf-8")):
-                    problems.append(where + ": no heading with that anchor in " +
-                                    os.path.relpath(dest, root))
+            if (anchor and dest.suffix == ".md"
+                    and anchor not in anchors(dest.read_text(encoding="utf-8"))):
+                problems.append(where + ": no heading with that anchor in " +
+                                os.path.relpath(dest, root))
+    index = root / "docs" / "index.md"
+    if index.is_file():
+        linked = {os.path.normpath(index.parent / t.partition("#")[0])
+                  for _, t in links(index.read_text(encoding="utf-8")) if not EXTERNAL.match(t)}
+        for page in page_files(root):
+            if page.parts[0] == "docs" and page != Path("docs/index.md") and \
+                    os.path.normpath(root / page) not in linked:
+                problems.append(f"docs/index.md: no link to the page {page}")
     return problems
 
 
@@ -137,10 +146,10 @@ def rewrite(text: str, page: Path, root: Path, pages: set[Path], copies: set[Pat
             slug = github_slug(m.group(2))
             if slug in seen:
                 seen[slug] += 1
-                slug = "%s-%d" % (slug, seen[slug])
+                slug = f"{slug}-{seen[slug]}"
             else:
                 seen[slug] = 0
-            line = "%s %s {: #%s }" % (m.group(1), m.group(2), slug)
+            line = f"{m.group(1)} {m.group(2)} {{: #{slug} }}"
         masked = without_code_spans(line)
         pieces = []
         last = 0
@@ -170,6 +179,13 @@ def title_of(text: str, page: Path) -> str:
     return str(page)
 
 
+def site_name(directory: Path, entry: str) -> str:
+    """The site's name of a directory entry in a generated index: pages as .html."""
+    if (directory / entry).is_dir():
+        return entry + "/index.html"
+    return entry[:-3] + ".html" if entry.endswith(".md") else entry
+
+
 def build_pages(root: Path, out: Path) -> None:
     if out.exists():
         shutil.rmtree(out)
@@ -180,7 +196,7 @@ def build_pages(root: Path, out: Path) -> None:
         target = out / site_path(page)
         target.parent.mkdir(parents=True, exist_ok=True)
         body = rewrite(text, page, root, pages, copies)
-        target.write_text("title: %s\n\n%s" % (title_of(text, page), body), encoding="utf-8")
+        target.write_text(f"title: {title_of(text, page)}\n\n{body}", encoding="utf-8")
     for item in sorted(copies):
         src = root / item
         dest = out / item
@@ -196,11 +212,8 @@ def build_pages(root: Path, out: Path) -> None:
             continue
         rel = directory.relative_to(out)
         entries = sorted(p.name for p in directory.iterdir() if p.name != "index.md")
-        items = ["- [%s](%s)" % (e, (e + "/index.html") if (directory / e).is_dir()
-                                 else e[:-3] + ".html" if e.endswith(".md") else e)
-                 for e in entries]
-        index.write_text("title: %s\n\nFiles in `%s`:\n\n%s\n" % (rel, rel, "\n".join(items)),
-                         encoding="utf-8")
+        items = "\n".join(f"- [{e}]({site_name(directory, e)})" for e in entries)
+        index.write_text(f"title: {rel}\n\nFiles in `{rel}`:\n\n{items}\n", encoding="utf-8")
 
 
 class _Page(html.parser.HTMLParser):
@@ -236,12 +249,12 @@ def check_html(site: Path) -> list[str]:
             path_part, _, anchor = ref.partition("#")
             path_part = path_part.split("?")[0]
             dest = (page.parent / path_part).resolve() if path_part else page
-            where = "%s: link '%s'" % (page.relative_to(site), ref)
+            where = f"{page.relative_to(site)}: link '{ref}'"
             if not dest.exists():
                 problems.append(where + ": no such file")
-            elif anchor and dest.suffix == ".html":
-                if anchor not in cache.setdefault(dest, _parse(dest)).ids:
-                    problems.append(where + ": no element with that id")
+            elif (anchor and dest.suffix == ".html"
+                  and anchor not in cache.setdefault(dest, _parse(dest)).ids):
+                problems.append(where + ": no element with that id")
     return problems
 
 
@@ -260,7 +273,7 @@ def main(argv: list[str]) -> int:
         return 2
     for problem in problems:
         print("broken link: " + problem)
-    print("%s: %d broken link(s)" % (what, len(problems)))
+    print(f"{what}: {len(problems)} broken link(s)")
     return 1 if problems else 0
 
 
