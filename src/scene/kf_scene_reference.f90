@@ -62,7 +62,7 @@ contains
       'The defaults (below) are those of a trefoil of the reference study. Unknown groups or variables, '// &
       'values of the wrong type and values outside the allowed ones stop the program before anything is '// &
       'written, with one line such as'//nl//nl// &
-      "    knotflow: error: inputs/x.nml: &forces: spring_k = -5.00 is not allowed (a number in [0, 1e7))"//nl//nl// &
+      "    knotflow: error: inputs/x.nml: &forces: spring_k = -5.0 is not allowed (a number in [0, 1e7))"//nl//nl// &
       'The reader is strict: it also refuses (exit status 2, nothing written) a file with no group, text '// &
       'outside a group, a variable given twice, an array given the wrong number of values (a subscripted '// &
       '`x(2) = ...` sets one component), more than one value for a scalar, a string longer than its '// &
