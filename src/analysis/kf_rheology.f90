@@ -1,4 +1,4 @@
-!> The fibre's stresslet and its rheological observables in simple shear (README, "Stresslet").
+!> The fibre's stresslet and its rheological observables in simple shear (docs/case-file.md, the stresslet).
 !>
 !> A dilute suspension of fibres at number density n adds n <S> to the fluid's stress, S the
 !> fibre's stresslet: the sum of the beads' hydrodynamic stresslets (about their own centres,

@@ -1,5 +1,6 @@
 !> Program knotflow: run a scene or a sweep of scenes over MPI ranks.
 !>   mpirun -n P knotflow SCENE.nml [--dry-run | --write-scenes DIR]
+!>   knotflow --scene-reference      (every scene variable as Markdown: docs/scenes.md)
 !> Every rank computes; cases are handed out dynamically. Built without MPI
 !> (-DKNOTFLOW_WITH_MPI=OFF), `knotflow SCENE.nml` runs every case in one process. Finished
 !> cases are skipped and interrupted ones resume from their checkpoint when the same command is
@@ -30,6 +31,7 @@ program knotflow
   use kf_blas_threads, only: allowed_cpus, blas_threads_for, set_blas_threads, blas_threads_in_use, blas_library
   use kf_platform, only: load_average
   use kf_kinds, only: wp
+  use kf_scene_reference, only: scene_reference
   implicit none
 
   character(len=*), parameter :: program_name = 'knotflow'
@@ -38,7 +40,9 @@ program knotflow
     new_line('a')//'  --dry-run            validate the input and list the cases without running them'// &
     new_line('a')//'  --write-scenes DIR   as --dry-run, and write each case''s scene, a single-case input that'// &
     new_line('a')//'                       runs (or resumes, or skips) that case alone, to DIR/<case>.nml'// &
-    new_line('a')//'  --version            print the version'
+    new_line('a')//'  --version            print the version'// &
+    new_line('a')//'  --scene-reference    print every scene variable (default, allowed values, meaning) as'// &
+    new_line('a')//'                       Markdown (docs/scenes.md) and exit'
 
   type(comm_t) :: comm
   type(error_t), allocatable :: error
@@ -52,10 +56,13 @@ program knotflow
   logical :: threads_set
   real(wp) :: load
 
-  ! --help and --version before MPI start-up (kf_cli).
+  ! --help and --version before MPI start-up (kf_cli), and the scene reference.
   do k = 1, command_argument_count()
     call standard_option(program_name, argument(k), usage)
   end do
+  if (command_argument_count() == 1) then
+    if (argument(1) == '--scene-reference') call print_scene_reference()
+  end if
   call comm_init(comm, error)
   if (allocated(error)) call die(program_name, error%message, 2)
   call keep_freed_heap()   ! after MPI start-up, which sets its own allocator options
@@ -388,7 +395,8 @@ contains
         if (len(scenes) == 0) call stop_all('--write-scenes needs a directory, not an empty name', 2)
         dry = .true.
       else if (index(arg, '-') == 1) then
-        call stop_all('unknown option '''//arg//''' (allowed: --dry-run, --write-scenes DIR, --help, --version)', 2)
+        call stop_all('unknown option '''//arg//''' (allowed: --dry-run, --write-scenes DIR, --scene-reference, '// &
+          '--help, --version)', 2)
       else if (len(path) > 0) then
         call stop_all('more than one scene file given ('''//path//''' and '''//arg//''')', 2)
       else
@@ -397,6 +405,15 @@ contains
     end do
     if (len(path) == 0) call stop_all('no scene file given (usage: knotflow SCENE.nml [--dry-run | --write-scenes DIR])', 2)
   end subroutine parse_arguments
+
+  !> Print the scene reference (kf_scene_reference) and end, before MPI start-up.
+  subroutine print_scene_reference()
+    character(len=:), allocatable :: text
+    call scene_reference(text, error)
+    if (allocated(error)) call die(program_name, error%message, 1)
+    write (output_unit, '(a)', advance='no') text
+    call exit_program_now(0)
+  end subroutine print_scene_reference
 
   !> MPI finalised on every rank, then one error line on stderr (from rank 0) and a non-zero
   !> exit on every rank (kf_cli).

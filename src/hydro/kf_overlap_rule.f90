@@ -1,4 +1,4 @@
-!> How the hydrodynamics treats overlapping beads (&hydro overlap; README "Known facts").
+!> How the hydrodynamics treats overlapping beads (&hydro overlap; docs/limitations.md).
 !>
 !> 'pair' is the BWE procedure as PHYSICS.md words it: an overlapping pair's lubrication
 !> correction (and its multipole pair blocks, docs/multipole.md) is evaluated at (1 + eps_lub)

@@ -1,47 +1,12 @@
 !> The HDF5 case file of one simulation case: the contract between the simulation and the
-!> analysis tools (schema in the README and in the comments below).
+!> analysis tools. The layout (groups, datasets, attributes, schema versions) is documented
+!> once, in docs/case-file.md; keep that page in step with this module.
 !>
-!> Layout (shapes as seen from h5py; Fortran writes the transposes):
-!> - root attributes: status, schema_version (int32, `case_schema_version`; files without it
-!>   are schema 1), knotflow_version, git_hash, compiler, compiler_flags, case_name, n_beads,
-!>   scene (namelist text), every effective scene variable as '<group>.<variable>',
-!>   chain.rotation (3x3).
-!> - /frames/time (nframes,), /frames/positions (nframes, N, 3),
-!>   /frames/observables/{rg,a,b,c,theta,phi} (nframes,) float64, .../close_pairs int32,
-!>   /frames/integrator/{steps,rejected} int64, /frames/integrator/dt float64: all chunked,
-!>   extendible along the frame axis and protected by HDF5's Fletcher-32 checksum filter.
-!> - Two checkpoint slots /checkpoint/slot0 and /checkpoint/slot1 (schema 3), written
-!>   alternately: the checkpoint after frame count k goes to slot mod(k, 2). Each holds {time,
-!>   positions (N, 3), dt, steps, rejected, nframes, digest} and, when given, stepper/{reals
-!>   float64, ints int64} with the group attribute `name` (the &integrator method: the time
-!>   stepper's whole state as exported by its `get_state`, kf_stepper), `counters` (int64, the
-!>   caller's run counters) and diagnostics/{counters, values, ongoing} (the run diagnostics'
-!>   state). `digest` (int64) is a digest of every other part of the slot, written just before
-!>   `nframes`. Files of schema 1 and 2 have one checkpoint with the same parts directly in
-!>   /checkpoint (without digest before it existed, without stepper state before that); they
-!>   still resume.
-!> - With run diagnostics (a `diagnostics_record_t` per frame; `enable_diagnostics` after `create`):
-!>   /frames/diagnostics/{strand_passages, overlap_episodes} int64 (cumulative since t = 0),
-!>   overlapping_pairs int32, min_distance and max_bond_strain float64 (of the frame's
-!>   configuration); root attributes diagnostics.{strand_passages, first_passage_time,
-!>   overlap_episodes, overlap_mean_duration, overlap_max_duration, max_overlapping_pairs,
-!>   min_distance, max_bond_strain} (run totals, rewritten with every frame); and the monitor
-!>   state in the checkpoint (`resumed_diagnostics`).
-!>   Files without /frames/diagnostics are valid: diagnostics are optional.
-!> - With the fibre's stresslet (a `stresslet_record_t` per frame; `enable_stresslet` after `create`):
-!>   /frames/stresslet/{hydrodynamic, elastic} (nframes, 3, 3) float64 (symmetric traceless,
-!>   units pi eta d^3 gamma_dot, Batchelor's sign) and /frames/stresslet/{viscosity, psi1, psi2}
-!>   (nframes,) float64 (intrinsic-viscosity form), one entry per frame, truncated
-!>   with the frames on resume. Files without /frames/stresslet are valid: it is optional.
-!> - /runs (schema 4): one entry per run segment (the first start and every resume), 1-D
-!>   datasets of equal length: commit, started, host, blas (strings; blas from schema 5: files
-!>   of schema 4 read as 'unknown'), ranks, threads (int32), t_start,
-!>   t_end, wall_seconds, load_start, load_mean (float64), steps (int64). `start_run` appends
-!>   the segment's entry (a `run_record_t` the run layer fills); `append_frame` and `finish`
-!>   given the record rewrite its changing figures (t_end, steps, wall_seconds, load_mean) in
-!>   place, and each checkpoint holds them too (run/counts = [entries, steps], run/figures =
-!>   [t_end, wall_seconds, load_mean]), so that `open_resume` restores /runs to the checkpoint
-!>   it continues from. Files without /runs (schema < 4) are valid and get it from a resume on.
+!> How the layout is written: `create` writes the root attributes and /frames;
+!> `enable_diagnostics` and `enable_stresslet` after `create` add /frames/diagnostics and
+!> /frames/stresslet; `start_run` appends the segment's /runs entry (a `run_record_t` the run
+!> layer fills), and `append_frame` and `finish` given the record rewrite its changing figures
+!> in place; `open_resume` restores /runs to the checkpoint it continues from.
 !>
 !> The file takes plain records (observables, run diagnostics, stresslet of a frame) and writes
 !> them as given: it computes nothing (the run layer fills the records, kf_frame_records).

@@ -24,6 +24,14 @@ module kf_scene_chain
   integer, parameter, public :: default_n_beads = 99     !< straight and random chains without n_beads
   integer, parameter :: max_beads = 100000
 
+  ! The allowed values, in the words of the refusals and of the scene reference.
+  character(len=*), parameter :: bond_length_allowed = 'a number in (0, 100)'
+  character(len=*), parameter :: bond_length_random_allowed = &
+    "a number > 0.5 with shape = 'random' (non-bonded beads stay 1 d apart)"
+  character(len=*), parameter :: coordinate_file_allowed = "a file name (required with shape = 'file')"
+  character(len=*), parameter :: straight_direction_allowed = 'a non-zero vector'
+  character(len=*), parameter :: n_beads_min_allowed = 'an integer >= 2'
+
   !> &chain: the initial shape.
   type, public :: chain_params_t
     character(len=name_len) :: shape = shape_trefoil !< trefoil | candycane | straight | random | file
@@ -70,14 +78,25 @@ contains
   subroutine chain_items(p, items)
     type(chain_params_t), intent(in) :: p
     type(scene_item_t), allocatable, intent(inout) :: items(:)
-    call add_s(items, 'chain.shape', p%shape)
-    call add_i(items, 'chain.n_beads', int(p%n_beads, i8))
-    call add_s(items, 'chain.orientation', p%orientation)
-    call add_i(items, 'chain.trefoil_removed_point', int(p%trefoil_removed_point, i8))
-    call add_r(items, 'chain.bond_length', p%bond_length)
-    call add_s(items, 'chain.coordinate_file', p%coordinate_file)
-    call add_i(items, 'chain.seed', p%seed)
-    call add_a(items, 'chain.straight_direction', p%straight_direction, [3, 0])
+    call add_s(items, 'chain.shape', p%shape, 'one of '//name_list(shape_names), &
+      'the initial shape: trefoil (N = 99: the closed trefoil of 100 points with one removed), candycane '// &
+      '(N = 152), straight, random (a random walk whose non-bonded beads stay 1 d apart), file (a coordinate file)')
+    call add_i(items, 'chain.n_beads', int(p%n_beads, i8), n_beads_allowed(), &
+      "0: not given, the shape's own count (trefoil 99, candycane 152, the bead lines of a coordinate file, "// &
+      "99 for straight and random); chosen only for 'straight' and 'random', a count that contradicts the "// &
+      'shape is refused')
+    call add_s(items, 'chain.orientation', p%orientation, 'one of '//name_list(orientation_names), &
+      'trefoil orientation: b, c rotate a about x by pi/2, pi; d, e rotate it about z by pi/2, 3 pi/2')
+    call add_i(items, 'chain.trefoil_removed_point', int(p%trefoil_removed_point, i8), removed_point_allowed(), &
+      'which of the 100 points of the closed trefoil is removed to open it')
+    call add_r(items, 'chain.bond_length', p%bond_length, bond_length_allowed//'; '//bond_length_random_allowed, &
+      'l0, rest length of the springs (also the spacing of straight and random chains), units of d')
+    call add_s(items, 'chain.coordinate_file', p%coordinate_file, coordinate_file_allowed, &
+      "shape = 'file': one bead per line, x y z (# starts a comment)")
+    call add_i(items, 'chain.seed', p%seed, 'an integer', &
+      "seed of the candy-cane's random rotation and of the random chain (recorded in the case file)")
+    call add_a(items, 'chain.straight_direction', p%straight_direction, [3, 0], straight_direction_allowed, &
+      'axis of the straight chain')
   end subroutine chain_items
 
   !> Check &chain (`file`: the scene file named in the messages, '' from code).
@@ -96,10 +115,10 @@ contains
     end if
     ! 0: not given (the shape's own count)
     if (p%n_beads /= 0 .and. p%n_beads < 2) then
-      call refuse(error, file, 'chain', 'n_beads', to_str(p%n_beads), 'an integer >= 2'); return
+      call refuse(error, file, 'chain', 'n_beads', to_str(p%n_beads), n_beads_min_allowed); return
     end if
     if (p%n_beads > max_beads) then
-      call refuse(error, file, 'chain', 'n_beads', to_str(p%n_beads), 'at most '//to_str(max_beads)); return
+      call refuse(error, file, 'chain', 'n_beads', to_str(p%n_beads), n_beads_max_allowed()); return
     end if
     if (.not. any(orientation_names == p%orientation)) then
       call refuse(error, file, 'chain', 'orientation', quoted(p%orientation), &
@@ -107,20 +126,20 @@ contains
     end if
     if (p%trefoil_removed_point < 1 .or. p%trefoil_removed_point > trefoil_points) then
       call refuse(error, file, 'chain', 'trefoil_removed_point', to_str(p%trefoil_removed_point), &
-        'an integer from 1 to '//to_str(trefoil_points)); return
+        removed_point_allowed()); return
     end if
     if (.not. (p%bond_length > 0.0_wp .and. p%bond_length < 100.0_wp)) then
-      call refuse(error, file, 'chain', 'bond_length', to_str_exact(p%bond_length), 'a number in (0, 100)'); return
+      call refuse(error, file, 'chain', 'bond_length', to_str_exact(p%bond_length), bond_length_allowed); return
     end if
     ! the random chain keeps non-bonded beads 1 d apart, which steps of l0 <= 0.5 cannot do
     if (p%shape == shape_random .and. .not. p%bond_length > 0.5_wp) then
       call refuse(error, file, 'chain', 'bond_length', to_str_exact(p%bond_length), &
-        "a number > 0.5 with shape = 'random' (non-bonded beads stay 1 d apart)"); return
+        bond_length_random_allowed); return
     end if
     if (p%shape == shape_file) then
       if (len_trim(p%coordinate_file) == 0) then
         call refuse(error, file, 'chain', 'coordinate_file', "''", &
-          "a file name (required with shape = 'file')"); return
+          coordinate_file_allowed); return
       end if
       inquire (file=trim(p%coordinate_file), exist=exists)
       if (.not. exists) then
@@ -130,7 +149,7 @@ contains
     end if
     if (p%shape == shape_straight .and. .not. norm2(p%straight_direction) > 0.0_wp) then
       call refuse(error, file, 'chain', 'straight_direction', vector_text(p%straight_direction), &
-        'a non-zero vector'); return
+        straight_direction_allowed); return
     end if
   end subroutine check_chain
 
@@ -194,6 +213,24 @@ contains
       end do
     end do
   end subroutine read_chain_file
+
+  !> The allowed values of n_beads: the two refusals' words together.
+  function n_beads_allowed() result(t)
+    character(len=:), allocatable :: t
+    t = n_beads_min_allowed//', '//n_beads_max_allowed()
+  end function n_beads_allowed
+
+  !> The upper limit of n_beads, in words.
+  function n_beads_max_allowed() result(t)
+    character(len=:), allocatable :: t
+    t = 'at most '//to_str(max_beads)
+  end function n_beads_max_allowed
+
+  !> The allowed values of trefoil_removed_point, in words.
+  function removed_point_allowed() result(t)
+    character(len=:), allocatable :: t
+    t = 'an integer from 1 to '//to_str(trefoil_points)
+  end function removed_point_allowed
 
   pure function prefix(file) result(t)
     character(len=*), intent(in) :: file

@@ -16,6 +16,10 @@ module kf_scene_flow
   character(len=*), parameter, public :: flow_names(3) = [character(len=9) :: flow_shear, flow_linear, &
     flow_quiescent]
 
+  ! The allowed values, in the words of the refusals and of the scene reference.
+  character(len=*), parameter :: shear_rate_allowed = 'a finite number'
+  character(len=*), parameter :: gradient_allowed = 'a traceless matrix (incompressible flow)'
+
   !> &flow: the ambient linear flow v0 = G r.
   type, public :: flow_params_t
     character(len=name_len) :: flow_type = flow_shear !< shear | linear | quiescent
@@ -45,9 +49,11 @@ contains
   subroutine flow_items(p, items)
     type(flow_params_t), intent(in) :: p
     type(scene_item_t), allocatable, intent(inout) :: items(:)
-    call add_s(items, 'flow.flow_type', p%flow_type)
-    call add_r(items, 'flow.shear_rate', p%shear_rate)
-    call add_a(items, 'flow.velocity_gradient', reshape(p%velocity_gradient, [9]), [3, 3])
+    call add_s(items, 'flow.flow_type', p%flow_type, 'one of '//name_list(flow_names), &
+      'the ambient flow: shear, v0 = (shear_rate z, 0, 0); linear, v0 = G r; quiescent, no flow')
+    call add_r(items, 'flow.shear_rate', p%shear_rate, shear_rate_allowed, 'gamma_dot of the shear flow')
+    call add_a(items, 'flow.velocity_gradient', reshape(p%velocity_gradient, [9]), [3, 3], gradient_allowed, &
+      "G(i,j) = d v0_i / d r_j of flow_type = 'linear' (9 values, or one component as velocity_gradient(i,j) = x)")
   end subroutine flow_items
 
   !> Check &flow (`file`: the scene file named in the messages, '' from code).
@@ -65,7 +71,7 @@ contains
       call refuse(error, file, 'flow', 'flow_type', quoted(p%flow_type), 'one of '//name_list(flow_names)); return
     end if
     if (.not. (abs(p%shear_rate) < 1.0e6_wp)) then
-      call refuse(error, file, 'flow', 'shear_rate', to_str_exact(p%shear_rate), 'a finite number'); return
+      call refuse(error, file, 'flow', 'shear_rate', to_str_exact(p%shear_rate), shear_rate_allowed); return
     end if
     if (p%flow_type == flow_linear) then
       associate (g => p%velocity_gradient)
@@ -75,7 +81,7 @@ contains
         tr = g(1, 1) + g(2, 2) + g(3, 3)
         if (abs(tr) > 1.0e-12_wp*max(1.0_wp, maxval(abs(g)))) then
           call refuse(error, file, 'flow', 'velocity_gradient', 'trace '//to_str_exact(tr), &
-            'a traceless matrix (incompressible flow)'); return
+            gradient_allowed); return
         end if
       end associate
     end if

@@ -9,6 +9,12 @@ module kf_scene_forces
   implicit none
   private
 
+  ! The allowed values, in the words of the refusals and of the scene reference.
+  character(len=*), parameter :: strength_allowed = 'a number in [0, 1e7)'
+  character(len=*), parameter :: ev_range_allowed = 'a number in (0, 10]'
+  character(len=*), parameter :: finite_allowed = 'finite numbers'
+  character(len=*), parameter :: logical_allowed = '.true. or .false.'
+
   !> &forces: which forces exist.
   type, public :: forces_params_t
     logical :: springs = .true.
@@ -48,14 +54,17 @@ contains
   subroutine forces_items(p, items)
     type(forces_params_t), intent(in) :: p
     type(scene_item_t), allocatable, intent(inout) :: items(:)
-    call add_l(items, 'forces.springs', p%springs)
-    call add_r(items, 'forces.spring_k', p%spring_k)
-    call add_l(items, 'forces.bending', p%bending)
-    call add_r(items, 'forces.bending_a', p%bending_a)
-    call add_l(items, 'forces.excluded_volume', p%excluded_volume)
-    call add_r(items, 'forces.ev_strength', p%ev_strength)
-    call add_r(items, 'forces.ev_range', p%ev_range)
-    call add_a(items, 'forces.external_force', p%external_force, [3, 0])
+    call add_l(items, 'forces.springs', p%springs, logical_allowed, 'harmonic springs between bonded beads')
+    call add_r(items, 'forces.spring_k', p%spring_k, strength_allowed, 'spring constant k, units of pi eta d gamma_dot')
+    call add_l(items, 'forces.bending', p%bending, logical_allowed, 'bending stiffness (discrete elastica)')
+    call add_r(items, 'forces.bending_a', p%bending_a, strength_allowed, &
+      'bending stiffness A, units of pi eta d^4 gamma_dot')
+    call add_l(items, 'forces.excluded_volume', p%excluded_volume, logical_allowed, &
+      'repulsion of non-bonded pairs (|i-j| > 1) closer than ev_range: U = (ev_strength/2)(ev_range - r)^2')
+    call add_r(items, 'forces.ev_strength', p%ev_strength, strength_allowed, 'stiffness of the excluded volume')
+    call add_r(items, 'forces.ev_range', p%ev_range, ev_range_allowed, 'range of the excluded volume, units of d')
+    call add_a(items, 'forces.external_force', p%external_force, [3, 0], finite_allowed, &
+      'the same force on every bead, units of pi eta d^2 gamma_dot')
   end subroutine forces_items
 
   !> Check &forces (`file`: the scene file named in the messages, '' from code).
@@ -69,19 +78,19 @@ contains
     call check_finite(items, file, error)
     if (allocated(error)) return
     if (.not. (p%spring_k >= 0.0_wp .and. p%spring_k < 1.0e7_wp)) then
-      call refuse(error, file, 'forces', 'spring_k', to_str_exact(p%spring_k), 'a number in [0, 1e7)'); return
+      call refuse(error, file, 'forces', 'spring_k', to_str_exact(p%spring_k), strength_allowed); return
     end if
     if (.not. (p%bending_a >= 0.0_wp .and. p%bending_a < 1.0e7_wp)) then
-      call refuse(error, file, 'forces', 'bending_a', to_str_exact(p%bending_a), 'a number in [0, 1e7)'); return
+      call refuse(error, file, 'forces', 'bending_a', to_str_exact(p%bending_a), strength_allowed); return
     end if
     if (.not. (p%ev_strength >= 0.0_wp .and. p%ev_strength < 1.0e7_wp)) then
-      call refuse(error, file, 'forces', 'ev_strength', to_str_exact(p%ev_strength), 'a number in [0, 1e7)'); return
+      call refuse(error, file, 'forces', 'ev_strength', to_str_exact(p%ev_strength), strength_allowed); return
     end if
     if (.not. (p%ev_range > 0.0_wp .and. p%ev_range <= 10.0_wp)) then
-      call refuse(error, file, 'forces', 'ev_range', to_str_exact(p%ev_range), 'a number in (0, 10]'); return
+      call refuse(error, file, 'forces', 'ev_range', to_str_exact(p%ev_range), ev_range_allowed); return
     end if
     if (.not. all(abs(p%external_force) < 1.0e7_wp)) then
-      call refuse(error, file, 'forces', 'external_force', 'non-finite', 'finite numbers'); return
+      call refuse(error, file, 'forces', 'external_force', 'non-finite', finite_allowed); return
     end if
   end subroutine check_forces
 

@@ -29,6 +29,14 @@ module kf_scene_hydro
 
   real(wp), parameter :: eps_lub_max = 0.5_wp    !< the lubrication model's range: 0 < eps_lub < 0.5
 
+  ! The allowed values, in the words of the refusals and of the scene reference.
+  character(len=*), parameter :: order_allowed = 'an integer from 1 to 8'
+  character(len=*), parameter :: order_lubrication_allowed = &
+    'at most 6 with lubrication = .true. (tables exist for L = 1..6)'
+  character(len=*), parameter :: eps_lub_allowed = 'a number in (0, 0.5), or negative for the integration tolerance'
+  character(len=*), parameter :: overlap_time_allowed = 'a number > 0'
+  character(len=*), parameter :: overlap_time_relax_allowed = "only with overlap = '"//overlap_relax//"'"
+
   !> &hydro: the hydrodynamic model.
   type, public :: hydro_params_t
     character(len=name_len) :: model = model_rpy    !< none | rpy | multipole
@@ -73,13 +81,26 @@ contains
   subroutine hydro_items(p, items)
     type(hydro_params_t), intent(in) :: p
     type(scene_item_t), allocatable, intent(inout) :: items(:)
-    call add_s(items, 'hydro.model', p%model)
-    call add_i(items, 'hydro.order', int(p%order, i8))
-    call add_l(items, 'hydro.lubrication', p%lubrication)
-    call add_r(items, 'hydro.eps_lub', p%eps_lub)
-    call add_s(items, 'hydro.update', p%update)
-    call add_s(items, 'hydro.overlap', p%overlap)
-    call add_r(items, 'hydro.overlap_time', p%overlap_time)
+    call add_s(items, 'hydro.model', p%model, 'one of '//name_list(model_names), &
+      'the hydrodynamic model: none (free draining), rpy (Rotne-Prager-Yamakawa), multipole (the multipole '// &
+      'method, with lubrication corrections; docs/multipole.md)')
+    call add_i(items, 'hydro.order', int(p%order, i8), order_allowed//'; '//order_lubrication_allowed, &
+      'multipole order L')
+    call add_l(items, 'hydro.lubrication', p%lubrication, '.true. or .false.', 'multipole: lubrication corrections')
+    call add_r(items, 'hydro.eps_lub', p%eps_lub, eps_lub_allowed, &
+      'multipole: the BWE shift of overlapping pairs; -1 (not given): the &integrator tolerance')
+    call add_s(items, 'hydro.update', p%update, 'one of '//name_list(update_names), &
+      'multipole: adaptive (the many-body part reused between refreshes within an error budget from the '// &
+      'tolerance, lubrication exact at every stage) or stage (recomputed exactly at every Runge-Kutta stage: '// &
+      'the reference); ignored by none and rpy')
+    call add_s(items, 'hydro.overlap', p%overlap, 'one of '//name_list(overlap_names)//'; '// &
+      quoted(overlap_pair)//' unless model = '//quoted(model_multipole), &
+      'multipole: how overlapping beads are treated. pair: each overlapping pair at 1 + eps_lub along its line '// &
+      'of centres, the rest at the real positions (BWE); separate: the whole hydrodynamics of the nearest '// &
+      'configuration without overlaps; relax: separate, and overlaps undone kinematically over overlap_time '// &
+      '(docs/limitations.md says why the study inputs use it)')
+    call add_r(items, 'hydro.overlap_time', p%overlap_time, overlap_time_allowed//', '//overlap_time_relax_allowed, &
+      'relax: the time, in units of 1/shear rate, over which an overlap is undone')
   end subroutine hydro_items
 
   !> Check &hydro (`file`: the scene file named in the messages, '' from code).
@@ -97,16 +118,14 @@ contains
     end if
     if (p%model == model_multipole) then
       if (p%order < 1 .or. p%order > 8) then
-        call refuse(error, file, 'hydro', 'order', to_str(p%order), 'an integer from 1 to 8'); return
+        call refuse(error, file, 'hydro', 'order', to_str(p%order), order_allowed); return
       end if
       if (p%lubrication .and. p%order > 6) then
-        call refuse(error, file, 'hydro', 'order', to_str(p%order), &
-          'at most 6 with lubrication = .true. (tables exist for L = 1..6)'); return
+        call refuse(error, file, 'hydro', 'order', to_str(p%order), order_lubrication_allowed); return
       end if
     end if
     if (.not. (p%eps_lub < eps_lub_max .and. p%eps_lub /= 0.0_wp)) then
-      call refuse(error, file, 'hydro', 'eps_lub', to_str_exact(p%eps_lub), &
-        'a number in (0, 0.5), or negative for the integration tolerance'); return
+      call refuse(error, file, 'hydro', 'eps_lub', to_str_exact(p%eps_lub), eps_lub_allowed); return
     end if
     if (.not. any(update_names == p%update)) then
       call refuse(error, file, 'hydro', 'update', quoted(p%update), 'one of '//name_list(update_names)); return
@@ -119,11 +138,11 @@ contains
         quoted(overlap_pair)//' with model = '//quoted(p%model)//' (the rule is for the multipole model)'); return
     end if
     if (.not. (p%overlap_time > 0.0_wp)) then
-      call refuse(error, file, 'hydro', 'overlap_time', to_str_exact(p%overlap_time), 'a number > 0'); return
+      call refuse(error, file, 'hydro', 'overlap_time', to_str_exact(p%overlap_time), overlap_time_allowed); return
     end if
     if (p%overlap /= overlap_relax .and. p%overlap_time /= overlap_time_default) then
       call refuse(error, file, 'hydro', 'overlap_time', to_str_exact(p%overlap_time), &
-        'only with overlap = '//quoted(overlap_relax)//' (it has no effect with overlap = '// &
+        overlap_time_relax_allowed//' (it has no effect with overlap = '// &
         quoted(p%overlap)//')'); return
     end if
   end subroutine check_hydro

@@ -14,6 +14,12 @@ module kf_scene_integrator
   !> The valid values of &integrator method.
   character(len=*), parameter, public :: method_names(2) = [character(len=7) :: method_dopri45, method_rk4]
 
+  ! The allowed values, in the words of the refusals and of the scene reference.
+  character(len=*), parameter :: t_end_allowed = 'a number > 0'
+  character(len=*), parameter :: tolerance_allowed = 'a number in (0, 1)'
+  character(len=*), parameter :: dt_min_allowed = 'a number > 0'
+  character(len=*), parameter :: max_steps_allowed = 'an integer >= 1'
+
   !> &integrator: time stepping.
   type, public :: integrator_params_t
     character(len=name_len) :: method = method_dopri45 !< dopri45 (adaptive) | rk4 (fixed step)
@@ -50,13 +56,17 @@ contains
   subroutine integrator_items(p, items)
     type(integrator_params_t), intent(in) :: p
     type(scene_item_t), allocatable, intent(inout) :: items(:)
-    call add_s(items, 'integrator.method', p%method)
-    call add_r(items, 'integrator.t_end', p%t_end)
-    call add_r(items, 'integrator.tolerance', p%tolerance)
-    call add_r(items, 'integrator.dt_initial', p%dt_initial)
-    call add_r(items, 'integrator.dt_min', p%dt_min)
-    call add_r(items, 'integrator.dt_max', p%dt_max)
-    call add_i(items, 'integrator.max_steps', p%max_steps)
+    call add_s(items, 'integrator.method', p%method, 'one of '//name_list(method_names), &
+      'dopri45: adaptive Dormand-Prince 5(4); rk4: classical Runge-Kutta with the fixed step dt_initial')
+    call add_r(items, 'integrator.t_end', p%t_end, t_end_allowed, 'end time, units of 1/shear rate')
+    call add_r(items, 'integrator.tolerance', p%tolerance, tolerance_allowed, &
+      'dopri45: error per step on the bead positions, units of d')
+    call add_r(items, 'integrator.dt_initial', p%dt_initial, 'a number in [dt_min, dt_max]', &
+      'first step (rk4: every step)')
+    call add_r(items, 'integrator.dt_min', p%dt_min, dt_min_allowed, &
+      'smallest step: a step below it fails the case (step size underflow)')
+    call add_r(items, 'integrator.dt_max', p%dt_max, 'a number > dt_min', 'largest step')
+    call add_i(items, 'integrator.max_steps', p%max_steps, max_steps_allowed, 'the most steps a case may take')
   end subroutine integrator_items
 
   !> Check &integrator (`file`: the scene file named in the messages, '' from code).
@@ -73,13 +83,13 @@ contains
       call refuse(error, file, 'integrator', 'method', quoted(p%method), 'one of '//name_list(method_names)); return
     end if
     if (.not. (p%t_end > 0.0_wp .and. p%t_end < 1.0e12_wp)) then
-      call refuse(error, file, 'integrator', 't_end', to_str_exact(p%t_end), 'a number > 0'); return
+      call refuse(error, file, 'integrator', 't_end', to_str_exact(p%t_end), t_end_allowed); return
     end if
     if (.not. (p%tolerance > 0.0_wp .and. p%tolerance < 1.0_wp)) then
-      call refuse(error, file, 'integrator', 'tolerance', to_str_exact(p%tolerance), 'a number in (0, 1)'); return
+      call refuse(error, file, 'integrator', 'tolerance', to_str_exact(p%tolerance), tolerance_allowed); return
     end if
     if (.not. (p%dt_min > 0.0_wp)) then
-      call refuse(error, file, 'integrator', 'dt_min', to_str_exact(p%dt_min), 'a number > 0'); return
+      call refuse(error, file, 'integrator', 'dt_min', to_str_exact(p%dt_min), dt_min_allowed); return
     end if
     if (.not. (p%dt_max > p%dt_min)) then
       call refuse(error, file, 'integrator', 'dt_max', to_str_exact(p%dt_max), 'a number > dt_min = '// &
@@ -90,7 +100,7 @@ contains
         'a number in [dt_min, dt_max] = ['//to_str_exact(p%dt_min)//', '//to_str_exact(p%dt_max)//']'); return
     end if
     if (p%max_steps < 1) then
-      call refuse(error, file, 'integrator', 'max_steps', to_str(p%max_steps), 'an integer >= 1'); return
+      call refuse(error, file, 'integrator', 'max_steps', to_str(p%max_steps), max_steps_allowed); return
     end if
   end subroutine check_integrator
 

@@ -23,6 +23,10 @@ module kf_scene_item
     real(wp), allocatable :: ra(:)                !< item_real_array (flattened, Fortran order)
     integer :: dims(2) = [0, 0]                   !< item_real_array: (n) -> [n, 0]; (n,m) -> [n, m]
     integer :: max_len = 0                        !< item_string: the declared length
+    !> What values are allowed, in the words of the group's refusals (the scene reference)
+    character(len=:), allocatable :: allowed
+    !> What the variable means (the scene reference, docs/scenes.md)
+    character(len=:), allocatable :: meaning
   end type scene_item_t
 
   public :: item_value_text, add_s, add_i, add_l, add_r, add_a
@@ -69,6 +73,14 @@ contains
     end function real_text
   end function item_value_text
 
+  !> Attach the scene reference's words (allowed values, meaning) to an item.
+  subroutine describe(it, allowed, meaning)
+    type(scene_item_t), intent(inout) :: it
+    character(len=*), intent(in), optional :: allowed, meaning
+    if (present(allowed)) it%allowed = allowed
+    if (present(meaning)) it%meaning = meaning
+  end subroutine describe
+
   subroutine push(items, it)
     type(scene_item_t), allocatable, intent(inout) :: items(:)
     type(scene_item_t), intent(in) :: it
@@ -76,64 +88,74 @@ contains
   end subroutine push
 
   !> Append a string variable (its declared length is the longest value allowed).
-  subroutine add_s(items, name, value)
+  subroutine add_s(items, name, value, allowed, meaning)
     type(scene_item_t), allocatable, intent(inout) :: items(:)
     character(len=*), intent(in) :: name, value
+    character(len=*), intent(in), optional :: allowed, meaning   !< the scene reference's words
     type(scene_item_t) :: it
     it%name = name
     it%kind = item_string
     it%s = trim(value)
     it%max_len = len(value)
+    call describe(it, allowed, meaning)
     call push(items, it)
   end subroutine add_s
 
   !> Append an integer variable.
-  subroutine add_i(items, name, value)
+  subroutine add_i(items, name, value, allowed, meaning)
     type(scene_item_t), allocatable, intent(inout) :: items(:)
     character(len=*), intent(in) :: name
     integer(i8), intent(in) :: value
+    character(len=*), intent(in), optional :: allowed, meaning   !< the scene reference's words
     type(scene_item_t) :: it
     it%name = name
     it%kind = item_integer
     it%i = value
+    call describe(it, allowed, meaning)
     call push(items, it)
   end subroutine add_i
 
   !> Append a logical variable.
-  subroutine add_l(items, name, value)
+  subroutine add_l(items, name, value, allowed, meaning)
     type(scene_item_t), allocatable, intent(inout) :: items(:)
     character(len=*), intent(in) :: name
     logical, intent(in) :: value
+    character(len=*), intent(in), optional :: allowed, meaning   !< the scene reference's words
     type(scene_item_t) :: it
     it%name = name
     it%kind = item_logical
     it%i = merge(1_i8, 0_i8, value)
+    call describe(it, allowed, meaning)
     call push(items, it)
   end subroutine add_l
 
   !> Append a real variable.
-  subroutine add_r(items, name, value)
+  subroutine add_r(items, name, value, allowed, meaning)
     type(scene_item_t), allocatable, intent(inout) :: items(:)
     character(len=*), intent(in) :: name
     real(wp), intent(in) :: value
+    character(len=*), intent(in), optional :: allowed, meaning   !< the scene reference's words
     type(scene_item_t) :: it
     it%name = name
     it%kind = item_real
     it%r = value
+    call describe(it, allowed, meaning)
     call push(items, it)
   end subroutine add_r
 
   !> Append a real array variable, flattened in Fortran order, with its shape `dims`.
-  subroutine add_a(items, name, values, dims)
+  subroutine add_a(items, name, values, dims, allowed, meaning)
     type(scene_item_t), allocatable, intent(inout) :: items(:)
     character(len=*), intent(in) :: name
     real(wp), intent(in) :: values(:)
     integer, intent(in) :: dims(2)
+    character(len=*), intent(in), optional :: allowed, meaning   !< the scene reference's words
     type(scene_item_t) :: it
     it%name = name
     it%kind = item_real_array
     it%ra = values
     it%dims = dims
+    call describe(it, allowed, meaning)
     call push(items, it)
   end subroutine add_a
 

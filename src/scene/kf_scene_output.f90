@@ -9,6 +9,12 @@ module kf_scene_output
   implicit none
   private
 
+  ! The allowed values, in the words of the refusals and of the scene reference.
+  character(len=*), parameter :: directory_allowed = 'a directory name'
+  character(len=*), parameter :: frame_interval_allowed = 'a number > 0'
+  character(len=*), parameter :: progress_interval_allowed = 'a number >= 0 (seconds; 0 = every frame)'
+  character(len=*), parameter :: case_name_allowed = 'letters, digits and _ . - + only'
+
   !> &output: files and progress.
   type, public :: output_params_t
     character(len=path_len) :: directory = 'results'
@@ -44,12 +50,20 @@ contains
   subroutine output_items(p, items)
     type(output_params_t), intent(in) :: p
     type(scene_item_t), allocatable, intent(inout) :: items(:)
-    call add_s(items, 'output.directory', p%directory)
-    call add_s(items, 'output.case_name', p%case_name)
-    call add_r(items, 'output.frame_interval', p%frame_interval)
-    call add_r(items, 'output.progress_interval', p%progress_interval)
-    call add_l(items, 'output.diagnostics', p%diagnostics)
-    call add_l(items, 'output.stresslet', p%stresslet)
+    call add_s(items, 'output.directory', p%directory, directory_allowed, &
+      'where the case files go; created if missing, must be writable')
+    call add_s(items, 'output.case_name', p%case_name, case_name_allowed, &
+      "the case file's name stem; '': from the swept parameters, e.g. A2.20_orc, or 'case'")
+    call add_r(items, 'output.frame_interval', p%frame_interval, frame_interval_allowed, &
+      'simulated time between frames')
+    call add_r(items, 'output.progress_interval', p%progress_interval, progress_interval_allowed, &
+      'wall seconds between progress lines')
+    call add_l(items, 'output.diagnostics', p%diagnostics, '.true. or .false.', &
+      'run diagnostics at every accepted step: strand passages, overlap episodes, distances, bond strain '// &
+      '(docs/case-file.md)')
+    call add_l(items, 'output.stresslet', p%stresslet, ".false. unless &flow flow_type = 'shear' with "// &
+      "shear_rate /= 0, and with &hydro model = 'multipole' order >= 2", &
+      "the fibre's stresslet and its viscosity and normal-stress coefficients at every frame (docs/case-file.md)")
   end subroutine output_items
 
   !> Check &output on its own (`file`: the scene file named in the messages, '' from code); what
@@ -64,18 +78,18 @@ contains
     call check_finite(items, file, error)
     if (allocated(error)) return
     if (len_trim(p%directory) == 0) then
-      call refuse(error, file, 'output', 'directory', "''", 'a directory name'); return
+      call refuse(error, file, 'output', 'directory', "''", directory_allowed); return
     end if
     if (.not. (p%frame_interval > 0.0_wp)) then
-      call refuse(error, file, 'output', 'frame_interval', to_str_exact(p%frame_interval), 'a number > 0'); return
+      call refuse(error, file, 'output', 'frame_interval', to_str_exact(p%frame_interval), frame_interval_allowed); return
     end if
     if (.not. (p%progress_interval >= 0.0_wp)) then
       call refuse(error, file, 'output', 'progress_interval', to_str_exact(p%progress_interval), &
-        'a number >= 0 (seconds; 0 = every frame)'); return
+        progress_interval_allowed); return
     end if
     if (verify(trim(p%case_name), 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.-+') /= 0) then
       call refuse(error, file, 'output', 'case_name', quoted(p%case_name), &
-        'letters, digits and _ . - + only'); return
+        case_name_allowed); return
     end if
   end subroutine check_output
 

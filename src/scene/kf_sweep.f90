@@ -30,9 +30,23 @@ module kf_sweep
     procedure :: case_scene
   end type sweep_t
 
-  public :: read_sweep
+  public :: read_sweep, sweep_reference
 
 contains
+
+  !> The variables of &sweep as Markdown table rows `| variable | default | allowed | meaning |`
+  !> (the scene reference, kf_scene_reference; docs/scenes.md).
+  function sweep_reference() result(text)
+    character(len=:), allocatable :: text
+    character(len=1), parameter :: nl = new_line('a')
+    character(len=:), allocatable :: most
+    most = 'a list of at most '//to_str(max_values)//' values'
+    text = '| `bending_a` | not given | '//most//' | values of &forces bending_a |'//nl// &
+      '| `orientation` | not given | '//most//" of 'a' to 'e' (trefoil only) | values of &chain orientation |"//nl// &
+      '| `seed` | not given | '//most//' | values of &chain seed |'//nl// &
+      "| `combine` | `'product'` | product, zip | product: every combination of the lists; zip: case k takes "// &
+      'the k-th value of each list (the lists given must have equal lengths) |'//nl
+  end function sweep_reference
 
   !> Read the base scene and the optional &sweep group from `path`.
   subroutine read_sweep(path, sw, error)

@@ -1,5 +1,5 @@
 """The accuracy-versus-cost report: turns the CSV tables of ``knotflow-accuracy`` into
-docs/accuracy.md (tables), PNG figures and, optionally, the summary block of README.md
+docs/accuracy.md (tables), PNG figures and, optionally, the summary block of docs/models.md
 (between ``<!-- accuracy:begin -->`` and ``<!-- accuracy:end -->``)."""
 
 from __future__ import annotations
@@ -185,7 +185,7 @@ def plot_scaling(scaling: list[dict], fits: list[dict], path: str) -> None:
 
 
 def build_markdown(directory: str, figdir_rel: str) -> tuple[str, str]:
-    """docs/accuracy.md text and the README summary block text."""
+    """docs/accuracy.md text and the summary block text of docs/models.md."""
     meta = _meta(directory)
     models = read_table(directory, "models.csv")
     tol = read_table(directory, "tolerance.csv")
@@ -299,7 +299,7 @@ def replace_block(text: str, block: str, begin: str, end: str, where: str) -> st
 
 
 def update_readme(path: str, block: str) -> None:
-    """Replace the text between the accuracy markers of README.md by `block`."""
+    """Replace the text between the accuracy markers of a Markdown page (docs/models.md) by `block`."""
     with open(path) as f:
         text = f.read()
     text = replace_block(text, block, BEGIN, END, path)
@@ -491,7 +491,7 @@ def update_reuse(markdown: str, directory: str) -> str:
 
 
 def build_report(directory: str, markdown: str, figdir: str, readme: str | None = None) -> dict:
-    """Write the markdown report and the figures; update the README block if asked."""
+    """Write the markdown report and the figures; update the summary block of docs/models.md if asked."""
     if not os.path.exists(os.path.join(directory, "meta.csv")):
         raise FileNotFoundError("%s: no meta.csv (run knotflow-accuracy first)" % directory)
     os.makedirs(figdir, exist_ok=True)
@@ -523,7 +523,7 @@ def build_report(directory: str, markdown: str, figdir: str, readme: str | None 
     if readme and summary:
         meta = _meta(directory)
         block = ("Measured by `bash scripts/accuracy.sh`%s (load average %s; details and "
-                 "figures in docs/accuracy.md):\n\n%s" % (
+                 "figures in [accuracy.md](accuracy.md)):\n\n%s" % (
                      " **--quick: smoke-test sizes, not the real figures**"
                      if meta.get("quick") == "1" else "",
                      meta.get("loadavg_start", "unknown") + (

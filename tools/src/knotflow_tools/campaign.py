@@ -403,7 +403,7 @@ def _newest_kernels_rate(runs: list) -> tuple[str, float, float, float, float] |
     that ran on the BLAS kernels of the newest run that recorded its kernels (`started` is ISO
     8601 UTC, so it sorts by time), None when no run recorded them or those runs covered no time.
     A sweep's rate is taken from these, because the kernels change the speed several-fold
-    (README, "Performance") and a campaign's older runs may have had slower ones."""
+    (docs/models.md) and a campaign's older runs may have had slower ones."""
     known = [r for r in runs if _known_blas(r) and r.get("started")]
     if not known:
         return None

@@ -385,7 +385,8 @@ def _accuracy_report(argv: Argv) -> int:
     p.add_argument("--markdown", default="docs/accuracy.md", help="report file to write")
     p.add_argument("--figures", default="docs/figures", help="directory of the PNG figures")
     p.add_argument("--readme", default=None,
-                   help="README.md whose block between %s and %s is replaced by the summary"
+                   help="Markdown page (docs/models.md) whose block between %s and %s is replaced "
+                   "by the summary"
                    % (accuracy.BEGIN, accuracy.END))
     args = p.parse_args(argv)
     if args.reuse is not None:

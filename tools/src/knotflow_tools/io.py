@@ -19,7 +19,7 @@ OBSERVABLES = ("rg", "a", "b", "c", "theta", "phi", "close_pairs")
 DIAGNOSTICS = ("strand_passages", "overlapping_pairs", "overlap_episodes", "min_distance",
                "max_bond_strain")
 # The fibre's stresslet (optional, &output stresslet): /frames/stresslet/{hydrodynamic, elastic}
-# (nframes, 3, 3) and {viscosity, psi1, psi2} (nframes,), units and normalisation in the README.
+# (nframes, 3, 3) and {viscosity, psi1, psi2} (nframes,), units and normalisation in docs/case-file.md.
 STRESSLET = ("hydrodynamic", "elastic", "viscosity", "psi1", "psi2")
 DIAGNOSTIC_TOTALS = ("strand_passages", "first_passage_time", "overlap_episodes",
                      "overlap_mean_duration", "overlap_max_duration", "max_overlapping_pairs",

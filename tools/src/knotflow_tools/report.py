@@ -172,7 +172,7 @@ def _rheology_cells(r):
 
 RHEOLOGY_NOTE = ("Late-time means ± standard deviations over the frames of the second half of "
                  "each run (t ≥ t_last/2) of the fibre's intrinsic-viscosity-form shear viscosity "
-                 "and normal-stress coefficients (/frames/stresslet; README).")
+                 "and normal-stress coefficients (/frames/stresslet; docs/case-file.md).")
 
 
 def _markdown(sweep_dir, rows, summary_name, summary) -> str:

@@ -1,6 +1,6 @@
 """The fibre's rheological series (``/frames/stresslet``, written with ``&output stresslet``):
 running and late-time averages of the intrinsic-viscosity-form shear viscosity and the normal
-stress difference coefficients psi1, psi2 (normalisation in the README: far-apart free beads
+stress difference coefficients psi1, psi2 (normalisation in docs/case-file.md: far-apart free beads
 give a viscosity of 5/2)."""
 
 from __future__ import annotations
