@@ -3,6 +3,7 @@
 !> and a value that fails to read can be named precisely.
 module kf_namelist_scan
   use kf_error, only: error_t, fatal_error
+  use kf_file_type, only: check_regular_file
   implicit none
   private
 
@@ -108,6 +109,8 @@ contains
       call fatal_error(error, trim(path)//': is a directory (allowed: a namelist scene file)')
       return
     end if
+    call check_regular_file(path, 'scene', error)
+    if (allocated(error)) return
     open (newunit=unit, file=path, status='old', action='read', iostat=ios, iomsg=msg)
     if (ios /= 0) then
       call fatal_error(error, trim(path)//': cannot open: '//trim(msg))

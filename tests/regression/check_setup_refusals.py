@@ -50,8 +50,8 @@ CASES = [
 # Coordinate files are read and checked at set-up.
 for name, points, frag in [
         ("coords_one_bead", "1 2 3\n", "holds fewer than 2 beads"),
-        ("coords_columns", "1 2 3\n4 5\n", "line 2: expected three numbers 'x y z', got '4 5'"),
-        ("coords_nan", "1 2 3\n2 2 nan\n", "line 2: expected three numbers"),
+        ("coords_columns", "1 2 3\n4 5\n", "line 2: expected three numbers 'x y z', found 2 item(s) in '4 5'"),
+        ("coords_nan", "1 2 3\n2 2 nan\n", "line 2: item 3 'nan' is not a number"),
         ("coords_coincident", "1 2 3\n2 2 3\n1 2 3\n", "beads 1 and 3 coincide (allowed: distinct points)")]:
     xyz = os.path.join(work, name + ".xyz")
     with open(xyz, "w") as f:
