@@ -15,19 +15,20 @@ S  a FIFO or a device: coordinate_file = '/dev/zero', a FIFO as coordinate file,
    hung knotflow, /dev/zero ate memory).
 
 Usage: check_input_files.py KNOTFLOW KNOTFLOW_ANALYZE KNOTFLOW_MOBILITY PYTHON TOOLS_SRC WORKDIR
-       [SECTIONS (default FGHS: run only these parts)]
+       [SECTIONS (default FGHSR: run only these parts)]
 """
 import math
 import os
 import shutil
 import subprocess
 import sys
+import time
 
 import h5py
 import numpy as np
 
 knotflow, analyze, mobility, python, tools_src, work = sys.argv[1:7]
-SECTIONS = sys.argv[7] if len(sys.argv) > 7 else "FGHS"
+SECTIONS = sys.argv[7] if len(sys.argv) > 7 else "FGHSR"
 shutil.rmtree(work, ignore_errors=True)
 os.makedirs(work)
 env = dict(os.environ, PYTHONPATH=tools_src)
@@ -180,3 +181,33 @@ if "S" in SECTIONS:
     os.mkfifo(os.path.join(out, case_name))
     refused("knotflow", [knotflow, sc], [case_name, "FIFO"])
     print("S: /dev/zero and FIFOs (coordinate file, scene, case file) refused by type, none hung")
+
+# ---- R: a resume checks the frames it keeps before it continues
+if "R" in SECTIONS:
+    out = path("out_resume")
+    sc = write("resume.nml", "&chain shape = 'straight', n_beads = 8 /\n&hydro model = 'none' /\n"
+                             "&integrator t_end = 300.0 /\n"
+                             f"&output directory = '{out}', case_name = 'r', frame_interval = 1.0 /\n")
+    proc = subprocess.Popen([knotflow, sc], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    case_file = os.path.join(out, "r.h5")
+    deadline = TIMEOUT
+    while deadline > 0:
+        time.sleep(0.5)
+        deadline -= 0.5
+        try:
+            with h5py.File(case_file, "r", locking=False) as f:
+                if f["frames/time"].shape[0] >= 5:
+                    break
+        except (OSError, KeyError):
+            pass
+    proc.kill()
+    proc.wait()
+    with h5py.File(case_file, "r+") as f:
+        status = f.attrs["status"]
+        assert (status.decode() if isinstance(status, bytes) else str(status)).strip() == "running"
+        f["frames/positions"][1, 3, 0] = np.nan
+    r = run([knotflow, sc])
+    assert "r.h5 is damaged (a frame it keeps is bad" in r.stdout and "frame 1" in r.stdout, r.stdout
+    assert "resuming" not in r.stdout, r.stdout
+    print("R: a resume whose kept frame 1 holds a NaN is refused before it continues "
+          "(moved aside and computed again)")
