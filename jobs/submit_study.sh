@@ -72,6 +72,15 @@ if [[ -n "${scale}" ]]; then
     || die "--time-scale must be a number in (0, 1], not '${scale}'"
 fi
 
+# Check everything that needs no written input before a trial's inputs are written (a refused
+# submission leaves no trial directory behind).
+for s in "${sweeps[@]}"; do [[ -r "inputs/${s}.nml" ]] || die "inputs/${s}.nml not found"; done
+for exe in "${build}/bin/knotflow" "${build}/bin/knotflow-analyze" "${build}/venv/bin/knotflow-study"; do
+  [[ -x "${exe}" ]] || die "${exe} not found: build with 'KNOTFLOW_BUILD_DIR=${build} bash scripts/build.sh' (installs the analysis tools too)"
+done
+command -v "$([[ ${scheduler} == slurm ]] && echo sbatch || echo qsub)" >/dev/null \
+  || die "no $([[ ${scheduler} == slurm ]] && echo sbatch || echo qsub) on this machine"
+
 # Inputs and names: the study, or a shortened trial with its own directory and job names.
 inputs=()
 if [[ -z "${scale}" ]]; then
@@ -100,11 +109,6 @@ fi
 
 # Check everything before submitting anything.
 for f in "${inputs[@]}"; do [[ -r "${f}" ]] || die "sweep file ${f} not found"; done
-for exe in "${build}/bin/knotflow" "${build}/bin/knotflow-analyze" "${build}/venv/bin/knotflow-study"; do
-  [[ -x "${exe}" ]] || die "${exe} not found: build with 'KNOTFLOW_BUILD_DIR=${build} bash scripts/build.sh' (installs the analysis tools too)"
-done
-command -v "$([[ ${scheduler} == slurm ]] && echo sbatch || echo qsub)" >/dev/null \
-  || die "no $([[ ${scheduler} == slurm ]] && echo sbatch || echo qsub) on this machine"
 
 submitted=()
 cancel_queued() {

@@ -5,11 +5,12 @@
 module kf_platform
   use, intrinsic :: iso_c_binding, only: c_int, c_double, c_char, c_size_t, c_null_char
   use kf_kinds, only: wp, i8
+  use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   implicit none
   private
 
-  public :: load_average, host_name, utc_now, utc_iso
+  public :: load_average, host_name, utc_now, utc_iso, physical_memory, bytes_text
 
   interface
     !> int getloadavg(double loadavg[], int nelem): samples retrieved, or -1.
@@ -139,5 +140,49 @@ contains
     m = int(merge(mp + 3, mp - 9, mp < 10))
     if (m <= 2) y = y + 1
   end subroutine civil_from_days
+
+  !> Physical memory of this machine in bytes (MemTotal of /proc/meminfo), -1 when unknown.
+  function physical_memory() result(bytes)
+    integer(i8) :: bytes
+    character(len=256) :: line
+    integer :: unit, ios, k
+    integer(i8) :: kib
+    bytes = -1
+    open (newunit=unit, file='/proc/meminfo', status='old', action='read', iostat=ios)
+    if (ios /= 0) return
+    do
+      read (unit, '(a)', iostat=ios) line
+      if (ios /= 0) exit
+      if (index(line, 'MemTotal:') /= 1) cycle
+      k = index(line, 'kB')
+      if (k == 0) exit
+      read (line(10:k - 1), *, iostat=ios) kib
+      if (ios == 0 .and. kib > 0) bytes = 1024_i8*kib
+      exit
+    end do
+    close (unit)
+  end function physical_memory
+
+  !> Bytes as text with a binary-prefixed unit: '512 B', '3.2 GiB'.
+  function bytes_text(bytes) result(text)
+    integer(i8), intent(in) :: bytes
+    character(len=:), allocatable :: text
+    character(len=*), parameter :: units(5) = ['KiB', 'MiB', 'GiB', 'TiB', 'PiB']
+    character(len=32) :: buf
+    real(wp) :: x
+    integer :: k
+    if (bytes < 1024) then
+      text = to_str(bytes)//' B'
+      return
+    end if
+    x = real(bytes, wp)
+    k = 0
+    do while (x >= 1024.0_wp .and. k < size(units))
+      x = x/1024.0_wp
+      k = k + 1
+    end do
+    write (buf, '(f0.1)') x
+    text = trim(adjustl(buf))//' '//units(k)
+  end function bytes_text
 
 end module kf_platform

@@ -41,6 +41,7 @@ module kf_case_file
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_build_info, only: knotflow_version, knotflow_git_hash, knotflow_compiler, knotflow_flags
+  use kf_file_type, only: check_regular_file
   use kf_h5, only: h5_file_t, h5_create_file, h5_open_file, h5_close_file, h5_flush, &
     h5_create_group, h5_exists, h5_attr_exists, h5_write_attr, h5_read_attr, h5_write, h5_read, &
     h5_create_extendible, h5_append, h5_set_length, h5_length, h5_real, h5_int32, h5_int64, h5_read_entry, &
@@ -1395,7 +1396,7 @@ contains
     type(error_t), allocatable, intent(out) :: error
     type(h5_file_t) :: file
     type(error_t), allocatable :: err
-    logical :: exists
+    logical :: exists, is_directory
     if (len_trim(path) == 0) then
       call fatal_error(error, 'case_file_status: empty path')
       status = 'missing'
@@ -1405,6 +1406,16 @@ contains
     if (.not. exists) then
       status = 'missing'
       return
+    end if
+    ! A FIFO, device or socket under the case file's name is no damaged case file: it is refused
+    ! (not moved aside, not opened: a FIFO would block HDF5's open for ever).
+    inquire (file=path//'/.', exist=is_directory)
+    if (.not. is_directory) then
+      call check_regular_file(path, 'case file', error)
+      if (allocated(error)) then
+        status = 'not a regular file'
+        return
+      end if
     end if
     call h5_open_file(file, path, .false., err)
     if (allocated(err)) then

@@ -17,7 +17,7 @@ module kf_case_runner
   use kf_stepper_factory, only: make_stepper
   use kf_shape, only: shape_t, compute_shape
   use kf_case_file, only: case_file_t, case_file_status, stepper_checkpoint_t, verify_case_file, &
-    diagnostics_record_t, stresslet_record_t, run_record_t
+    read_frames, diagnostics_record_t, stresslet_record_t, run_record_t
   use kf_run_segment, only: run_segment_t, run_launch_t
   use kf_frame_records, only: observables_record, diagnostics_record, stresslet_record
   use kf_run_diagnostics, only: run_diagnostics_t, diag_pair_cutoff
@@ -156,6 +156,18 @@ contains
       end if
       state = 'corrupt: marked finished, but '//error%message
       deallocate (error)
+    end if
+    if (state == 'running') then
+      ! The frames a resume keeps are checked first (finite times and coordinates, times that
+      ! increase): a bad early frame is found now, not after the whole remaining run.
+      block
+        real(wp), allocatable :: kept_t(:), kept_r(:, :, :)
+        call read_frames(path, kept_t, kept_r, error)
+      end block
+      if (allocated(error)) then
+        state = 'corrupt: a frame it keeps is bad: '//error%message
+        deallocate (error)
+      end if
     end if
     if (state == 'running') then
       call file%open_resume(path, r, t, dt, steps, rejected, nframes, error, saved, saved_counters)

@@ -3,6 +3,7 @@
 !> and a value that fails to read can be named precisely.
 module kf_namelist_scan
   use kf_error, only: error_t, fatal_error
+  use kf_file_type, only: check_regular_file
   implicit none
   private
 
@@ -20,6 +21,9 @@ module kf_namelist_scan
   end type nml_group_t
 
   public :: scan_namelist_file, group_text, lower, count_values
+
+  !> The UTF-8 byte-order mark some editors write at the start of a file (skipped).
+  character(len=*), parameter :: bom = char(239)//char(187)//char(191)
 
 contains
 
@@ -108,6 +112,8 @@ contains
       call fatal_error(error, trim(path)//': is a directory (allowed: a namelist scene file)')
       return
     end if
+    call check_regular_file(path, 'scene', error)
+    if (allocated(error)) return
     open (newunit=unit, file=path, status='old', action='read', iostat=ios, iomsg=msg)
     if (ios /= 0) then
       call fatal_error(error, trim(path)//': cannot open: '//trim(msg))
@@ -124,12 +130,18 @@ contains
       end if
       if (is_iostat_eor(ios)) then
         line = line//chunk(1:got)
-        text = text//' '//strip_comment(line)
+        if (len(text) == 0 .and. len(line) >= 3) then
+          if (line(1:3) == bom) line = line(4:)
+        end if
+        text = text//' '//strip_comment(blank_tabs(line))
         line = ''
         cycle
       end if
       if (is_iostat_end(ios)) then
-        if (len(line) > 0) text = text//' '//strip_comment(line)
+        if (len(text) == 0 .and. len(line) >= 3) then
+          if (line(1:3) == bom) line = line(4:)
+        end if
+        if (len(line) > 0) text = text//' '//strip_comment(blank_tabs(line))
         exit
       end if
       call fatal_error(error, trim(path)//': cannot read (a directory or not a text file?): '// &
@@ -142,6 +154,26 @@ contains
       call fatal_error(error, trim(path)//': not a text file (it holds NUL bytes; allowed: a namelist scene)')
     end if
   end subroutine read_stripped
+
+  !> line with every tab and carriage return outside quotes made a blank (a tab separates like
+  !> a blank; inside a quoted string it is kept).
+  pure function blank_tabs(line) result(s)
+    character(len=*), intent(in) :: line
+    character(len=len(line)) :: s
+    integer :: k
+    character(len=1) :: quote
+    s = line
+    quote = ' '
+    do k = 1, len(s)
+      if (quote /= ' ') then
+        if (s(k:k) == quote) quote = ' '
+      else if (s(k:k) == '"' .or. s(k:k) == "'") then
+        quote = s(k:k)
+      else if (s(k:k) == achar(9) .or. s(k:k) == achar(13)) then
+        s(k:k) = ' '
+      end if
+    end do
+  end function blank_tabs
 
   pure function itoa(i) result(s)
     integer, intent(in) :: i

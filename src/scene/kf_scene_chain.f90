@@ -23,6 +23,8 @@ module kf_scene_chain
   integer, parameter, public :: candycane_beads = 152    !< beads of the candy-cane
   integer, parameter, public :: default_n_beads = 99     !< straight and random chains without n_beads
   integer, parameter :: max_beads = 100000
+  !> Longest bond of a coordinate file, in rest lengths (bond_length): a strain of 100 %.
+  real(wp), parameter, public :: max_bond_stretch = 2.0_wp
 
   ! The allowed values, in the words of the refusals and of the scene reference.
   character(len=*), parameter :: bond_length_allowed = 'a number in (0, 100)'
@@ -160,7 +162,8 @@ contains
     character(len=*), intent(in) :: file
     type(error_t), allocatable, intent(out) :: error
     real(wp), allocatable :: r(:, :)
-    integer :: n
+    real(wp) :: bond
+    integer :: n, i
     select case (p%shape)
     case (shape_trefoil)
       n = trefoil_points - 1
@@ -173,6 +176,17 @@ contains
         return
       end if
       n = size(r, 2)
+      ! A bond far beyond its rest length l0 is a wrong file or a wrong bond_length, not a
+      ! chain to relax: the spring force would throw the beads apart (docs/inputs.md).
+      do i = 1, n - 1
+        bond = norm2(r(:, i + 1) - r(:, i))
+        if (bond > max_bond_stretch*p%bond_length) then
+          call refuse(error, file, 'chain', 'coordinate_file', quoted(p%coordinate_file), &
+            'bonds of at most '//to_str_exact(max_bond_stretch)//' times bond_length = '// &
+            to_str_exact(p%bond_length)//'; bond '//to_str(i)//' (beads '//to_str(i)//' and '// &
+            to_str(i + 1)//') is '//to_str(bond, '(f0.4)')//' long'); return
+        end if
+      end do
     case default
       if (p%n_beads == 0) p%n_beads = default_n_beads
       return

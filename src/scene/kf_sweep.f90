@@ -80,6 +80,13 @@ contains
             groups(ig)%items(k)%name//''' (allowed: bending_a, orientation, seed, combine)')
           return
         end select
+        if (has_empty_item(groups(ig)%items(k)%value)) then
+          call fatal_error(error, trim(path)//': &sweep: '//groups(ig)%items(k)%lhs//' = '// &
+            groups(ig)%items(k)%value//' has an empty item (allowed: a list of '// &
+            trim(merge('quoted letters a-e', 'values            ', groups(ig)%items(k)%name == 'orientation'))// &
+            ' separated by commas, none empty: no ",,", no leading comma, no empty quotes)')
+          return
+        end if
         text = group_text(groups(ig), only=k)
         read (text, nml=sweep, iostat=ios, iomsg=msg)
         if (ios /= 0) then
@@ -132,6 +139,42 @@ contains
       end do
     end block
   end subroutine read_sweep
+
+  !> Does a list as written hold an empty item: nothing at all, an item between two commas, a
+  !> leading comma, or a quoted item of blanks? Fortran's namelist read would take each as
+  !> "no value" and the sweep would drop it in silence. (A comma before the closing '/' ends
+  !> the list, as in Fortran, and is no item.)
+  pure logical function has_empty_item(value) result(empty)
+    character(len=*), intent(in) :: value
+    integer :: k
+    character(len=1) :: quote
+    logical :: item_seen, quoted_blank
+    empty = .true.
+    if (len_trim(value) == 0) return
+    quote = ' '
+    item_seen = .false.
+    quoted_blank = .true.
+    do k = 1, len_trim(value)
+      if (quote /= ' ') then
+        if (value(k:k) == quote) then
+          quote = ' '
+          if (quoted_blank) return
+        else if (value(k:k) /= ' ') then
+          quoted_blank = .false.
+        end if
+      else if (value(k:k) == "'" .or. value(k:k) == '"') then
+        quote = value(k:k)
+        quoted_blank = .true.
+        item_seen = .true.
+      else if (value(k:k) == ',') then
+        if (.not. item_seen) return
+        item_seen = .false.
+      else if (value(k:k) /= ' ' .and. value(k:k) /= achar(9)) then
+        item_seen = .true.
+      end if
+    end do
+    empty = .not. item_seen
+  end function has_empty_item
 
   !> Every case must have its own name (its own file): refuse a sweep whose cases would share
   !> one, naming the two cases, their values and what to change. Names are kept short and stable

@@ -11,7 +11,8 @@
 #      its scaled input (t_end x F, output in the trial's directory) and its --ntasks-*; the
 #      analysis job depends on every sweep job id qsub printed; rpy submits exactly two sweeps
 #      (with --hold: every job held);
-#   4. a qsub that fails at the third job: the two queued are deleted, no analysis submitted;
+#   4. a submission refused by a check (knotflow-analyze missing) writes no trial inputs; a
+#      qsub that fails at the third job: the two queued are deleted, no analysis submitted;
 #      --ntasks-ensemble for rpy (no ensemble there) is refused before any qsub.
 # Usage: check_study_sweeps.sh SOURCE_DIR WORKDIR
 set -uo pipefail
@@ -124,6 +125,13 @@ grep -qx "held: release with qrls 1.pbs 2.pbs 3.pbs" <<<"${out}" || fail "--hold
 echo "pbs rpy --hold: 2 sweep jobs, the analysis after both, all held"
 
 # --- 4. failures ------------------------------------------------------------------------------
+# a submission refused by a check (an executable missing) writes no trial inputs first
+mv "${proj}/build/bin/knotflow-analyze" "${work}/knotflow-analyze.away"
+out=$(submit rpy --time-scale 0.5) && fail "a missing knotflow-analyze went unnoticed: ${out}"
+[[ "${out}" == *"knotflow-analyze not found"* ]] || fail "missing executable not named: ${out}"
+[[ ! -e "${proj}/results/study_rpy_t0.5" ]] || fail "a refused submission wrote its trial inputs: $(ls -R "${proj}/results/study_rpy_t0.5")"
+mv "${work}/knotflow-analyze.away" "${proj}/build/bin/knotflow-analyze"
+echo "a refused trial submission writes nothing (checks first)"
 rm -f "${work}/qsub.calls"
 out=$(QSUB_FAIL_AT=3 submit multipole --time-scale 0.001) && fail "a failed qsub went unnoticed: ${out}"
 [[ "$(cat "${work}/qdel.calls" 2>/dev/null)" == "1.pbs 2.pbs" ]] || fail "the queued jobs were not deleted: qdel $(cat "${work}/qdel.calls" 2>/dev/null); ${out}"

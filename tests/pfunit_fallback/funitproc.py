@@ -28,7 +28,10 @@ and so is what real pFUnit 4.12 does not compile although a lenient preprocessor
     a component (``s%values``) is not seen;
   - in a module that uses ``pfunit`` (which re-exports the ``mpi`` module): ``use mpi_f08``
     without ``only:``, an MPI name imported from ``mpi_f08`` without a rename, and a local
-    entity or procedure named ``MPI_...`` / ``PMPI_...`` (the names ``mpi`` exports).
+    entity or procedure named ``MPI_...`` / ``PMPI_...`` (the names ``mpi`` exports);
+  - in a module that uses ``funit`` without ``only:``, a module entity or procedure named like
+    one that module itself exports (FUNIT_EXPORTS: ``run``, ``initialize``, ...): real pFUnit
+    4.12 stops with "Procedure 'run' at (1) is already defined".
 """
 
 import argparse
@@ -48,6 +51,10 @@ PRIVATE_RE = re.compile(r"^\s*private\s*(!.*)?$", re.IGNORECASE)
 # assertTrue_/assertTrue_1d_, assertFalse_/assertFalse_1d_; assertIsNaN and assertIsFinite
 # for single and double precision scalars only).
 MAX_RANK = {"asserttrue": 1, "assertfalse": 1, "assertisnan": 0, "assertisfinite": 0}
+# The names module funit of pFUnit 4.12 declares public itself (src/funit/FUnit.F90); a module
+# procedure or module variable of the same name in a module that does `use funit` without
+# `only:` does not compile.
+FUNIT_EXPORTS = ("run", "initialize", "generic_run", "finalize", "loadtests_interface", "stub")
 IDENT_RE = re.compile(r"[A-Za-z]\w*")
 DECL_RE = re.compile(
     r"^\s*(?:real|integer|logical|complex|character|double\s+precision|type\s*\(|class\s*\()"
@@ -240,6 +247,7 @@ class PfFile:
         pending = None           # (directive, options, line) waiting for its subroutine
         module_decls, proc_decls = {}, {}   # name -> is an array
         mpi_names = []           # (line, name) of every declared entity and procedure
+        module_entities = []     # (line, name) of module variables and procedures
         uses = []                # (line, module, only-list or None)
         disable_next = False
         in_type = 0
@@ -325,7 +333,10 @@ class PfFile:
             if proc and not re.match(r"^\s*end\b", statement, re.IGNORECASE):
                 proc_decls = {}
                 mpi_names.append((lineno, proc.group(2)))
+                module_entities.append((lineno, proc.group(2)))
             names = declared_names(statement)
+            if not seen_contains:
+                module_entities.extend((lineno, n) for n in names)
             (proc_decls if seen_contains else module_decls).update(names)
             mpi_names.extend((lineno, n) for n in names)
             use = USE_RE.match(statement)
@@ -355,6 +366,13 @@ class PfFile:
             raise self.error(pending[2], f"'@{pending[0]}' is not followed by a subroutine")
         if any(module == "pfunit" for _, module, _ in uses):
             self._check_mpi_clashes(uses, mpi_names)
+        if any(module == "funit" and only is None for _, module, only in uses):
+            for lineno, name in module_entities:
+                if name.lower() in FUNIT_EXPORTS:
+                    raise self.error(lineno, f"'{name}' is a name module funit exports, and this "
+                                             "module uses funit without 'only:': real pFUnit "
+                                             f"4.12 stops with \"Procedure '{name}' is already "
+                                             "defined\"; rename it")
         if self.module is None:
             raise self.error(1, "no 'module <name>' statement found")
         if not self.tests:

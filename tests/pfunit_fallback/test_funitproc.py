@@ -201,6 +201,60 @@ class PreprocessorTest(unittest.TestCase):
             end module test_p6
             """, 5, "'MPI_helper'")
 
+    def test_procedure_named_like_funit_export(self):
+        """funit exports `run`: a module procedure `run` beside `use funit` (no only:) does not
+        compile under real pFUnit 4.12 (tests/unit/test_shared_pairs.pf had one)."""
+        self.assert_rejected("test_f1.pf", """
+            module test_f1
+              use funit
+            contains
+              subroutine run(x)
+                real, intent(out) :: x
+                x = 1
+              end subroutine run
+              @test
+              subroutine test_x()
+              end subroutine test_x
+            end module test_f1
+            """, 4, "'run' is a name module funit exports")
+        self.assert_rejected("test_f2.pf", """
+            module test_f2
+              use funit
+              implicit none
+              integer :: finalize = 0
+            contains
+              @test
+              subroutine test_x()
+              end subroutine test_x
+            end module test_f2
+            """, 4, "'finalize'")
+        # with only:, or as a local variable of a procedure, the name is the module's own
+        self.assert_accepted("test_f3.pf", """
+            module test_f3
+              use funit, only: assertTrue, anyExceptions, SourceLocation
+            contains
+              subroutine run()
+              end subroutine run
+              @test
+              subroutine test_x()
+                integer :: run_count
+                run_count = 1
+                @assertTrue(run_count == 1)
+              end subroutine test_x
+            end module test_f3
+            """)
+        self.assert_accepted("test_f4.pf", """
+            module test_f4
+              use funit
+            contains
+              @test
+              subroutine test_x()
+                integer :: run
+                run = 1
+              end subroutine test_x
+            end module test_f4
+            """)
+
     def test_project_pf_files_pass(self):
         """Every .pf file of the project passes the rules (real pFUnit compiles them)."""
         root = os.path.dirname(os.path.dirname(HERE))

@@ -83,12 +83,20 @@ def damaged_chunk(f):
                      fletcher32=True)
 
 
+def huge_declared(f):
+    """frames/positions declared (10^8, 59, 3) with 4 frames written: a small file."""
+    del f["frames/positions"]
+    ds = f.create_dataset("frames/positions", shape=(10**8, 59, 3), maxshape=(None, 59, 3),
+                          chunks=(1, 59, 3), dtype="f8")
+    ds[:4] = POS
+
+
 # (file, how to make it, fragment of knotflow-analyze's message, fragment of knotflow-kf's)
 CORPUS = [
     ("missing.h5", None, "does not exist", "no such file"),
     ("empty.h5", lambda: text("empty.h5", []), "an empty file, not HDF5", "an empty file, not HDF5"),
     ("words.h5", lambda: text("words.h5", ["this is not HDF5\n"] * 50), "not an HDF5 file", "not an HDF5 file"),
-    ("directory.h5", lambda: os.mkdir(path("directory.h5")), "it is a directory", "it is a directory"),
+    ("directory.h5", lambda: os.mkdir(path("directory.h5")), "is a directory", "it is a directory"),
     ("truncated.h5", None, "truncated or damaged", "truncated or damaged"),
     ("no_frames.h5", lambda: h5py.File(path("no_frames.h5"), "w").close(), "no /frames group", "no /frames group"),
     ("frames_dataset.h5", None, "'/frames/time' not found", "no /frames group"),
@@ -121,9 +129,20 @@ CORPUS = [
     ("two_columns.xyz", lambda: text("two_columns.xyz", ["%r %r\n" % (float(p[0]), float(p[1])) for p in POS[0]]),
      "line 1: expected three numbers", ":1: expected 3 numbers, got 2"),
     ("word.xyz", lambda: text("word.xyz", xyz_rows(POS[0][:7]) + ["1.0 abc 2.0\n"] + xyz_rows(POS[0][8:])),
-     "line 8: expected three numbers", ":8: not a number"),
+     "line 8: item 2 'abc' is not a number", ":8: not a number: item 2 'abc'"),
     ("nan.xyz", lambda: text("nan.xyz", xyz_rows(POS[0][:3]) + ["1.0 nan 2.0\n"] + xyz_rows(POS[0][4:])),
-     "line 4", ":4: non-finite coordinate"),
+     "line 4: item 2 'nan' is not a number", ":4: not a number: item 2 'nan'"),
+    ("inf.xyz", lambda: text("inf.xyz", xyz_rows(POS[0][:3]) + ["1.0 2.0 1e999\n"] + xyz_rows(POS[0][4:])),
+     "line 4: item 3 '1e999' is not a number", ":4: non-finite coordinate"),
+    ("comma.xyz", lambda: text("comma.xyz", xyz_rows(POS[0][:5]) + ["0 0 1,5\n"] + xyz_rows(POS[0][6:])),
+     "line 6: item 3 '1,5' is not a number", ":6: not a number: item 3 '1,5'"),
+    ("four.xyz", lambda: text("four.xyz", xyz_rows(POS[0][:2]) + [" " * 3000 + "1 2 3 4\n"]),
+     "line 3: expected three numbers 'x y z', found a fourth item '4'", ":3: expected 3 numbers, found a fourth"),
+    ("control.xyz", lambda: text("control.xyz", xyz_rows(POS[0][:2]) + ["1 2 3\x0b\n"]),
+     "item 3 '3<0x0B>' is not a number", "item 3 '3<0x0B>'"),
+    ("huge_declared.h5", lambda: case("huge_declared.h5", extra=huge_declared),
+     "declares shape (100000000, 59, 3)", "declares shape (100000000, 59, 3)"),
+    ("fifo.h5", lambda: os.mkfifo(path("fifo.h5")), "is a FIFO (named pipe)", "is a FIFO (named pipe)"),
     ("comments_only.xyz", lambda: text("comments_only.xyz", ["# nothing\n", "\n"]), "contains no points",
      "no coordinates"),
     ("one_bead.xyz", lambda: text("one_bead.xyz", ["1 2 3\n"]), "the chain has 1 bead(s), at least 2",

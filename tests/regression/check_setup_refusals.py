@@ -50,9 +50,12 @@ CASES = [
 # Coordinate files are read and checked at set-up.
 for name, points, frag in [
         ("coords_one_bead", "1 2 3\n", "holds fewer than 2 beads"),
-        ("coords_columns", "1 2 3\n4 5\n", "line 2: expected three numbers 'x y z', got '4 5'"),
-        ("coords_nan", "1 2 3\n2 2 nan\n", "line 2: expected three numbers"),
-        ("coords_coincident", "1 2 3\n2 2 3\n1 2 3\n", "beads 1 and 3 coincide (allowed: distinct points)")]:
+        ("coords_columns", "1 2 3\n4 5\n", "line 2: expected three numbers 'x y z', found 2 item(s) in '4 5'"),
+        ("coords_nan", "1 2 3\n2 2 nan\n", "line 2: item 3 'nan' is not a number"),
+        ("coords_coincident", "1 2 3\n2 2 3\n1 2 3\n", "beads 1 and 3 coincide (allowed: distinct points)"),
+        # bond_length 1.02 (default): 2 x 1.02 = 2.04 is the longest bond allowed
+        ("coords_stretched", "0 0 0\n0 0 1.02\n0 0 11.22\n",
+         "is not allowed (bonds of at most 2.0 times bond_length = 1.02; bond 2 (beads 2 and 3) is 10.2000 long)")]:
     xyz = os.path.join(work, name + ".xyz")
     with open(xyz, "w") as f:
         f.write(points)

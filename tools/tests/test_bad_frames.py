@@ -40,6 +40,12 @@ def test_kf_tool_refuses_nan_in_a_text_file(tmp_path, capsys):
     p.write_text("\n".join(lines) + "\n")
     assert cli.main_kf([str(p), "--closures", "10"]) == 2
     err = capsys.readouterr().err
+    # 'nan' is no number of a coordinate file (docs/inputs.md); 1e999 is one, but not finite
+    assert "chain.xyz:6: not a number: item 2 'nan'" in err
+    lines[5] = "1.0 2.0 1e999"
+    p.write_text("\n".join(lines) + "\n")
+    assert cli.main_kf([str(p), "--closures", "10"]) == 2
+    err = capsys.readouterr().err
     assert "chain.xyz:6: non-finite coordinate" in err
 
 

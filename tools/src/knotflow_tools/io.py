@@ -6,6 +6,8 @@
 from __future__ import annotations
 
 import os
+import re
+import stat
 from dataclasses import dataclass, field
 
 import h5py
@@ -95,9 +97,77 @@ class Case:
         return len(self.time)
 
 
+#: Largest ratio of raw to stored bytes accepted for compressed data (deflate's is 1032); the
+#: same limit as the Fortran readers (kf_h5, check_declared_size). docs/inputs.md.
+MAX_COMPRESSION = 1100.0
+#: Filters that do not compress (their data takes at least its raw size in the file).
+_NON_COMPRESSING = (h5py.h5z.FILTER_FLETCHER32, h5py.h5z.FILTER_SHUFFLE)
+
+_FILE_TYPES = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+               (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+               (stat.S_ISSOCK, "a socket"))
+
+
+def check_regular_file(path, what: str) -> None:
+    """A ValueError unless `path` (symbolic links followed) is a regular file: a FIFO would
+    block the open forever, a device such as /dev/zero never ends. A missing file is left to
+    the caller's open."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return
+    if stat.S_ISREG(mode):
+        return
+    kind = next((name for test, name in _FILE_TYPES if test(mode)), "not a regular file")
+    raise ValueError(f"{path}: the {what} is {kind}: only a regular file is read")
+
+
+def physical_memory() -> int:
+    """Bytes of physical memory of this machine (0 when unknown)."""
+    try:
+        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError):
+        return 0
+
+
+def check_declared_size(path, ds, whole: bool = True) -> None:
+    """The shape dataset `ds` declares must fit its file and (a whole read) this machine's
+    memory, checked before anything is read: without a compressing filter its bytes may
+    exceed the file's size by at most one entry along its first dimension (a frame being
+    written when a run stopped), with one by at most MAX_COMPRESSION times the file's size.
+    A ValueError names the file, the dataset and the shape (a 139 kB file declaring
+    (10^8, 99, 3) reals is refused instead of crashing the reader)."""
+    if ds.shape is None or len(ds.shape) == 0:
+        return
+    declared = float(ds.dtype.itemsize) * float(np.prod([float(n) for n in ds.shape]))
+    entry = declared / max(1.0, float(ds.shape[0]))
+    plist = ds.id.get_create_plist()
+    compressed = any(plist.get_filter(k)[0] not in _NON_COMPRESSING
+                     for k in range(plist.get_nfilters()))
+    try:
+        file_bytes = os.path.getsize(path)
+    except OSError:
+        file_bytes = -1
+    shape = ", ".join(str(n) for n in ds.shape)
+    if file_bytes >= 0:
+        allowed = (MAX_COMPRESSION if compressed else 1.0) * file_bytes + entry
+        if declared > allowed:
+            held = " compressed" if compressed else ""
+            raise ValueError(f"{path}: {ds.name} declares shape ({shape}) of {declared:.3g} "
+                             f"bytes, more than the {file_bytes}-byte file can hold{held} "
+                             "(a damaged or forged file; refused before reading)")
+    memory = physical_memory()
+    if whole and memory > 0 and declared > memory:
+        raise ValueError(f"{path}: {ds.name} declares shape ({shape}) of {declared:.3g} bytes, "
+                         f"more than the {memory} bytes of memory of this machine "
+                         "(refused before reading)")
+
+
 def _read(path, ds):
-    """All of dataset ds; a read that fails (a Fletcher-32 checksum mismatch in damaged data,
-    an I/O error) becomes a ValueError naming the file and the dataset."""
+    """All of dataset ds (its declared size checked first, check_declared_size); a read that
+    fails (a Fletcher-32 checksum mismatch in damaged data, an I/O error) becomes a
+    ValueError naming the file and the dataset."""
+    check_declared_size(path, ds)
     try:
         return ds[()]
     except OSError as exc:
@@ -207,7 +277,10 @@ def read_runs(path, f) -> list:
 
 def open_case(path):
     """The case file `path` opened read-only with h5py; a file HDF5 cannot open is a ValueError
-    naming it and telling why (missing, a directory, empty, not HDF5, truncated or damaged)."""
+    naming it and telling why (missing, a directory, empty, not HDF5, truncated or damaged);
+    a FIFO or a device is refused before it is opened (check_regular_file)."""
+    if not os.path.isdir(path):
+        check_regular_file(path, "case file")
     try:
         return h5py.File(path, "r")
     except OSError as exc:
@@ -336,23 +409,44 @@ def read_frame(path, frame: int = -1) -> np.ndarray:
     return case.positions[frame]
 
 
+#: A number of a coordinate file: the whole item, nothing else (docs/inputs.md; the Fortran
+#: reader kf_text_coords applies the same rule). float() alone would take '1_0', 'inf', 'nan'.
+_NUMBER_RE = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+
+
+def _visible(text: str) -> str:
+    """text with characters outside printable ASCII shown (<TAB>, <0xNN>), at most 80."""
+    out = "".join("<TAB>" if c == "\t" else "<CR>" if c == "\r"
+                  else c if " " <= c <= "~" else f"<0x{ord(c):02X}>" if ord(c) < 256
+                  else f"<U+{ord(c):04X}>" for c in text)
+    return out if len(out) <= 80 else out[:80] + "..."
+
+
 def read_xyz(path) -> np.ndarray:
-    """Points (n, 3) of a text coordinate file (blank lines and '#' lines ignored)."""
+    """Points (n, 3) of a text coordinate file (docs/inputs.md): blanks are spaces, tabs and
+    carriage returns; blank lines and lines whose first item starts with '#' are ignored; a
+    UTF-8 byte-order mark is skipped; every other line holds exactly three whole, finite
+    numbers. A ValueError names the file, the line and the item."""
+    check_regular_file(path, "coordinate file")
     pts = []
-    with open(path, encoding="utf-8") as fh:
+    with open(path, encoding="utf-8-sig", newline="\n") as fh:
         for lineno, line in enumerate(fh, 1):
-            s = line.strip()
-            if not s or s.startswith("#"):
+            parts = line.replace("\t", " ").replace("\r", " ").replace("\n", " ").split(" ")
+            parts = [p for p in parts if p]
+            if not parts or parts[0].startswith("#"):
                 continue
-            parts = s.split()
+            if len(parts) > 3:
+                raise ValueError(f"{path}:{lineno}: expected 3 numbers, found a fourth item "
+                                 f"'{_visible(parts[3])}'")
             if len(parts) != 3:
                 raise ValueError(f"{path}:{lineno}: expected 3 numbers, got {len(parts)}")
-            try:
-                xyz = [float(x) for x in parts]
-            except ValueError:
-                raise ValueError(f"{path}:{lineno}: not a number in '{s}'") from None
+            for k, item in enumerate(parts, 1):
+                if not _NUMBER_RE.fullmatch(item):
+                    raise ValueError(f"{path}:{lineno}: not a number: item {k} '{_visible(item)}' "
+                                     "(allowed: [+-]digits[.digits][e[+-]digits], finite)")
+            xyz = [float(x) for x in parts]
             if not all(np.isfinite(xyz)):
-                raise ValueError(f"{path}:{lineno}: non-finite coordinate in '{s}'")
+                raise ValueError(f"{path}:{lineno}: non-finite coordinate in '{_visible(line.strip())}'")
             pts.append(xyz)
     if not pts:
         raise ValueError(f"{path}: no coordinates (every line is blank or a comment)")

@@ -54,7 +54,8 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
     for path in find_case_files(sweep_dir):
         try:
             case = read_case(path)
-        except (OSError, KeyError, ValueError) as exc:
+        except (OSError, KeyError, ValueError, TypeError, RuntimeError, MemoryError) as exc:
+            # whatever a bad file holds, the good cases are reported and the bad one listed
             rows.append({"file": os.path.basename(path), "name": os.path.basename(path),
                          "A": None, "orientation": None, "status": f"unreadable: {exc}",
                          "final_kf": None, "final_state": "-", "transitions": "-",

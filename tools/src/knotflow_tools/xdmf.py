@@ -28,7 +28,7 @@ import xml.etree.ElementTree as ET
 import h5py
 import numpy as np
 
-from .io import checkpoint_frames
+from .io import check_declared_size, check_regular_file, checkpoint_frames
 
 XDMF_SUFFIX = ".xdmf2"
 
@@ -137,11 +137,14 @@ def build_xdmf(case_path, out_path=None) -> ET.ElementTree:
     href = os.path.relpath(case_path, os.path.dirname(out_path))
     root = ET.Element("Xdmf", Version="2.0")
     domain = ET.SubElement(root, "Domain")
+    check_regular_file(case_path, "case file")
     with h5py.File(case_path, "r") as f:
         pos = f["frames/positions"]
         if pos.ndim != 3 or pos.shape[2] != 3:
             raise ValueError(f"{case_path}: /frames/positions has shape {pos.shape}, "
                              "expected (frames, beads, 3)")
+        check_declared_size(case_path, pos, whole=False)
+        check_declared_size(case_path, f["frames/time"])
         nframes = _frame_count(f)
         nbeads = pos.shape[1]
         times = np.asarray(f["frames/time"][:nframes], dtype=float)
