@@ -56,6 +56,10 @@ def test_section_appended_then_replaced(tmp_path):
     assert ("| trefoil | 50.0000 | adaptive | 3 | 1 | 120.00 | 7.500E-02 | 22.000 / 35.000 / "
             "41.000 | 2.900 | 3.200 | 2 | 3.600 | 0.400 | 1.00 1.00 1.00 1/2 3 |") in section
     assert "![stiffness](figures/accuracy_stiffness.png)" in section
+    # the accepted steps after the first tenth of the window (t >= 0.0081): only the last one,
+    # lambda h = 3.075 = 0.93 of 3.307, error / tol 0.5 (not below half: accuracy), h 0.075,
+    # h from accuracy alone 0.075 * 0.5^(-1/5) = 0.0862
+    assert "| trefoil | 0.93 | 0.500 | 0.0750 | 0.0862 | accuracy |" in section
     assert (figs / accuracy.STIFFNESS_FIGURE).stat().st_size > 0
     text = md.read_text()
     assert "reuse text" in text and text.startswith("# Report\n\nbody\n")
@@ -72,3 +76,17 @@ def test_cli_without_outputs(tmp_path, capsys):
     status = cli.main_accuracy_report(["--stiffness", str(tmp_path), "--markdown", str(md)])
     assert status != 0
     assert "no knotflow-bench-reuse stiffness outputs" in capsys.readouterr().err
+
+
+def test_binding_limit():
+    rows = [{"t": 0.1*i, "h": 0.08, "lambda_h": 0.9*3.3, "error_over_tol": 1e-5*3.2**5,
+             "accepted": 1} for i in range(20)]
+    b = accuracy.binding_limit(rows, 3.3)
+    assert b["verdict"] == "stability"
+    assert b["lambda_h_over_boundary"] == pytest.approx(0.9)
+    # error ~ h^5: the accuracy-limited step is h (1/err)^(1/5) = 0.08 * 10 / 3.2
+    assert b["h_accuracy"] == pytest.approx(0.25)
+    for r in rows:
+        r["lambda_h"] = 1.0
+        r["error_over_tol"] = 0.7
+    assert accuracy.binding_limit(rows, 3.3)["verdict"] == "accuracy"

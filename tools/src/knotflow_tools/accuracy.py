@@ -510,7 +510,36 @@ def plot_stiffness(tables: dict, boundary: float, path: str) -> None:
     plt.close(fig)
 
 
-def stiffness_lines(runs: dict, figure: str | None = None) -> list[str]:
+def _median(values: list[float]) -> float:
+    v = sorted(values)
+    if not v:
+        return float("nan")
+    return v[len(v)//2] if len(v) % 2 else 0.5*(v[len(v)//2 - 1] + v[len(v)//2])
+
+
+def binding_limit(rows: list[dict], boundary: float) -> dict:
+    """Which limit sets the accepted steps of a stiffness table: the medians of |lambda| h / the
+    boundary and of the error estimate / tolerance over the accepted steps (the first tenth of
+    the window left out: the start-up ramp of the step size), the step an accuracy limit alone
+    would allow (h (tol/err)^(1/5), dopri45's local error ~ h^5; a median, indicative only), and
+    the verdict: 'stability' when the steps sit within 20 % of the boundary while the error
+    estimate stays below half the tolerance, else 'accuracy'."""
+    acc = [r for r in rows if r["accepted"] == 1]
+    if not acc:
+        return {}
+    t0 = acc[0]["t"] + 0.1*(acc[-1]["t"] - acc[0]["t"])
+    acc = [r for r in acc if r["t"] >= t0]
+    lh = _median([r["lambda_h"]/boundary for r in acc])
+    err = _median([r["error_over_tol"] for r in acc])
+    h = _median([r["h"] for r in acc])
+    h_acc = _median([r["h"]*max(r["error_over_tol"], 1e-12)**(-0.2) for r in acc])
+    verdict = "stability" if lh >= 0.8 and err < 0.5 else "accuracy"
+    return {"lambda_h_over_boundary": lh, "error_over_tol": err, "h": h, "h_accuracy": h_acc,
+            "verdict": verdict}
+
+
+def stiffness_lines(runs: dict, figure: str | None = None,
+                    tables: dict | None = None) -> list[str]:
     """The section on which limit sets the time step (stiffness_* outputs)."""
     st = [(k, v) for k, v in runs.items() if k.startswith("stiffness_")]
     if not st:
@@ -541,6 +570,24 @@ def stiffness_lines(runs: dict, figure: str | None = None) -> list[str]:
                       "|λ|h mean (accepted)", "|λ|h max (accepted)",
                       "accepted with |λ|h > 0.9 boundary", "|λ|h mean (rejected)",
                       "error / tol mean (accepted)", "load"], rows), ""]
+    if tables:
+        boundary = float(st[0][1].get("stability_boundary", "3.307"))
+        rows = []
+        for name, trials in sorted(tables.items()):
+            b = binding_limit(trials, boundary)
+            if b:
+                rows.append([name, "%.2f" % b["lambda_h_over_boundary"],
+                             "%.3f" % b["error_over_tol"], "%.4f" % b["h"],
+                             "%.4f" % b["h_accuracy"], b["verdict"]])
+        out += ["Medians over the accepted steps after the first tenth of each window (the "
+                "start-up ramp of the step size): |λ|h over the stability boundary, the error "
+                "estimate over the tolerance, the step h, and the step an accuracy limit alone "
+                "would allow, h·(tol/err)^(1/5) (dopri45's local error ∝ h^5 away from the "
+                "boundary; indicative: near the boundary the estimate is dominated by the stiff "
+                "modes). Binding limit: 'stability' when the steps sit within 20 % of the "
+                "boundary while the error estimate stays below half the tolerance.", "",
+                _md_table(["configuration", "|λ|h / boundary", "error / tol", "h",
+                           "h from accuracy alone", "binding limit"], rows), ""]
     if figure:
         out += ["![stiffness](%s)" % figure, ""]
     return out
@@ -563,7 +610,7 @@ def update_stiffness(markdown: str, directory: str, figdir: str) -> str:
         rel = os.path.relpath(os.path.abspath(figdir),
                               os.path.dirname(os.path.abspath(markdown)))
         figure = os.path.join(rel, STIFFNESS_FIGURE)
-    section = "\n".join(stiffness_lines(runs, figure))
+    section = "\n".join(stiffness_lines(runs, figure, tables))
     text = ""
     if os.path.exists(markdown):
         with open(markdown) as f:
