@@ -11,7 +11,7 @@
 #                                              but stiffness and case)
 #   stiffness: which limit sets dopri45's step (|lambda_max| h of mu dF/dr at every trial step)
 #   along the trefoil (t = 0-50) and a candy-cane window (t = 800 of the campaign run, 20 units),
-#   into $out/stiffness and the stiffness section of docs/accuracy.md (about 30 min of one core)
+#   into $out/stiffness and the stiffness section of docs/accuracy.md (about 45 min of one core)
 #   case: the whole reference trefoil case (N = 99, t_end = 1000) with the adaptive path
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
@@ -52,7 +52,14 @@ for part in "${parts[@]}"; do
       mkdir -p "$out/stiffness"
       bench stiffness/stiffness_trefoil stiffness --config trefoil --t-end 50 --table "$out/stiffness/stiffness_trefoil.dat"
       bench stiffness/stiffness_candycane_t800 stiffness --config inputs/configs/candycane_A1_multipole_t800.xyz \
-        --t-end 20 --table "$out/stiffness/stiffness_candycane_t800.dat" ;;
+        --t-end 20 --table "$out/stiffness/stiffness_candycane_t800.dat"
+      for tol in 1e-3 1e-5; do   # does the step follow the tolerance (accuracy) or not (stability)?
+        bench stiffness/stiffness_trefoil_tol$tol stiffness --config trefoil --t-end 10 \
+          --tolerance $tol --table "$out/stiffness/stiffness_trefoil_tol$tol.dat"
+        bench stiffness/stiffness_candycane_t800_tol$tol stiffness \
+          --config inputs/configs/candycane_A1_multipole_t800.xyz --t-end 3 --tolerance $tol \
+          --table "$out/stiffness/stiffness_candycane_t800_tol$tol.dat"
+      done ;;
     case)
       dir="$out/case"
       rm -rf "$dir"; mkdir -p "$dir"

@@ -12,9 +12,11 @@
 !>   scaling    [--t-end T]: adaptive wall time per unit time for random chains N = 50..400
 !>   overlaps   [--config C] [--t-end T] [--eps-lub E]: BWE overlap statistics (run
 !>              diagnostics) of both paths
-!>   stiffness  [--config C] [--t-end T] [--update U] [--table FILE]: which limit sets dopri45's
-!>              step: at every trial step lambda_max*h of mu dF/dr (kf_stiffness_probe), the
-!>              error estimate and the outcome; per-trial rows into FILE, a summary on stdout
+!>   stiffness  [--config C] [--t-end T] [--update U] [--tolerance TOL] [--table FILE]: which
+!>              limit sets dopri45's step: at every trial step lambda_max*h of mu dF/dr
+!>              (kf_stiffness_probe), the error estimate and the outcome; per-trial rows into
+!>              FILE, a summary on stdout; TOL (default 1e-4) is the dopri45 tolerance only
+!>              (eps_lub stays 1e-4 unless --eps-lub is given)
 !>   rigid      [--config C]: the reused part at rigidly moved and at deformed configurations
 !>              (overlap rule pair only: the model's reused part against its exact one, both
 !>              without the dynamics' configuration rules separate and relax)
@@ -47,7 +49,7 @@ program knotflow_bench_reuse
   character(len=*), parameter :: program_name = 'knotflow-bench-reuse'
 
   character(len=:), allocatable :: part, config, overlap, update, table
-  real(wp) :: t_end, eps_lub
+  real(wp) :: t_end, eps_lub, tolerance
   integer :: every
 
   call parse_arguments()
@@ -79,7 +81,7 @@ contains
     part = argument(1)
     call standard_option(program_name, part, 'usage: knotflow-bench-reuse velocity|trajectory|speed|overlaps|'// &
       'scaling|rigid|stiffness [--config trefoil|coil|FILE] [--t-end T] [--every K] [--eps-lub E]'// &
-      ' [--overlap pair|separate|relax] [--update U] [--table FILE]'//new_line('a')// &
+      ' [--overlap pair|separate|relax] [--update U] [--tolerance TOL] [--table FILE]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
       'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).')
     config = 'trefoil'
@@ -89,6 +91,7 @@ contains
     overlap = ''
     update = 'adaptive'
     table = ''
+    tolerance = 1.0e-4_wp
     k = 2
     do while (k <= command_argument_count())
       arg = argument(k)
@@ -112,6 +115,10 @@ contains
         update = trim(val)
         if (.not. any(update_names == update)) &
           call die(program_name, '--update '//update//': allowed values are '//name_list(update_names), 2)
+      case ('--tolerance')
+        read (val, *, iostat=ios) tolerance
+        if (ios /= 0 .or. .not. (tolerance > 0.0_wp .and. tolerance < 1.0_wp)) &
+          call die(program_name, '--tolerance '//trim(val)//': expected a number in (0, 1)', 2)
       case ('--table')
         table = trim(val)
       case ('--every')
@@ -414,7 +421,7 @@ contains
     integer :: unit, ios, k, n, n_acc
     logical, allocatable :: acc(:)
     call header()
-    call study_scene(config, 1.0e-4_wp, update, scene, r)
+    call study_scene(config, tolerance, update, scene, r)
     if (eps_lub < 0.0_wp) scene%hydro%eps_lub = 1.0e-4_wp
     call sys%init(scene, size(r, 2), error)
     if (allocated(error)) call die(program_name, error%message, 2)
@@ -432,6 +439,7 @@ contains
       lh(:) = abs(tr%lambda)*tr%h
       n_acc = count(acc)
       write (output_unit, '(a)') 'update = '//update
+      write (output_unit, '(a)') 'tolerance = '//to_str(tolerance, '(es10.3)')
       write (output_unit, '(a)') 'n_beads = '//to_str(size(r, 2))
       write (output_unit, '(a)') 'stability_boundary = '//to_str(stability_boundary, '(f6.3)')
       write (output_unit, '(a)') 'trials = '//to_str(n)
@@ -448,7 +456,7 @@ contains
       write (output_unit, '(a)') 'accepted_above_0.9_boundary = '// &
         to_str(count(acc .and. lh > 0.9_wp*stability_boundary))
       write (output_unit, '(a)') 'error_over_tol_mean_accepted = '// &
-        to_str(sum(tr%error, mask=acc)/max(1, n_acc)/1.0e-4_wp, '(f8.3)')
+        to_str(sum(tr%error, mask=acc)/max(1, n_acc)/tolerance, '(f8.3)')
       write (output_unit, '(a)') 'lanczos_iterations_mean = '//to_str(real(sum(tr%iterations), wp)/max(1, n), '(f8.2)')
       if (table /= '') then
         open (newunit=unit, file=table, action='write', status='replace', iostat=ios)
@@ -456,7 +464,7 @@ contains
         write (unit, '(a)') '# t h lambda lambda_h error_over_tol accepted lanczos_iterations'
         do k = 1, n
           write (unit, '(es14.6,1x,es12.4,1x,f10.4,1x,f8.4,1x,es12.4,1x,i1,1x,i3)') tr(k)%t, tr(k)%h, &
-            tr(k)%lambda, lh(k), tr(k)%error/1.0e-4_wp, merge(1, 0, tr(k)%accepted), tr(k)%iterations
+            tr(k)%lambda, lh(k), tr(k)%error/tolerance, merge(1, 0, tr(k)%accepted), tr(k)%iterations
         end do
         close (unit)
       end if

@@ -56,10 +56,7 @@ def test_section_appended_then_replaced(tmp_path):
     assert ("| trefoil | 50.0000 | adaptive | 3 | 1 | 120.00 | 7.500E-02 | 22.000 / 35.000 / "
             "41.000 | 2.900 | 3.200 | 2 | 3.600 | 0.400 | 1.00 1.00 1.00 1/2 3 |") in section
     assert "![stiffness](figures/accuracy_stiffness.png)" in section
-    # the accepted steps after the first tenth of the window (t >= 0.0081): only the last one,
-    # lambda h = 3.075 = 0.93 of 3.307, error / tol 0.5 (not below half: accuracy), h 0.075,
-    # h from accuracy alone 0.075 * 0.5^(-1/5) = 0.0862
-    assert "| trefoil | 0.93 | 0.500 | 0.0750 | 0.0862 | accuracy |" in section
+    assert "\\|λ_max\\| min / mean / max" in section   # pipes escaped in the table
     assert (figs / accuracy.STIFFNESS_FIGURE).stat().st_size > 0
     text = md.read_text()
     assert "reuse text" in text and text.startswith("# Report\n\nbody\n")
@@ -78,15 +75,30 @@ def test_cli_without_outputs(tmp_path, capsys):
     assert "no knotflow-bench-reuse stiffness outputs" in capsys.readouterr().err
 
 
-def test_binding_limit():
+def test_window_medians():
     rows = [{"t": 0.1*i, "h": 0.08, "lambda_h": 0.9*3.3, "error_over_tol": 1e-5*3.2**5,
              "accepted": 1} for i in range(20)]
-    b = accuracy.binding_limit(rows, 3.3)
-    assert b["verdict"] == "stability"
-    assert b["lambda_h_over_boundary"] == pytest.approx(0.9)
+    rows.append({"t": 0.5, "h": 1.0, "lambda_h": 9.0, "error_over_tol": 9.0, "accepted": 0})
+    m = accuracy.window_medians(rows, 3.3, 0.2, 1.0)
+    assert m["steps"] == 9    # t = 0.2 .. 1.0, the rejected trial left out
+    assert m["lambda_h_over_boundary"] == pytest.approx(0.9)
     # error ~ h^5: the accuracy-limited step is h (1/err)^(1/5) = 0.08 * 10 / 3.2
-    assert b["h_accuracy"] == pytest.approx(0.25)
-    for r in rows:
-        r["lambda_h"] = 1.0
-        r["error_over_tol"] = 0.7
-    assert accuracy.binding_limit(rows, 3.3)["verdict"] == "accuracy"
+    assert m["h_accuracy"] == pytest.approx(0.25)
+    assert accuracy.window_medians(rows, 3.3, 5.0, 6.0) == {}
+
+
+def test_tolerance_rows():
+    # h ~ tol^(1/5) between 1e-5 and 1e-4 (accuracy), constant from 1e-4 to 1e-3 (stability)
+    def trials(h):
+        return [{"t": 0.5*i, "h": h, "lambda_h": 40*h, "error_over_tol": 0.17, "accepted": 1}
+                for i in range(41)]
+    runs = {"stiffness_a": {"config": "trefoil", "tolerance": "1.000E-05", "t_end": "10"},
+            "stiffness_b": {"config": "trefoil", "t_end": "20"},   # no tolerance line: 1e-4
+            "stiffness_c": {"config": "trefoil", "tolerance": "1.000E-03", "t_end": "10"},
+            "stiffness_d": {"config": "coil", "tolerance": "1.000E-04", "t_end": "10"}}
+    tables = {"a": trials(0.05), "b": trials(0.05*10**0.2), "c": trials(0.05*10**0.2),
+              "d": trials(0.1)}
+    rows = accuracy.tolerance_rows(runs, tables, 3.3)
+    assert [r[1] for r in rows] == ["1e-05", "1e-04", "1e-03"]   # coil: one tolerance only
+    assert rows[0][2] == "1–10" and rows[0][3] == "19"
+    assert [r[-1] for r in rows] == ["–", "0.20", "0.00"]
