@@ -7,7 +7,11 @@
 # A science command (about 1.5 h of one core), not a test.
 #
 #   bash scripts/bench_reuse.sh [part ...]     parts: velocity trajectory speed overlaps
-#                                              scaling profile case (default: all but case)
+#                                              scaling profile stiffness case (default: all
+#                                              but stiffness and case)
+#   stiffness: which limit sets dopri45's step (|lambda_max| h of mu dF/dr at every trial step)
+#   along the trefoil (t = 0-50) and a candy-cane window (t = 800 of the campaign run, 20 units),
+#   into $out/stiffness and the stiffness section of docs/accuracy.md (about 45 min of one core)
 #   case: the whole reference trefoil case (N = 99, t_end = 1000) with the adaptive path
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
@@ -44,6 +48,18 @@ for part in "${parts[@]}"; do
       bench overlaps_coil_eps1e-4 overlaps --config coil --t-end 4 --eps-lub 1e-4 ;;
     scaling) bench scaling scaling --t-end 1 ;;
     profile) bench profile_trefoil rigid --config trefoil ;;
+    stiffness)
+      mkdir -p "$out/stiffness"
+      bench stiffness/stiffness_trefoil stiffness --config trefoil --t-end 50 --table "$out/stiffness/stiffness_trefoil.dat"
+      bench stiffness/stiffness_candycane_t800 stiffness --config inputs/configs/candycane_A1_multipole_t800.xyz \
+        --t-end 20 --table "$out/stiffness/stiffness_candycane_t800.dat"
+      for tol in 1e-3 1e-5; do   # does the step follow the tolerance (accuracy) or not (stability)?
+        bench stiffness/stiffness_trefoil_tol$tol stiffness --config trefoil --t-end 10 \
+          --tolerance $tol --table "$out/stiffness/stiffness_trefoil_tol$tol.dat"
+        bench stiffness/stiffness_candycane_t800_tol$tol stiffness \
+          --config inputs/configs/candycane_A1_multipole_t800.xyz --t-end 3 --tolerance $tol \
+          --table "$out/stiffness/stiffness_candycane_t800_tol$tol.dat"
+      done ;;
     case)
       dir="$out/case"
       rm -rf "$dir"; mkdir -p "$dir"
@@ -74,9 +90,20 @@ NML
         echo "loadavg_start = $load0"; echo "wall_s = $(( $(date +%s) - start ))";
         echo "loadavg_end = $(cat /proc/loadavg)";
         echo "status = $status (see $dir/log.txt)"; } > "$out/case_trefoil.txt" ;;
-    *) kf_die "unknown part '$part' (velocity trajectory speed overlaps scaling profile case)" ;;
+    *) kf_die "unknown part '$part' (velocity trajectory speed overlaps scaling profile stiffness case)" ;;
   esac
 done
 
-kf_log "knotflow-accuracy-report --reuse $out --markdown docs/accuracy.md"
-knotflow-accuracy-report --reuse "$out" --markdown "$KF_ROOT/docs/accuracy.md"
+reuse=0; stiffness=0
+for part in "${parts[@]}"; do
+  if [ "$part" = stiffness ]; then stiffness=1; else reuse=1; fi
+done
+if [ "$reuse" = 1 ]; then
+  kf_log "knotflow-accuracy-report --reuse $out --markdown docs/accuracy.md"
+  knotflow-accuracy-report --reuse "$out" --markdown "$KF_ROOT/docs/accuracy.md"
+fi
+if [ "$stiffness" = 1 ]; then
+  kf_log "knotflow-accuracy-report --stiffness $out/stiffness --markdown docs/accuracy.md"
+  knotflow-accuracy-report --stiffness "$out/stiffness" --markdown "$KF_ROOT/docs/accuracy.md" \
+    --figures "$KF_ROOT/docs/figures"
+fi

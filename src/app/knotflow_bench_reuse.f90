@@ -12,6 +12,11 @@
 !>   scaling    [--t-end T]: adaptive wall time per unit time for random chains N = 50..400
 !>   overlaps   [--config C] [--t-end T] [--eps-lub E]: overlap statistics (run
 !>              diagnostics) of both paths
+!>   stiffness  [--config C] [--t-end T] [--update U] [--tolerance TOL] [--table FILE]: which
+!>              limit sets dopri45's step: at every trial step lambda_max*h of mu dF/dr
+!>              (kf_stiffness_probe), the error estimate and the outcome; per-trial rows into
+!>              FILE, a summary on stdout; TOL (default 1e-4) is the dopri45 tolerance only
+!>              (eps_lub stays 1e-4 unless --eps-lub is given)
 !>   rigid      [--config C]: the reused part at rigidly moved and at deformed configurations
 !>              (overlap rule pair only: the model's reused part against its exact one, both
 !>              without the dynamics' configuration rules separate and relax)
@@ -26,7 +31,7 @@ program knotflow_bench_reuse
   use kf_strings, only: to_str
   use kf_error, only: error_t
   use kf_scene, only: scene_t
-  use kf_scene_hydro, only: overlap_names, overlap_pair, overlap_relax
+  use kf_scene_hydro, only: overlap_names, overlap_pair, overlap_relax, update_names
   use kf_scene_check, only: name_list
   use kf_chain_shapes, only: build_initial_chain
   use kf_dynamics, only: dynamics_t
@@ -38,12 +43,13 @@ program knotflow_bench_reuse
   use kf_run_diagnostics, only: run_diagnostics_t
   use kf_cli, only: standard_option, argument, die
   use kf_accuracy, only: wall_seconds, max_bead_deviation, loglog_slope
+  use kf_stiffness_probe, only: stiffness_probe_t, stability_boundary
   implicit none
 
   character(len=*), parameter :: program_name = 'knotflow-bench-reuse'
 
-  character(len=:), allocatable :: part, config, overlap
-  real(wp) :: t_end, eps_lub
+  character(len=:), allocatable :: part, config, overlap, update, table
+  real(wp) :: t_end, eps_lub, tolerance
   integer :: every
 
   call parse_arguments()
@@ -60,8 +66,10 @@ program knotflow_bench_reuse
     call run_rigid()
   case ('overlaps')
     call run_overlaps()
+  case ('stiffness')
+    call run_stiffness()
   case default
-    call die(program_name, "unknown part '"//part//"' (allowed: velocity, trajectory, speed, scaling, overlaps, rigid)", 2)
+    call die(program_name, "unknown part '"//part//"' (allowed: velocity, trajectory, speed, scaling, overlaps, rigid, stiffness)", 2)
   end select
 
 contains
@@ -72,8 +80,8 @@ contains
     if (command_argument_count() < 1) call die(program_name, 'usage: knotflow-bench-reuse velocity|trajectory|speed|scaling [options]', 2)
     part = argument(1)
     call standard_option(program_name, part, 'usage: knotflow-bench-reuse velocity|trajectory|speed|overlaps|'// &
-      'scaling|rigid [--config trefoil|coil|FILE] [--t-end T] [--every K] [--eps-lub E]'// &
-      ' [--overlap pair|separate|relax]'//new_line('a')// &
+      'scaling|rigid|stiffness [--config trefoil|coil|FILE] [--t-end T] [--every K] [--eps-lub E]'// &
+      ' [--overlap pair|separate|relax] [--update U] [--tolerance TOL] [--table FILE]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
       'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).')
     config = 'trefoil'
@@ -81,6 +89,9 @@ contains
     every = 1
     eps_lub = -1.0_wp
     overlap = ''
+    update = 'adaptive'
+    table = ''
+    tolerance = 1.0e-4_wp
     k = 2
     do while (k <= command_argument_count())
       arg = argument(k)
@@ -100,6 +111,16 @@ contains
         overlap = trim(val)
         if (.not. any(overlap_names == overlap)) &
           call die(program_name, '--overlap '//overlap//': allowed values are '//name_list(overlap_names), 2)
+      case ('--update')
+        update = trim(val)
+        if (.not. any(update_names == update)) &
+          call die(program_name, '--update '//update//': allowed values are '//name_list(update_names), 2)
+      case ('--tolerance')
+        read (val, *, iostat=ios) tolerance
+        if (ios /= 0 .or. .not. (tolerance > 0.0_wp .and. tolerance < 1.0_wp)) &
+          call die(program_name, '--tolerance '//trim(val)//': expected a number in (0, 1)', 2)
+      case ('--table')
+        table = trim(val)
       case ('--every')
         read (val, *, iostat=ios) every
         if (ios /= 0 .or. every < 1) call die(program_name, '--every '//trim(val)//': expected an integer >= 1', 2)
@@ -387,6 +408,70 @@ contains
     call fast%flow%velocity(rr, v0)
     vv = vv + v0
   end subroutine reused
+
+  !> dopri45 along the configuration with the study's model (update from --update), the
+  !> stiffness of mu dF/dr at every trial step (kf_stiffness_probe); rows into --table.
+  subroutine run_stiffness()
+    type(scene_t) :: scene
+    type(stiffness_probe_t) :: sys
+    class(stepper_t), allocatable, target :: integ
+    type(error_t), allocatable :: error
+    real(wp), allocatable :: r(:, :), lh(:)
+    real(wp) :: t, w0
+    integer :: unit, ios, k, n, n_acc
+    logical, allocatable :: acc(:)
+    call header()
+    call study_scene(config, tolerance, update, scene, r)
+    if (eps_lub < 0.0_wp) scene%hydro%eps_lub = 1.0e-4_wp
+    call sys%init(scene, size(r, 2), error)
+    if (allocated(error)) call die(program_name, error%message, 2)
+    call make_stepper(scene%integrator, integ, error)
+    if (allocated(error)) call die(program_name, error%message, 2)
+    sys%stepper => integ
+    t = 0.0_wp
+    w0 = wall_seconds()
+    call integ%advance(sys, t, r, t_end, error)
+    if (allocated(error)) call die(program_name, error%message, 2)
+    n = sys%n_trials
+    allocate (acc(n), lh(n))
+    associate (tr => sys%trials(1:n))
+      acc(:) = tr%accepted
+      lh(:) = abs(tr%lambda)*tr%h
+      n_acc = count(acc)
+      write (output_unit, '(a)') 'update = '//update
+      write (output_unit, '(a)') 'tolerance = '//to_str(tolerance, '(es10.3)')
+      write (output_unit, '(a)') 'n_beads = '//to_str(size(r, 2))
+      write (output_unit, '(a)') 'stability_boundary = '//to_str(stability_boundary, '(f6.3)')
+      write (output_unit, '(a)') 'trials = '//to_str(n)
+      write (output_unit, '(a)') 'steps = '//to_str(integ%steps())
+      write (output_unit, '(a)') 'rejected = '//to_str(integ%rejected())
+      write (output_unit, '(a)') 'evaluations_per_time = '//to_str(real(integ%evaluations(), wp)/t_end, '(f8.2)')
+      write (output_unit, '(a)') 'h_mean = '//to_str(t_end/max(1, n_acc), '(es10.3)')
+      write (output_unit, '(a)') 'lambda_min = '//to_str(minval(abs(tr%lambda)), '(f8.3)')
+      write (output_unit, '(a)') 'lambda_max = '//to_str(maxval(abs(tr%lambda)), '(f8.3)')
+      write (output_unit, '(a)') 'lambda_mean = '//to_str(sum(abs(tr%lambda))/max(1, n), '(f8.3)')
+      write (output_unit, '(a)') 'lambda_h_mean_accepted = '//to_str(sum(lh, mask=acc)/max(1, n_acc), '(f8.3)')
+      write (output_unit, '(a)') 'lambda_h_max_accepted = '//to_str(maxval(lh, mask=acc), '(f8.3)')
+      write (output_unit, '(a)') 'lambda_h_mean_rejected = '//to_str(sum(lh, mask=.not. acc)/max(1, n - n_acc), '(f8.3)')
+      write (output_unit, '(a)') 'accepted_above_0.9_boundary = '// &
+        to_str(count(acc .and. lh > 0.9_wp*stability_boundary))
+      write (output_unit, '(a)') 'error_over_tol_mean_accepted = '// &
+        to_str(sum(tr%error, mask=acc)/max(1, n_acc)/tolerance, '(f8.3)')
+      write (output_unit, '(a)') 'lanczos_iterations_mean = '//to_str(real(sum(tr%iterations), wp)/max(1, n), '(f8.2)')
+      if (table /= '') then
+        open (newunit=unit, file=table, action='write', status='replace', iostat=ios)
+        if (ios /= 0) call die(program_name, '--table '//table//': cannot open for writing', 2)
+        write (unit, '(a)') '# t h lambda lambda_h error_over_tol accepted lanczos_iterations'
+        do k = 1, n
+          write (unit, '(es14.6,1x,es12.4,1x,f10.4,1x,f8.4,1x,es12.4,1x,i1,1x,i3)') tr(k)%t, tr(k)%h, &
+            tr(k)%lambda, lh(k), tr(k)%error/tolerance, merge(1, 0, tr(k)%accepted), tr(k)%iterations
+        end do
+        close (unit)
+      end if
+    end associate
+    call print_stats(update//'.', sys%dyn%model%statistics())
+    write (output_unit, '(a)') 'wall_s = '//to_str(wall_seconds() - w0, '(f10.2)')
+  end subroutine run_stiffness
 
   subroutine run_scaling()
     integer, parameter :: sizes(4) = [50, 100, 200, 400]

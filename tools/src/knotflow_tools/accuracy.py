@@ -16,6 +16,8 @@ BEGIN = "<!-- accuracy:begin -->"
 END = "<!-- accuracy:end -->"
 REUSE_BEGIN = "<!-- reuse:begin -->"
 REUSE_END = "<!-- reuse:end -->"
+STIFFNESS_BEGIN = "<!-- stiffness:begin -->"
+STIFFNESS_END = "<!-- stiffness:end -->"
 TABLES = ("meta.csv", "models.csv", "tolerance.csv", "scaling.csv", "scaling_fit.csv",
           "case_time.csv")
 CONFIG_TEXT = {
@@ -471,6 +473,196 @@ def reuse_section(runs: dict) -> str:
     return "\n".join(out)
 
 
+STIFFNESS_FIGURE = "accuracy_stiffness.png"
+
+
+def read_trials(path: str) -> list[dict]:
+    """Rows of a knotflow-bench-reuse stiffness table (--table): one per trial step."""
+    names = ("t", "h", "lambda", "lambda_h", "error_over_tol", "accepted", "lanczos_iterations")
+    rows = []
+    with open(path) as f:
+        for line in f:
+            if line.strip() and not line.startswith("#"):
+                rows.append(dict(zip(names, (float(x) for x in line.split()))))
+    return rows
+
+
+def plot_stiffness(tables: dict, boundary: float, path: str) -> None:
+    """|lambda_max| h and the scaled error estimate of every trial step, per configuration."""
+    fig, axes = plt.subplots(len(tables), 1, figsize=(9, 3.2*len(tables)), squeeze=False,
+                             constrained_layout=True)
+    for ax, (name, rows) in zip(axes[:, 0], sorted(tables.items())):
+        acc = [r for r in rows if r["accepted"] == 1]
+        rej = [r for r in rows if r["accepted"] == 0]
+        ax.plot([r["t"] for r in acc], [r["lambda_h"] for r in acc], ".", ms=3,
+                label="|λ_max| h, accepted")
+        ax.plot([r["t"] for r in rej], [r["lambda_h"] for r in rej], "x", ms=5, color="C3",
+                label="|λ_max| h, rejected")
+        ax.plot([r["t"] for r in acc], [r["error_over_tol"] for r in acc], ".", ms=2,
+                color="C2", alpha=0.6, label="error estimate / tolerance")
+        ax.axhline(boundary, color="k", lw=0.8, ls="--", label="dopri45 stability boundary")
+        ax.set_title(name, fontsize=9)
+        ax.set_xlabel("t")
+        ax.set_ylim(0, 1.3*boundary)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, loc="lower right")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _median(values: list[float]) -> float:
+    v = sorted(values)
+    if not v:
+        return float("nan")
+    return v[len(v)//2] if len(v) % 2 else 0.5*(v[len(v)//2 - 1] + v[len(v)//2])
+
+
+def window_medians(rows: list[dict], boundary: float, t_lo: float, t_hi: float) -> dict:
+    """Medians over the accepted steps that start in [t_lo, t_hi] of a stiffness table: |lambda| h
+    over the stability boundary, the error estimate over the tolerance, the step h, and the
+    step an accuracy limit alone would allow, h (tol/err)^(1/5) (dopri45's local error ~ h^5;
+    indicative only)."""
+    acc = [r for r in rows if r["accepted"] == 1 and t_lo <= r["t"] <= t_hi]
+    if not acc:
+        return {}
+    return {"lambda_h_over_boundary": _median([r["lambda_h"]/boundary for r in acc]),
+            "error_over_tol": _median([r["error_over_tol"] for r in acc]),
+            "h": _median([r["h"] for r in acc]),
+            "h_accuracy": _median([r["h"]*max(r["error_over_tol"], 1e-12)**(-0.2)
+                                   for r in acc]),
+            "steps": len(acc)}
+
+
+def tolerance_rows(runs: dict, tables: dict, boundary: float) -> list[list[str]]:
+    """Per configuration run at several tolerances: the medians over the window all its runs
+    cover (from a tenth of the shortest t_end to it) and the exponent p of h ~ tol^p between
+    consecutive tolerances (1/5 when accuracy sets the step, 0 when stability does)."""
+    import math
+    by_config: dict = {}
+    for name, v in runs.items():
+        key = name[len("stiffness_"):]
+        if key in tables:
+            # outputs without a tolerance line come from the benchmark before --tolerance,
+            # which always ran at 1e-4
+            by_config.setdefault(v.get("config", key), []).append(
+                (float(v.get("tolerance", "1e-4")), float(v.get("t_end", "0")), key))
+    out = []
+    for config, items in sorted(by_config.items()):
+        if len({tol for tol, _, _ in items}) < 2:
+            continue
+        t_hi = min(t for _, t, _ in items)
+        prev = None
+        for tol, _, key in sorted(items):
+            m = window_medians(tables[key], boundary, 0.1*t_hi, t_hi)
+            if not m:
+                continue
+            p = "–"
+            if prev is not None and prev[0] != tol:
+                p = "%.2f" % (math.log(m["h"]/prev[1])/math.log(tol/prev[0]))
+            out.append([os.path.basename(config), "%.0e" % tol,
+                         "%g–%g" % (0.1*t_hi, t_hi), str(m["steps"]),
+                         "%.4f" % m["h"], "%.2f" % m["lambda_h_over_boundary"],
+                         "%.3f" % m["error_over_tol"], p])
+            prev = (tol, m["h"])
+    return out
+
+
+def stiffness_lines(runs: dict, figure: str | None = None,
+                    tables: dict | None = None) -> list[str]:
+    """The section on which limit sets the time step (stiffness_* outputs)."""
+    st = [(k, v) for k, v in runs.items() if k.startswith("stiffness_")]
+    if not st:
+        return []
+    rows = []
+    for k, v in st:
+        rows.append([k[len("stiffness_"):], v.get("t_end", "–"), v.get("update", "–"),
+                     v.get("steps", "–"), v.get("rejected", "–"),
+                     v.get("evaluations_per_time", "–"), v.get("h_mean", "–"),
+                     "%s / %s / %s" % (v.get("lambda_min", "–"), v.get("lambda_mean", "–"),
+                                       v.get("lambda_max", "–")),
+                     v.get("lambda_h_mean_accepted", "–"), v.get("lambda_h_max_accepted", "–"),
+                     v.get("accepted_above_0.9_boundary", "–"),
+                     v.get("lambda_h_mean_rejected", "–"),
+                     v.get("error_over_tol_mean_accepted", "–"), v.get("loadavg_start", "–")])
+    out = ["## Which limit sets the time step", "",
+           "Generated by `bash scripts/bench_reuse.sh stiffness` (knotflow-bench-reuse "
+           "stiffness, then `knotflow-accuracy-report --stiffness`). "
+           "dopri45 (tolerance 1e-4) along real runs with the study's model; at every trial step "
+           "the stiffest eigenvalue λ_max of μ·∂F/∂r at its start (the exact mobility, the "
+           "Jacobian of springs, bending and excluded volume by central differences; Lanczos "
+           "iteration, kf_stiffness_probe), its product with the step size h, the embedded error "
+           "estimate over the tolerance and the outcome. dopri45 is stable on the negative real "
+           "axis up to \\|λh\\| = %s. \\|λ\\| min / mean / max over the trials." % (
+               st[0][1].get("stability_boundary", "3.307")), "",
+           _md_table(["run", "t_end", "update", "steps", "rejected",
+                      "evaluations per unit time", "mean h", "\\|λ_max\\| min / mean / max",
+                      "\\|λ\\|h mean (accepted)", "\\|λ\\|h max (accepted)",
+                      "accepted with \\|λ\\|h > 0.9 boundary", "\\|λ\\|h mean (rejected)",
+                      "error / tol mean (accepted)", "load"], rows), ""]
+    if tables:
+        boundary = float(st[0][1].get("stability_boundary", "3.307"))
+        rows = []
+        for name, trials in sorted(tables.items()):
+            t_end = float(runs.get("stiffness_" + name, {}).get("t_end", "0"))
+            m = window_medians(trials, boundary, 0.1*t_end, t_end)
+            if m:
+                rows.append([name, "%g–%g" % (0.1*t_end, t_end),
+                             "%.2f" % m["lambda_h_over_boundary"],
+                             "%.3f" % m["error_over_tol"], "%.4f" % m["h"],
+                             "%.4f" % m["h_accuracy"]])
+        out += ["Medians over the accepted steps after the first tenth of each window (the "
+                "start-up ramp of the step size): \\|λ\\|h over the stability boundary, the "
+                "error estimate over the tolerance, the step h, and h·(tol/err)^(1/5), the step "
+                "dopri45's local error ∝ h^5 would allow if accuracy alone set it (indicative). "
+                "The step controller (PI, safety 0.9, exponents 0.14 and 0.08) settles at an "
+                "error estimate of 0.9^(1/0.06) ≈ 0.17 of the tolerance whichever limit binds, "
+                "so the error column cannot tell the limits apart; the step's response to the "
+                "tolerance can (next table).", "",
+                _md_table(["run", "window", "\\|λ\\|h / boundary", "error / tol", "h",
+                           "h·(tol/err)^(1/5)"], rows), ""]
+        tol_rows = tolerance_rows(runs, tables, boundary)
+        if tol_rows:
+            out += ["The same configuration at several tolerances (eps_lub fixed at 1e-4), "
+                    "medians over the window all its runs cover: the exponent p of h ∝ tol^p "
+                    "between consecutive tolerances is 1/5 where accuracy sets the step and 0 "
+                    "where stability does.", "",
+                    _md_table(["configuration", "tolerance", "window", "steps", "h",
+                               "\\|λ\\|h / boundary", "error / tol", "p"], tol_rows), ""]
+    if figure:
+        out += ["![stiffness](%s)" % figure, ""]
+    return out
+
+
+def update_stiffness(markdown: str, directory: str, figdir: str) -> str:
+    """Replace the stiffness block of `markdown` (appended when missing) by the section of the
+    knotflow-bench-reuse stiffness outputs in `directory` (NAME.txt keys, NAME.dat rows) and
+    write its figure into `figdir`; returns the section."""
+    runs = {k: v for k, v in read_reuse(directory).items() if k.startswith("stiffness_")}
+    if not runs:
+        raise FileNotFoundError("%s: no knotflow-bench-reuse stiffness outputs" % directory)
+    tables = {k[len("stiffness_"):]: read_trials(os.path.join(directory, k + ".dat"))
+              for k in runs if os.path.exists(os.path.join(directory, k + ".dat"))}
+    figure = None
+    if tables:
+        os.makedirs(figdir, exist_ok=True)
+        boundary = float(next(iter(runs.values())).get("stability_boundary", "3.307"))
+        plot_stiffness(tables, boundary, os.path.join(figdir, STIFFNESS_FIGURE))
+        rel = os.path.relpath(os.path.abspath(figdir),
+                              os.path.dirname(os.path.abspath(markdown)))
+        figure = os.path.join(rel, STIFFNESS_FIGURE)
+    section = "\n".join(stiffness_lines(runs, figure, tables))
+    text = ""
+    if os.path.exists(markdown):
+        with open(markdown) as f:
+            text = f.read()
+    if STIFFNESS_BEGIN not in text:
+        text = text.rstrip("\n") + "\n\n%s\n%s\n" % (STIFFNESS_BEGIN, STIFFNESS_END)
+    text = replace_block(text, section, STIFFNESS_BEGIN, STIFFNESS_END, markdown)
+    with open(markdown, "w") as f:
+        f.write(text)
+    return section
+
+
 def update_reuse(markdown: str, directory: str) -> str:
     """Replace the reuse block of the report `markdown` (appended when missing) by the section
     of the knotflow-bench-reuse outputs in `directory`; returns the section."""
@@ -515,9 +707,10 @@ def build_report(directory: str, markdown: str, figdir: str, readme: str | None 
     if os.path.exists(markdown):
         with open(markdown) as f:
             old = f.read()
-    i, j = old.find(REUSE_BEGIN), old.find(REUSE_END)
-    if 0 <= i < j:   # the reuse section has its own command: keep it
-        text = text.rstrip("\n") + "\n\n" + old[i:j + len(REUSE_END)] + "\n"
+    for begin, end in ((REUSE_BEGIN, REUSE_END), (STIFFNESS_BEGIN, STIFFNESS_END)):
+        i, j = old.find(begin), old.find(end)
+        if 0 <= i < j:   # these sections have their own commands: keep them
+            text = text.rstrip("\n") + "\n\n" + old[i:j + len(end)] + "\n"
     with open(markdown, "w") as f:
         f.write(text)
     if readme and summary:

@@ -382,6 +382,9 @@ def _accuracy_report(argv: Argv) -> int:
     p.add_argument("--reuse", default=None, metavar="DIR",
                    help="only replace the reuse section of the report by the outputs of "
                    "knotflow-bench-reuse in DIR (scripts/bench_reuse.sh)")
+    p.add_argument("--stiffness", default=None, metavar="DIR",
+                   help="only replace the section on the step-size limit (stiffness) of the "
+                   "report by the knotflow-bench-reuse stiffness outputs in DIR")
     p.add_argument("--markdown", default="docs/accuracy.md", help="report file to write")
     p.add_argument("--figures", default="docs/figures", help="directory of the PNG figures")
     p.add_argument("--readme", default=None,
@@ -392,6 +395,11 @@ def _accuracy_report(argv: Argv) -> int:
     if args.reuse is not None:
         accuracy.update_reuse(args.markdown, args.reuse)
         print("wrote the reuse section of %s" % args.markdown)
+        return 0
+    if args.stiffness is not None:
+        accuracy.update_stiffness(args.markdown, args.stiffness, args.figures)
+        print("wrote the stiffness section of %s and its figure in %s" % (args.markdown,
+                                                                        args.figures))
         return 0
     if args.results is None:
         p.error("the results directory is required (or --reuse DIR)")
