@@ -134,6 +134,15 @@ log "debootstrap: $(( $(date +%s) - t0 )) s, $(chroot "$root" dpkg-query -W | wc
 # the tests that need munge or SLURM start their own).
 cp /etc/resolv.conf "$root/etc/resolv.conf"
 cp /etc/hosts "$root/etc/hosts"
+# The host's local CA certificates (a TLS-inspecting proxy of the site): without them pip cannot
+# reach PyPI from the root where the host can.
+if compgen -G "/usr/local/share/ca-certificates/*.crt" >/dev/null; then
+  mkdir -p "$root/usr/local/share/ca-certificates"
+  cp /usr/local/share/ca-certificates/*.crt "$root/usr/local/share/ca-certificates/"
+  chroot "$root" update-ca-certificates >"$logs/ca.log" 2>&1 \
+    || { cat "$logs/ca.log"; echo "fresh_check.sh: update-ca-certificates failed" >&2; exit 1; }
+  log "the host's local CA certificates added: $(cd /usr/local/share/ca-certificates && echo ./*.crt)"
+fi
 printf '#!/bin/sh\nexit 101\n' >"$root/usr/sbin/policy-rc.d"
 chmod 755 "$root/usr/sbin/policy-rc.d"
 
