@@ -102,25 +102,99 @@ kf_ensure_system_packages() {
 # Python: the tools package (tools/pyproject.toml, editable, with its [test] extra and its
 # [fortran] extra: fypp, which the build needs, findent and FORD) or, before
 # it exists, numpy h5py matplotlib pytest.  Installs go into a virtual environment of this
-# checkout, build/venv, created with --system-site-packages so that packages the base Python
-# already has are reused: nothing is installed into the base Python (which may be shared with
-# other checkouts, or refuse pip installs under PEP 668 as Debian's /usr/bin/python3 does).
+# checkout, build/venv, isolated from the system's site-packages: every package the tools use
+# comes from PyPI with the versions of tools/constraints.txt, never from the base Python (whose
+# packages, e.g. Debian's python3-matplotlib installed for the scheduler jobs, would shadow the
+# pinned ones: its mpl_toolkits broke the pinned matplotlib's 3-D axes).  Nothing is installed
+# into the base Python (which may be shared with other checkouts, or refuse pip installs under
+# PEP 668 as Debian's /usr/bin/python3 does).  A venv made by an older knotflow with
+# --system-site-packages (pyvenv.cfg: include-system-site-packages = true) is made again.
+# The venv is made from an interpreter every user can run (its executable and standard library
+# readable by others), so that the tools in build/venv also run for other users (e.g. the jobs of
+# a scheduler): python3 on PATH when it is such an interpreter, else /usr/bin/python3 (>= 3.11)
+# when it is, else python3 on PATH with a warning.  KNOTFLOW_PYTHON chooses it outright.
 # An interpreter that already runs inside a virtual environment is used as it is.
 # Sets KF_PY to the interpreter to use and puts its bin/ first on PATH.
+
+# The Python requirement of the tools (requires-python = ">=3.11" in tools/pyproject.toml).
+KF_PYTHON_MIN="3.11"
+
+# kf_python_shared PY: exit status 0 when PY's executable and standard library can be read and
+# run by every user (every directory above them searchable by others), 1 otherwise.
+kf_python_shared() {
+  "$1" - <<'PY' 2>/dev/null
+import os, stat, sys, sysconfig
+
+def shared(path):
+    path = os.path.realpath(path)
+    if not os.stat(path).st_mode & stat.S_IROTH:
+        return False
+    d = path if os.path.isdir(path) else os.path.dirname(path)
+    while True:
+        if not os.stat(d).st_mode & stat.S_IXOTH:
+            return False
+        if d == os.path.dirname(d):
+            return True
+        d = os.path.dirname(d)
+
+sys.exit(0 if shared(sys.executable) and shared(sysconfig.get_paths()["stdlib"]) else 1)
+PY
+}
+
+# kf_python_version_ok PY: exit status 0 when PY is at least KF_PYTHON_MIN.
+kf_python_version_ok() {
+  "$1" -c "import sys; sys.exit(0 if sys.version_info >= tuple(map(int, '$KF_PYTHON_MIN'.split('.'))) else 1)" 2>/dev/null
+}
+
+# kf_venv_base PY: the interpreter to make the venv from (see above); printed.
+kf_venv_base() {
+  local py="$1" real
+  if [ -n "${KNOTFLOW_PYTHON:-}" ] || kf_python_shared "$py"; then
+    printf '%s\n' "$py"
+    return 0
+  fi
+  real="$("$py" -c 'import sys; print(sys.executable)' 2>/dev/null || printf '%s' "$py")"
+  if [ -x /usr/bin/python3 ] && kf_python_version_ok /usr/bin/python3 && kf_python_shared /usr/bin/python3; then
+    kf_log "python: $real cannot be run by other users; the venv is made from /usr/bin/python3" >&2
+    printf '%s\n' /usr/bin/python3
+  else
+    kf_log "WARNING: python: $real cannot be run by other users: neither can the tools in the venv" >&2
+    printf '%s\n' "$py"
+  fi
+}
+
 kf_ensure_python() {
   local py="${KNOTFLOW_PYTHON:-python3}"
   command -v "$py" >/dev/null 2>&1 || kf_die "python interpreter '$py' not found"
   py="$(command -v "$py")"
-  local in_venv
+  local in_venv venv="$KF_BUILD_DIR/venv" base
   in_venv="$("$py" -c 'import sys; print(int(sys.prefix != sys.base_prefix))')" \
     || kf_die "cannot run $py"
+  # this checkout's own venv (activated in the shell) is checked like any other time
+  if [ "$in_venv" = 1 ] && [ -d "$venv" ] \
+     && [ "$("$py" -c 'import os, sys; print(os.path.realpath(sys.prefix))')" = "$(cd "$venv" && pwd -P)" ]; then
+    py="$("$py" -c 'import sys; print(getattr(sys, "_base_executable", "") or sys.executable)')"
+    in_venv=0
+  fi
   if [ "$in_venv" = 0 ]; then
-    local venv="$KF_BUILD_DIR/venv"
+    if [ -f "$venv/pyvenv.cfg" ] \
+       && grep -qiE '^[[:space:]]*include-system-site-packages[[:space:]]*=[[:space:]]*true' "$venv/pyvenv.cfg"; then
+      [ "${KNOTFLOW_NO_INSTALL:-0}" = 1 ] \
+        && kf_die "the virtual environment $venv sees the system's site-packages (made by an older knotflow); run without KNOTFLOW_NO_INSTALL=1 to make it again"
+      kf_log "the virtual environment $venv sees the system's site-packages (made by an older knotflow): making it again without them"
+      rm -rf "$venv"
+    elif [ -e "$venv" ] && ! "$venv/bin/python" -c '' 2>/dev/null; then
+      [ "${KNOTFLOW_NO_INSTALL:-0}" = 1 ] && kf_die "the virtual environment $venv is broken (its python does not run)"
+      kf_log "the virtual environment $venv is broken (its python does not run): making it again"
+      rm -rf "$venv"
+    fi
     if [ ! -x "$venv/bin/python" ]; then
-      kf_log "creating the virtual environment $venv (sees $py's packages)"
+      base="$(kf_venv_base "$py")"
+      kf_python_version_ok "$base" || kf_die "$base is older than Python $KF_PYTHON_MIN (set KNOTFLOW_PYTHON)"
+      kf_log "creating the virtual environment $venv from $base (without the system's site-packages)"
       mkdir -p "$KF_BUILD_DIR"
-      "$py" -m venv --system-site-packages "$venv" </dev/null \
-        || kf_die "$py -m venv failed (Debian: apt-get install python3-venv)"
+      "$base" -m venv "$venv" </dev/null \
+        || kf_die "$base -m venv failed (Debian: apt-get install python3-venv)"
     fi
     py="$venv/bin/python"
   fi

@@ -25,11 +25,13 @@ Kill points:
   'slow' test); a larger STRIDE at every STRIDE-th write, plus the first 8 writes (creating
   the file) and every write of frame 16 (the one that allocates the second chunk of
   /frames/positions).
+  DENSE (default 1) thins the first 8 writes and the writes of frame 16 to every DENSE-th one
+  (the short test of the default suite; the full sets in the 'slow' tests).
   Skipped, with a message, when strace is not installed or cannot trace (no ptrace).
 - at RANDOM random moments of the run (SIGKILL from this script after a random number of
   frames and a random delay of up to 0.06 s, about one frame).
 
-Usage: check_kill_points.py KNOTFLOW WORKDIR [STRIDE] [RANDOM]
+Usage: check_kill_points.py KNOTFLOW WORKDIR [STRIDE] [RANDOM] [DENSE]
 """
 import os
 import random
@@ -46,6 +48,7 @@ import numpy as np
 exe, work = sys.argv[1], sys.argv[2]
 stride = int(sys.argv[3]) if len(sys.argv) > 3 else 9
 n_random = int(sys.argv[4]) if len(sys.argv) > 4 else 8
+dense_stride = int(sys.argv[5]) if len(sys.argv) > 5 else 1
 dense_frames = (16,)     # frame indices whose every write is a kill point
 shutil.rmtree(work, ignore_errors=True)
 os.makedirs(work)
@@ -166,9 +169,9 @@ if strace:
     dense = set()
     for k in dense_frames:    # frame k >= 1 is written after the progress line of frame k - 1
         if k - 1 in first_write and k in first_write:
-            dense.update(range(first_write[k - 1], first_write[k]))
+            dense.update(range(first_write[k - 1], first_write[k], dense_stride))
     # the first writes create the file: a kill there leaves a file without scene attributes
-    points = sorted(set(range(1, total + 1, stride)) | dense | set(range(1, 9)))
+    points = sorted(set(range(1, total + 1, stride)) | dense | set(range(1, 9, dense_stride)))
     print("%d pwrite64 calls in the uninterrupted run, %d progress lines; %d kill points"
           % (total, reported, len(points)))
     for n in points:
