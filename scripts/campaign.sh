@@ -16,7 +16,8 @@
 #   (default)   run: each case of every sweep as a single-case scene (knotflow --write-scenes),
 #               N processes of one rank each (default KNOTFLOW_NP, 2) taking the cases in
 #               turn: first those with progress (a case file here, or the ledger), then the
-#               others with the sweeps interleaved. A case whose file is here resumes it; a case
+#               others (the sweeps interleaved or in sequence, --set; within a sweep in the
+#               order of its cases). A case whose file is here resumes it; a case
 #               the ledger has but this machine does not is continued from the ledger's newest
 #               frame (results/<sweep>/continued/<case>_from<T>). Runs until every case has
 #               finished; killing it loses nothing but the frames since the last digest.
@@ -113,12 +114,18 @@ results=results
 # One line "sweep case action scene" per case still to run, cases with progress first.
 queue() {
   local i sweep
+  mkdir -p "$results/scenes"
   for i in "${!KF_STUDY_SWEEPS[@]}"; do
     sweep="${KF_STUDY_SWEEPS[i]}"
-    "$knotflow" "$inputs/$sweep.nml" --write-scenes "$results/scenes/$sweep" >/dev/null
+    # rank = the case's number in its sweep (knotflow lists "case K: NAME ..."), so that a
+    # sweep runs in the order of its &sweep lists (plan lists the cases by name)
+    "$knotflow" "$inputs/$sweep.nml" --write-scenes "$results/scenes/$sweep" \
+      | awk '$1 == "case" {sub(":", "", $2); print $2, $3}' >"$results/scenes/$sweep.order"
     knotflow-campaign plan --scenes "$results/scenes/$sweep" --results "$results" \
       --ledger "$ledger" --sweep "$sweep" \
-      | awk -v s="$sweep" -v base="$((sequential * i * 100000))" '$2 != "finished" {print base + NR, s, $0}'
+      | awk -v s="$sweep" -v base="$((sequential * i * 100000))" \
+          'NR == FNR {rank[$2] = $1; next} $2 != "finished" {print base + rank[$1], s, $0}' \
+          "$results/scenes/$sweep.order" -
   done | while read -r rank sweep case action scene; do
     progress=1
     [ "$action" = continue ] || [ -e "$results/$sweep/$case.h5" ] || [ -e "$ledger/$sweep/$case.json" ] || progress=2
