@@ -3,13 +3,21 @@
 # what each case needs is kept in the case ledger (docs/reproduction_multipole/ledger, small
 # committed text files: knotflow-campaign, docs/analysis.md "The case ledger"), and the next
 # machine goes on from it.
-#   scripts/campaign.sh [--workers N] [--digest] [--digest-every MIN] [--no-run] [--workdir DIR]
-#                       [--ledger DIR]
+#   scripts/campaign.sh [--set study|ensembles] [--workers N] [--digest] [--digest-every MIN]
+#                       [--no-run] [--workdir DIR] [--ledger DIR]
+#
+#   --set       which sweeps: `study` (default) the multipole study of scripts/study_sweeps.sh,
+#               inputs/<sweep>.nml, ledger docs/reproduction_multipole/ledger, the sweeps
+#               interleaved; `ensembles` the RPY + EV ensembles of issue 36 of
+#               scripts/ensemble_sweeps.sh, inputs/ensembles/<sweep>.nml, ledger
+#               docs/ensembles/ledger, the sweeps one after the other in the listed order (the
+#               most informative first; within a sweep the order of its &sweep lists).
 #
 #   (default)   run: each case of every sweep as a single-case scene (knotflow --write-scenes),
 #               N processes of one rank each (default KNOTFLOW_NP, 2) taking the cases in
 #               turn: first those with progress (a case file here, or the ledger), then the
-#               others with the sweeps interleaved. A case whose file is here resumes it; a case
+#               others (the sweeps interleaved or in sequence, --set; within a sweep in the
+#               order of its cases). A case whose file is here resumes it; a case
 #               the ledger has but this machine does not is continued from the ledger's newest
 #               frame (results/<sweep>/continued/<case>_from<T>). Runs until every case has
 #               finished; killing it loses nothing but the frames since the last digest.
@@ -25,12 +33,11 @@
 #               that outlasts it (the repository's checkout); commit the ledger as before.
 #   --workdir   where knotflow runs (default: the repository): the case files go where the
 #               inputs say, DIR/results/<sweep>/ (and DIR/inputs, if missing, becomes a link to
-#               the repository's inputs, for their coordinate files); --ledger: default
-#               docs/reproduction_multipole/ledger of the repository.
+#               the repository's inputs, for their coordinate files); --ledger: default the
+#               set's ledger in the repository (above).
 # Positions kept in the ledger: the candy-canes and the probe every 10 time units (the knot
-# matrices of the slipknot search, snapshots), the further rotations every 50, the trefoils
-# every 100; every
-# case's newest frame at full precision.
+# matrices of the slipknot search, snapshots), the further rotations (and the ensembles'
+# candy-canes) every 50, the trefoils every 100; every case's newest frame at full precision.
 # Needs a build (scripts/build.sh; KNOTFLOW_BUILD_DIR) and its Python tools; installs nothing.
 # The whole script is one block that bash reads before it runs any of it, so editing this file
 # (a checkout updated) while a campaign runs for hours does not change the running one.
@@ -40,13 +47,16 @@ set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 # shellcheck source=scripts/study_sweeps.sh
 source "$KF_ROOT/scripts/study_sweeps.sh"
+# shellcheck source=scripts/ensemble_sweeps.sh
+source "$KF_ROOT/scripts/ensemble_sweeps.sh"
 
 run=1
 digest=0
 digest_every=0   # minutes, as given (0: no periodic digest)
 digest_period=0  # the same in whole seconds
 workdir="$KF_ROOT"
-ledger="$KF_ROOT/docs/reproduction_multipole/ledger"
+set_name=study
+ledger=
 workers="$(kf_ranks)"
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -63,9 +73,28 @@ while [ $# -gt 0 ]; do
     --no-run) run=0; shift ;;
     --workdir) [ $# -ge 2 ] || kf_die "--workdir needs a directory"; workdir="$2"; shift 2 ;;
     --ledger) [ $# -ge 2 ] || kf_die "--ledger needs a directory"; ledger="$2"; shift 2 ;;
-    *) kf_die "unknown argument '$1' (allowed: --workers N, --digest, --digest-every MIN, --no-run, --workdir DIR, --ledger DIR)" ;;
+    --set)
+      case "${2:-}" in study|ensembles) set_name="$2" ;; *) kf_die "--set needs study or ensembles: got '${2:-}'" ;; esac
+      shift 2 ;;
+    *) kf_die "unknown argument '$1' (allowed: --set study|ensembles, --workers N, --digest, --digest-every MIN, --no-run, --workdir DIR, --ledger DIR)" ;;
   esac
 done
+# The set: its sweeps (KF_STUDY_ROLES, KF_STUDY_SWEEPS), inputs, default ledger, the closures of
+# a role, the order of the queue (interleaved: rank within its sweep; sequential: sweep, then rank).
+case "$set_name" in
+  study)
+    kf_study_arrays multipole 1 || exit 1
+    inputs="$KF_ROOT/inputs"
+    : "${ledger:=$KF_ROOT/docs/reproduction_multipole/ledger}"
+    set_closures() { kf_study_closures multipole "$1"; }
+    sequential=0 ;;
+  ensembles)
+    kf_ensemble_arrays
+    inputs="$KF_ROOT/inputs/ensembles"
+    : "${ledger:=$KF_ROOT/docs/ensembles/ledger}"
+    set_closures() { kf_ensemble_closures "$1"; }
+    sequential=1 ;;
+esac
 [ -d "$KF_BUILD_DIR/venv/bin" ] && PATH="$KF_BUILD_DIR/venv/bin:$PATH"
 knotflow="$(cd "$KF_BUILD_DIR" && pwd)/bin/knotflow"
 analyze="$(cd "$KF_BUILD_DIR" && pwd)/bin/knotflow-analyze"
@@ -73,7 +102,6 @@ for exe in "$knotflow" "$analyze"; do
   [ -x "$exe" ] || kf_die "$exe not found (build first: bash scripts/build.sh)"
 done
 command -v knotflow-campaign >/dev/null 2>&1 || kf_die "knotflow-campaign not found (bash scripts/build.sh installs it)"
-kf_study_arrays multipole 1 || exit 1
 mkdir -p "$workdir/results" "$ledger"
 ledger="$(cd "$ledger" && pwd)"
 # Everything from here on in the work directory: the inputs' output directories are relative.
@@ -86,11 +114,18 @@ results=results
 # One line "sweep case action scene" per case still to run, cases with progress first.
 queue() {
   local i sweep
+  mkdir -p "$results/scenes"
   for i in "${!KF_STUDY_SWEEPS[@]}"; do
     sweep="${KF_STUDY_SWEEPS[i]}"
-    "$knotflow" "$KF_ROOT/inputs/$sweep.nml" --write-scenes "$results/scenes/$sweep" >/dev/null
+    # rank = the case's number in its sweep (knotflow lists "case K: NAME ..."), so that a
+    # sweep runs in the order of its &sweep lists (plan lists the cases by name)
+    "$knotflow" "$inputs/$sweep.nml" --write-scenes "$results/scenes/$sweep" \
+      | awk '$1 == "case" {sub(":", "", $2); print $2, $3}' >"$results/scenes/$sweep.order"
     knotflow-campaign plan --scenes "$results/scenes/$sweep" --results "$results" \
-      --ledger "$ledger" --sweep "$sweep" | awk -v s="$sweep" '$2 != "finished" {print NR, s, $0}'
+      --ledger "$ledger" --sweep "$sweep" \
+      | awk -v s="$sweep" -v base="$((sequential * i * 100000))" \
+          'NR == FNR {rank[$2] = $1; next} $2 != "finished" {print base + rank[$1], s, $0}' \
+          "$results/scenes/$sweep.order" -
   done | while read -r rank sweep case action scene; do
     progress=1
     [ "$action" = continue ] || [ -e "$results/$sweep/$case.h5" ] || [ -e "$ledger/$sweep/$case.json" ] || progress=2
@@ -114,7 +149,7 @@ digest_all() {
   copies="$results/ledger_copies"
   for i in "${!KF_STUDY_SWEEPS[@]}"; do
     role="${KF_STUDY_ROLES[i]}" sweep="${KF_STUDY_SWEEPS[i]}"
-    read -r closures stride < <(kf_study_closures multipole "$role")
+    read -r closures stride < <(set_closures "$role")
     [ "$stride" = 1 ] || kf_die "$sweep: the ledger takes k_f of every frame (stride $stride)"
     case "$role" in
       candycane|probe) every=10 ;;

@@ -1,22 +1,27 @@
 !> Initial chain shapes (PHYSICS.md section 5): the open trefoil (orientations a-e), the
-!> candy-cane with a seeded random rotation, straight and random chains, and coordinate files.
+!> candy-cane with a seeded random rotation or a tilt about x, straight and random chains, and
+!> coordinate files; then, optionally, a seeded random displacement of every bead.
 module kf_chain_shapes
-  use kf_kinds, only: wp
+  use kf_kinds, only: wp, i8
   use kf_constants, only: pi, two_pi
   use kf_error, only: error_t, fatal_error
   use kf_scene_chain, only: chain_params_t, shape_trefoil, shape_candycane, shape_straight, shape_random, &
                             shape_file, trefoil_points, candycane_beads, check_chain, resolve_chain, &
-                            read_chain_file
+                            read_chain_file, rotation_tilt_x
   use kf_random, only: rng_t
   implicit none
   private
 
-  public :: build_initial_chain, trefoil_closed_points, random_rotation
+  public :: build_initial_chain, trefoil_closed_points, random_rotation, tilt_x_rotation, &
+            perturb_positions
 
   integer, parameter :: candycane_arc_points = 62
   real(wp), parameter :: candycane_radius = 20.0_wp
   real(wp), parameter :: candycane_ds = 0.05105_wp
   real(wp), parameter :: candycane_rod_spacing = 1.02_wp
+  !> The perturbation's stream: seeded with ieor(seed, this key), so that it is not the stream
+  !> of the candy-cane's rotation or the random chain drawn from the same seed.
+  integer(i8), parameter :: perturbation_stream_key = 7046029254386353131_i8
 
   ! 5-point Gauss-Legendre rule on [-1, 1].
   real(wp), parameter :: gl_x(5) = [-0.9061798459386640_wp, -0.5384693101056831_wp, 0.0_wp, &
@@ -29,7 +34,9 @@ contains
   !> Build the initial bead positions r(3, N) described by `params`, after checking them by the
   !> &chain group's own rules (kf_scene_chain: names, ranges, the bead count of the shape, the
   !> coordinate file). `rotation` is the random rotation applied to the candy-cane
-  !> (r = rotation * r_unrotated), the identity otherwise.
+  !> (r = rotation * r_unrotated), the identity otherwise. With perturbation p > 0 every bead is
+  !> then displaced by p times an isotropic random unit vector (perturb_positions); p = 0 leaves
+  !> the shape untouched (no random number is drawn).
   subroutine build_initial_chain(params, r, rotation, error)
     type(chain_params_t), intent(in) :: params
     real(wp), allocatable, intent(out) :: r(:, :)
@@ -43,22 +50,47 @@ contains
     if (allocated(error)) return
     if (p%shape == shape_file) then
       call read_chain_file(p%coordinate_file, r, error)
-      if (allocated(error)) error%message = '&chain: '//error%message
-      return
+      if (allocated(error)) then
+        error%message = '&chain: '//error%message
+        return
+      end if
+    else
+      call resolve_chain(p, '', error)
+      if (allocated(error)) return
+      select case (trim(p%shape))
+      case (shape_trefoil)
+        call build_trefoil(p, r)
+      case (shape_candycane)
+        call build_candycane(p, r, rotation)
+      case (shape_straight)
+        call build_straight(p, r)
+      case (shape_random)
+        call build_random(p, r, error)
+        if (allocated(error)) return
+      end select
     end if
-    call resolve_chain(p, '', error)
-    if (allocated(error)) return
-    select case (trim(p%shape))
-    case (shape_trefoil)
-      call build_trefoil(p, r)
-    case (shape_candycane)
-      call build_candycane(p, r, rotation)
-    case (shape_straight)
-      call build_straight(p, r)
-    case (shape_random)
-      call build_random(p, r, error)
-    end select
+    if (p%perturbation > 0.0_wp) call perturb_positions(r, p%perturbation, p%seed)
   end subroutine build_initial_chain
+
+  !> Displace every bead by `amplitude` times a unit vector drawn uniformly on the sphere
+  !> (cos(polar angle) uniform in [-1, 1), azimuth uniform in [0, 2 pi)), bead 1 first, from the
+  !> stream seeded with ieor(seed, perturbation_stream_key): each displacement has length
+  !> `amplitude` (to rounding), its components at most `amplitude` in size.
+  subroutine perturb_positions(r, amplitude, seed)
+    real(wp), intent(inout) :: r(:, :)
+    real(wp), intent(in) :: amplitude
+    integer(i8), intent(in) :: seed
+    type(rng_t) :: rng
+    real(wp) :: cz, sz, phi
+    integer :: k
+    call rng%init(ieor(seed, perturbation_stream_key))
+    do k = 1, size(r, 2)
+      cz = 2.0_wp*rng%uniform() - 1.0_wp
+      phi = two_pi*rng%uniform()
+      sz = sqrt(max(0.0_wp, 1.0_wp - cz*cz))
+      r(:, k) = r(:, k) + amplitude*[sz*cos(phi), sz*sin(phi), cz]
+    end do
+  end subroutine perturb_positions
 
   pure function identity3() result(m)
     real(wp) :: m(3, 3)
@@ -156,8 +188,9 @@ contains
   end subroutine build_trefoil
 
   !> The candy-cane: rod (-1.02 (91 - s), 0, 0), s = 1..90, then the semicircle
-  !> (20 cos s, 20 sin s + 20, 0) from s = -pi/2 in steps 0.05105 (62 points); then a uniformly
-  !> random rotation about the origin drawn from `seed`.
+  !> (20 cos s, 20 sin s + 20, 0) from s = -pi/2 in steps 0.05105 (62 points); then a rotation
+  !> about the origin: uniformly random drawn from `seed` (candycane_rotation = 'random'), or
+  !> about the x axis by tilt_deg ('tilt_x'; the seed is not used).
   subroutine build_candycane(params, r, rotation)
     type(chain_params_t), intent(in) :: params
     real(wp), allocatable, intent(out) :: r(:, :)
@@ -175,10 +208,40 @@ contains
       s = -0.5_wp*pi + k*candycane_ds
       r(:, n_rod + 1 + k) = [candycane_radius*cos(s), candycane_radius*sin(s) + candycane_radius, 0.0_wp]
     end do
-    call rng%init(params%seed)
-    rotation = random_rotation(rng)
+    if (params%candycane_rotation == rotation_tilt_x) then
+      rotation = tilt_x_rotation(params%tilt_deg)
+    else
+      call rng%init(params%seed)
+      rotation = random_rotation(rng)
+    end if
     r = matmul(rotation, r)
   end subroutine build_candycane
+
+  !> The rotation about the x axis by `deg` degrees (y turns towards z). Multiples of 90 degrees
+  !> take exact cosines and sines (0, 1, -1), so that e.g. 90 maps y onto z exactly.
+  pure function tilt_x_rotation(deg) result(m)
+    real(wp), intent(in) :: deg
+    real(wp) :: m(3, 3)
+    real(wp) :: c, s, q
+    q = modulo(deg, 360.0_wp)
+    if (q == 0.0_wp) then
+      c = 1.0_wp; s = 0.0_wp
+    else if (q == 90.0_wp) then
+      c = 0.0_wp; s = 1.0_wp
+    else if (q == 180.0_wp) then
+      c = -1.0_wp; s = 0.0_wp
+    else if (q == 270.0_wp) then
+      c = 0.0_wp; s = -1.0_wp
+    else
+      c = cos(deg*pi/180.0_wp); s = sin(deg*pi/180.0_wp)
+    end if
+    m = 0.0_wp
+    m(1, 1) = 1.0_wp
+    m(2, 2) = c
+    m(3, 2) = s
+    m(2, 3) = -s
+    m(3, 3) = c
+  end function tilt_x_rotation
 
   !> A uniformly distributed rotation matrix (Shoemake's random unit quaternion, 1992).
   function random_rotation(rng) result(m)

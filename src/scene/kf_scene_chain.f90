@@ -18,6 +18,14 @@ module kf_scene_chain
     shape_candycane, shape_straight, shape_random, shape_file]
   !> The valid values of &chain orientation (trefoil).
   character(len=*), parameter, public :: orientation_names(5) = ['a', 'b', 'c', 'd', 'e']
+  !> The valid values of &chain candycane_rotation: a uniformly (Haar) random rotation drawn from
+  !> `seed`, or the unrotated candy-cane (in the xy plane) turned about the x axis by tilt_deg.
+  character(len=*), parameter, public :: rotation_random = 'random', rotation_tilt_x = 'tilt_x'
+  character(len=*), parameter, public :: candycane_rotation_names(2) = [character(len=6) :: &
+    rotation_random, rotation_tilt_x]
+  real(wp), parameter, public :: max_tilt_deg = 360.0_wp   !< |tilt_deg| <= this
+  !> &chain perturbation: at most this many d (a displacement, not a new shape).
+  real(wp), parameter, public :: max_perturbation = 0.1_wp
 
   integer, parameter, public :: trefoil_points = 100     !< points on the closed trefoil (one is removed)
   integer, parameter, public :: candycane_beads = 152    !< beads of the candy-cane
@@ -47,6 +55,11 @@ module kf_scene_chain
     character(len=path_len) :: coordinate_file = '' !< shape = 'file': one bead per line, x y z
     integer(i8) :: seed = 20150509_i8               !< candy-cane rotation, random chain
     real(wp) :: straight_direction(3) = [0.0_wp, 0.0_wp, 1.0_wp] !< axis of the straight chain
+    !> candy-cane: 'random' (Haar rotation from seed) or 'tilt_x' (about x by tilt_deg)
+    character(len=name_len) :: candycane_rotation = rotation_random
+    real(wp) :: tilt_deg = 0.0_wp                   !< candycane_rotation = 'tilt_x': degrees about x
+    !> every bead displaced by p times an isotropic random unit vector (from seed), p in d
+    real(wp) :: perturbation = 0.0_wp
   end type chain_params_t
 
   public :: read_chain_group, chain_items, check_chain, resolve_chain, read_chain_file
@@ -62,18 +75,21 @@ contains
     character(len=name_len) :: shape
     integer :: n_beads, trefoil_removed_point
     character(len=1) :: orientation
-    real(wp) :: bond_length, straight_direction(3)
+    real(wp) :: bond_length, straight_direction(3), tilt_deg, perturbation
     character(len=path_len) :: coordinate_file
+    character(len=name_len) :: candycane_rotation
     integer(i8) :: seed
     namelist /chain/ shape, n_beads, orientation, trefoil_removed_point, bond_length, &
-      coordinate_file, seed, straight_direction
+      coordinate_file, seed, straight_direction, candycane_rotation, tilt_deg, perturbation
     shape = p%shape; n_beads = p%n_beads; orientation = p%orientation
     trefoil_removed_point = p%trefoil_removed_point; bond_length = p%bond_length
     coordinate_file = p%coordinate_file; seed = p%seed; straight_direction = p%straight_direction
+    candycane_rotation = p%candycane_rotation; tilt_deg = p%tilt_deg; perturbation = p%perturbation
     read (text, nml=chain, iostat=ios, iomsg=msg)
     p%shape = shape; p%n_beads = n_beads; p%orientation = orientation
     p%trefoil_removed_point = trefoil_removed_point; p%bond_length = bond_length
     p%coordinate_file = coordinate_file; p%seed = seed; p%straight_direction = straight_direction
+    p%candycane_rotation = candycane_rotation; p%tilt_deg = tilt_deg; p%perturbation = perturbation
   end subroutine read_chain_group
 
   !> The variables of &chain, in namelist order, appended to `items`.
@@ -99,6 +115,14 @@ contains
       "seed of the candy-cane's random rotation and of the random chain (recorded in the case file)")
     call add_a(items, 'chain.straight_direction', p%straight_direction, [3, 0], straight_direction_allowed, &
       'axis of the straight chain')
+    call add_s(items, 'chain.candycane_rotation', p%candycane_rotation, 'one of '//name_list(candycane_rotation_names), &
+      "the candy-cane's start: random (a uniform random rotation drawn from seed) or tilt_x (the unrotated "// &
+      'candy-cane in the xy plane tilted about x by tilt_deg)')
+    call add_r(items, 'chain.tilt_deg', p%tilt_deg, 'a number of degrees from -'//to_str_exact(max_tilt_deg)// &
+      ' to '//to_str_exact(max_tilt_deg)//"; 0 unless candycane_rotation = 'tilt_x'", &
+      "the tilt about x of candycane_rotation = 'tilt_x'")
+    call add_r(items, 'chain.perturbation', p%perturbation, 'a length in d from 0 to '//to_str_exact(max_perturbation), &
+      'every bead moved by this length in a random isotropic direction drawn from seed (0: none)')
   end subroutine chain_items
 
   !> Check &chain (`file`: the scene file named in the messages, '' from code).
@@ -152,6 +176,26 @@ contains
     if (p%shape == shape_straight .and. .not. norm2(p%straight_direction) > 0.0_wp) then
       call refuse(error, file, 'chain', 'straight_direction', vector_text(p%straight_direction), &
         straight_direction_allowed); return
+    end if
+    if (.not. any(candycane_rotation_names == p%candycane_rotation)) then
+      call refuse(error, file, 'chain', 'candycane_rotation', quoted(p%candycane_rotation), &
+        'one of '//name_list(candycane_rotation_names)); return
+    end if
+    if (p%candycane_rotation /= rotation_random .and. p%shape /= shape_candycane) then
+      call refuse(error, file, 'chain', 'candycane_rotation', quoted(p%candycane_rotation), &
+        quoted(rotation_random)//" (the default) unless shape = '"//shape_candycane//"'"); return
+    end if
+    if (abs(p%tilt_deg) > max_tilt_deg) then
+      call refuse(error, file, 'chain', 'tilt_deg', to_str_exact(p%tilt_deg), &
+        'a number of degrees from -'//to_str_exact(max_tilt_deg)//' to '//to_str_exact(max_tilt_deg)); return
+    end if
+    if (p%tilt_deg /= 0.0_wp .and. p%candycane_rotation /= rotation_tilt_x) then
+      call refuse(error, file, 'chain', 'tilt_deg', to_str_exact(p%tilt_deg), &
+        "0 unless candycane_rotation = '"//rotation_tilt_x//"'"); return
+    end if
+    if (.not. (p%perturbation >= 0.0_wp .and. p%perturbation <= max_perturbation)) then
+      call refuse(error, file, 'chain', 'perturbation', to_str_exact(p%perturbation), &
+        'a length in d from 0 to '//to_str_exact(max_perturbation)); return
     end if
   end subroutine check_chain
 
