@@ -98,10 +98,12 @@ contains
       'the reference); ignored by none and rpy')
     call add_s(items, 'hydro.overlap', p%overlap, 'one of '//name_list(overlap_names)//'; '// &
       quoted(overlap_pair)//' unless model = '//quoted(model_multipole), &
-      'multipole: how overlapping beads are treated. pair: each overlapping pair at 1 + eps_lub along its line '// &
-      'of centres, the rest at the real positions (BWE); separate: the whole hydrodynamics of the nearest '// &
-      'configuration without overlaps; relax: separate, and overlaps undone kinematically over overlap_time '// &
-      '(docs/limitations.md says why the study inputs use it)')
+      'multipole: how overlapping beads are treated. bwe: the study''s BWE rule, only the lubrication '// &
+      'correction of a pair with r <= 1 taken at 1 + eps_lub, everything else at the real positions; pair (a '// &
+      'variant of ours): the pair''s multipole blocks and lubrication correction at 1 + eps_lub along its line '// &
+      'of centres; separate: the whole hydrodynamics of the nearest configuration without overlaps; relax: '// &
+      'separate, and overlaps undone kinematically over overlap_time (docs/limitations.md says why the study '// &
+      'inputs use it)')
     call add_r(items, 'hydro.overlap_time', p%overlap_time, overlap_time_allowed//', '//overlap_time_relax_allowed, &
       'relax: the time, in units of 1/shear rate, over which an overlap is undone')
   end subroutine hydro_items
