@@ -493,8 +493,9 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
     close-pair ratio's time windows)."""
     confirm_dir = os.path.join(out, "confirm")
     os.makedirs(out, exist_ok=True)
-    md = ["# knotflow-study: generated results", "",
-          f"Trefoil sweep: `{trefoil_dir}`; candy-cane sweep: `{candycane_dir}`.", ""]
+    md = ["# knotflow-study: generated results", ""]
+    if trefoil_dir or candycane_dir:
+        md += [f"Trefoil sweep: `{trefoil_dir}`; candy-cane sweep: `{candycane_dir}`.", ""]
     result = {}
     comparison = {}
     cane_rows = []  # the candy-cane sweep's rows, beside the rotations in their k_f figure
