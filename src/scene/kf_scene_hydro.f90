@@ -95,9 +95,9 @@ contains
       'the reference); ignored by none and rpy')
     call add_s(items, 'hydro.overlap', p%overlap, 'one of '//name_list(overlap_names)//'; '// &
       quoted(overlap_pair)//' unless model = '//quoted(model_multipole), &
-      'multipole: how overlapping beads are treated. bwe: the study''s BWE rule, only the lubrication '// &
-      'correction of a pair with r <= 1 taken at 1 + eps_lub, everything else at the real positions; pair (a '// &
-      'variant of ours): the pair''s multipole blocks and lubrication correction at 1 + eps_lub along its line '// &
+      'multipole: how overlapping beads are treated, by rules of ours (the study''s BWE rule, which shifts only '// &
+      'the lubrication correction of a pair with r <= 1, is not implemented yet). pair: the '// &
+      'pair''s multipole blocks and lubrication correction at 1 + eps_lub along its line '// &
       'of centres; separate: the whole hydrodynamics of the nearest configuration without overlaps; relax: '// &
       'separate, and overlaps undone kinematically over overlap_time (docs/limitations.md says why the study '// &
       'inputs use it)')
