@@ -83,16 +83,20 @@ def anchors(text: str) -> list[str]:
     out = []
     for _, line in text_lines(text):
         m = HEADING.match(line)
-        if not m:
-            continue
-        slug = github_slug(m.group(2))
-        if slug in seen:
-            seen[slug] += 1
-            slug = f"{slug}-{seen[slug]}"
-        else:
-            seen[slug] = 0
-        out.append(slug)
+        if m:
+            out.append(unique_slug(m.group(2), seen))
     return out
+
+
+def unique_slug(heading: str, seen: dict[str, int]) -> str:
+    """The GitHub anchor of `heading`, numbered when `seen` (the page's anchors so far, updated
+    here) already has it."""
+    slug = github_slug(heading)
+    if slug in seen:
+        seen[slug] += 1
+        return f"{slug}-{seen[slug]}"
+    seen[slug] = 0
+    return slug
 
 
 def links(text: str) -> list[tuple[int, str]]:
@@ -106,6 +110,7 @@ def links(text: str) -> list[tuple[int, str]]:
 
 def check_markdown(root: Path) -> list[str]:
     problems = []
+    page_anchors: dict[Path, list[str]] = {}   # each linked page's anchors, read once
     for page in page_files(root):
         text = (root / page).read_text(encoding="utf-8")
         for number, target in links(text):
@@ -117,8 +122,9 @@ def check_markdown(root: Path) -> list[str]:
             if not dest.exists():
                 problems.append(where + ": no such file")
                 continue
-            if (anchor and dest.suffix == ".md"
-                    and anchor not in anchors(dest.read_text(encoding="utf-8"))):
+            if anchor and dest.suffix == ".md" and dest not in page_anchors:
+                page_anchors[dest] = anchors(dest.read_text(encoding="utf-8"))
+            if anchor and dest.suffix == ".md" and anchor not in page_anchors[dest]:
                 problems.append(where + ": no heading with that anchor in " +
                                 os.path.relpath(dest, root))
     index = root / "docs" / "index.md"
@@ -143,13 +149,7 @@ def rewrite(text: str, page: Path, root: Path, pages: set[Path], copies: set[Pat
             continue
         m = HEADING.match(line)
         if m and not line.rstrip().endswith("}"):
-            slug = github_slug(m.group(2))
-            if slug in seen:
-                seen[slug] += 1
-                slug = f"{slug}-{seen[slug]}"
-            else:
-                seen[slug] = 0
-            line = f"{m.group(1)} {m.group(2)} {{: #{slug} }}"
+            line = f"{m.group(1)} {m.group(2)} {{: #{unique_slug(m.group(2), seen)} }}"
         masked = without_code_spans(line)
         pieces = []
         last = 0

@@ -118,10 +118,9 @@ contains
     call add_s(items, 'chain.candycane_rotation', p%candycane_rotation, 'one of '//name_list(candycane_rotation_names), &
       "the candy-cane's start: random (a uniform random rotation drawn from seed) or tilt_x (the unrotated "// &
       'candy-cane in the xy plane tilted about x by tilt_deg)')
-    call add_r(items, 'chain.tilt_deg', p%tilt_deg, 'a number of degrees from -'//to_str_exact(max_tilt_deg)// &
-      ' to '//to_str_exact(max_tilt_deg)//"; 0 unless candycane_rotation = 'tilt_x'", &
+    call add_r(items, 'chain.tilt_deg', p%tilt_deg, tilt_allowed()//"; 0 unless candycane_rotation = 'tilt_x'", &
       "the tilt about x of candycane_rotation = 'tilt_x'")
-    call add_r(items, 'chain.perturbation', p%perturbation, 'a length in d from 0 to '//to_str_exact(max_perturbation), &
+    call add_r(items, 'chain.perturbation', p%perturbation, perturbation_allowed(), &
       'every bead moved by this length in a random isotropic direction drawn from seed (0: none)')
   end subroutine chain_items
 
@@ -187,7 +186,7 @@ contains
     end if
     if (abs(p%tilt_deg) > max_tilt_deg) then
       call refuse(error, file, 'chain', 'tilt_deg', to_str_exact(p%tilt_deg), &
-        'a number of degrees from -'//to_str_exact(max_tilt_deg)//' to '//to_str_exact(max_tilt_deg)); return
+        tilt_allowed()); return
     end if
     if (p%tilt_deg /= 0.0_wp .and. p%candycane_rotation /= rotation_tilt_x) then
       call refuse(error, file, 'chain', 'tilt_deg', to_str_exact(p%tilt_deg), &
@@ -195,7 +194,7 @@ contains
     end if
     if (.not. (p%perturbation >= 0.0_wp .and. p%perturbation <= max_perturbation)) then
       call refuse(error, file, 'chain', 'perturbation', to_str_exact(p%perturbation), &
-        'a length in d from 0 to '//to_str_exact(max_perturbation)); return
+        perturbation_allowed()); return
     end if
   end subroutine check_chain
 
@@ -296,5 +295,17 @@ contains
     t = ''
     if (len(file) > 0) t = file//': '
   end function prefix
+
+  !> The allowed values of tilt_deg, in the words of the refusal and of the scene reference.
+  function tilt_allowed() result(text)
+    character(len=:), allocatable :: text
+    text = 'a number of degrees from -'//to_str_exact(max_tilt_deg)//' to '//to_str_exact(max_tilt_deg)
+  end function tilt_allowed
+
+  !> The allowed values of perturbation, in the words of the refusal and of the scene reference.
+  function perturbation_allowed() result(text)
+    character(len=:), allocatable :: text
+    text = 'a length in d from 0 to '//to_str_exact(max_perturbation)
+  end function perturbation_allowed
 
 end module kf_scene_chain

@@ -60,7 +60,7 @@ contains
       nl//'# Scenes: the namelist variables'//nl//nl// &
       'A scene is a namelist file with one group per concern; every group and variable is optional. '// &
       'The defaults (below) are those of a trefoil of the reference study. Unknown groups or variables, '// &
-      'values of the wrong type and values outside the allowed ones stop the program before anything is '// &
+      'values of the wrong type and values outside the allowed ones are refused before anything is '// &
       'written, with one line such as'//nl//nl// &
       "    knotflow: error: inputs/x.nml: &forces: spring_k = -5.0 is not allowed (a number in [0, 1e7))"//nl//nl// &
       'The reader is strict: it also refuses (exit status 2, nothing written) a file with no group, text '// &

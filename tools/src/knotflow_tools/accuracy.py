@@ -651,16 +651,22 @@ def update_stiffness(markdown: str, directory: str, figdir: str) -> str:
                               os.path.dirname(os.path.abspath(markdown)))
         figure = os.path.join(rel, STIFFNESS_FIGURE)
     section = "\n".join(stiffness_lines(runs, figure, tables))
+    write_block(markdown, section, STIFFNESS_BEGIN, STIFFNESS_END)
+    return section
+
+
+def write_block(markdown: str, section: str, begin: str, end: str) -> None:
+    """Put `section` between the markers `begin` and `end` of the file `markdown` (the markers
+    appended when missing, the file made when missing)."""
     text = ""
     if os.path.exists(markdown):
         with open(markdown) as f:
             text = f.read()
-    if STIFFNESS_BEGIN not in text:
-        text = text.rstrip("\n") + "\n\n%s\n%s\n" % (STIFFNESS_BEGIN, STIFFNESS_END)
-    text = replace_block(text, section, STIFFNESS_BEGIN, STIFFNESS_END, markdown)
+    if begin not in text:
+        text = text.rstrip("\n") + "\n\n%s\n%s\n" % (begin, end)
+    text = replace_block(text, section, begin, end, markdown)
     with open(markdown, "w") as f:
         f.write(text)
-    return section
 
 
 def update_reuse(markdown: str, directory: str) -> str:
@@ -670,15 +676,7 @@ def update_reuse(markdown: str, directory: str) -> str:
     if not runs:
         raise FileNotFoundError("%s: no knotflow-bench-reuse outputs (*.txt)" % directory)
     section = reuse_section(runs)
-    text = ""
-    if os.path.exists(markdown):
-        with open(markdown) as f:
-            text = f.read()
-    if REUSE_BEGIN not in text:
-        text = text.rstrip("\n") + "\n\n%s\n%s\n" % (REUSE_BEGIN, REUSE_END)
-    text = replace_block(text, section, REUSE_BEGIN, REUSE_END, markdown)
-    with open(markdown, "w") as f:
-        f.write(text)
+    write_block(markdown, section, REUSE_BEGIN, REUSE_END)
     return section
 
 
