@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from .study_reference import in_study
+from .study_rows import late_mask
 
 #: The confidence level of every interval here.
 LEVEL = 0.95
@@ -167,7 +168,7 @@ def _late(case_row):
     """The late frames' observables of a candy-cane row (second half, as candycane_rows)."""
     case = case_row["_case"]
     t = np.asarray(case.time)
-    late = t >= t[0] + 0.5 * (t[-1] - t[0])
+    late = late_mask(t)
     o = case.observables
     return t[late], {k: np.asarray(o[k])[late] for k in ("a", "b", "c", "theta", "phi", "close_pairs")}
 
