@@ -22,7 +22,7 @@ module kf_case_runner
   use kf_frame_records, only: observables_record, diagnostics_record, stresslet_record
   use kf_run_diagnostics, only: run_diagnostics_t, diag_pair_cutoff
   use kf_rheology, only: fibre_stresslet_t
-  use kf_fs, only: remove_file, move_aside
+  use kf_fs, only: remove_file, move_aside, file_exists, file_in_use, file_not_writable
   use kf_case_match, only: check_reusable
   use kf_h5, only: h5_extend_truncated, h5_raise_end
   implicit none
@@ -97,11 +97,19 @@ contains
     path = case_path(sc)
     name = trim(sc%output%case_name)
     hydro_base = 0
+    ! A file another process holds for writing cannot even be read: say so rather than call it
+    ! damaged.
+    if (refused_access(.false.)) return
     call case_file_status(path, state, error)
     if (allocated(error)) then
       status = case_failed
       message = error%message
       return
+    end if
+    ! Anything but skipping a finished file writes to it or moves it: a file in use by another
+    ! process or not writable for this one fails the case (nothing moved, nothing recomputed).
+    if (state /= 'missing' .and. state /= 'finished') then
+      if (refused_access(.true.)) return
     end if
     resumed = .false.
     with_diag = sc%output%diagnostics
@@ -183,6 +191,8 @@ contains
       end if
     end if
     if (index(state, 'corrupt: ') == 1) then
+      ! (a finished file found damaged: not yet checked for writing)
+      if (refused_access(.true.)) return
       ! Damaged or unreadable: moved aside (never deleted) and the case recomputed.
       call move_aside(path, moved_to, error)
       if (allocated(error)) then
@@ -338,6 +348,30 @@ contains
     if (ieee_is_finite(final%load_mean)) message = message//', mean load '//to_str_short(final%load_mean)
 
   contains
+
+    !> Whether the existing case file cannot be used as this run needs (for writing, or only for
+    !> reading): in use by another process (HDF5's file lock, kf_fs: file_in_use) or, for
+    !> writing, not writable for this process. Then the case fails with the reason, and the
+    !> file is left exactly as it is.
+    logical function refused_access(for_writing) result(refused)
+      logical, intent(in) :: for_writing
+      character(len=:), allocatable :: reason
+      refused = .false.
+      if (.not. file_exists(path)) return
+      reason = ''
+      if (file_in_use(path, for_writing)) then
+        reason = 'it is open in another process, which holds its HDF5 file lock (a viewer such as h5py, '// &
+          'HDFView or ParaView, or another run): close it there and run again'
+      else if (for_writing) then
+        reason = file_not_writable(path)
+        if (len(reason) > 0) reason = 'it cannot be written ('//reason//'): give it write permission (chmod u+w) '// &
+          'and run again'
+      end if
+      if (len(reason) == 0) return
+      refused = .true.
+      status = case_failed
+      message = 'case file '//path//' not used: '//reason//'; nothing was changed'
+    end function refused_access
 
     !> The counters of the hydrodynamic model (kf_hydro_model's hydro_stats_t), cumulative over
     !> resumes: saved with every checkpoint and written as the root attributes

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import h5py
 import numpy as np
 
+from .atomic import write_text
 from .knots import KNOT_TYPES
 
 OBSERVABLES = ("rg", "a", "b", "c", "theta", "phi", "close_pairs")
@@ -366,41 +367,57 @@ def read_case(path) -> Case:
         elif totals:
             case.diagnostic_totals, case.diagnostic_totals_source = totals, "attributes"
         case.runs = read_runs(path, f)
-        an = f.get("analysis")
-        if an is not None:
-            if "knots" in an:
-                g = an["knots"]
-                case.knots = {
-                    "frame_index": np.asarray(g["frame_index"][()], dtype=np.int64),
-                    "time": np.asarray(g["time"][()], dtype=float),
-                    "kf": np.asarray(g["kf"][()], dtype=float),
-                    "spectrum": np.asarray(g["spectrum"][()], dtype=float)
-                    if "spectrum" in g else None,
-                    "types": _attr(g["spectrum"].attrs["types"])
-                    if "spectrum" in g and "types" in g["spectrum"].attrs else list(KNOT_TYPES),
-                    "dominant": _strings(g["dominant"]) if "dominant" in g else None,
-                    "attrs": {k: _attr(v) for k, v in g.attrs.items()},
-                }
-            if "events" in an:
-                g = an["events"]
-                case.events = {
-                    "kind": _strings(g["kind"]) if "kind" in g else [],
-                    "time": np.asarray(g["time"][()], dtype=float) if "time" in g else None,
-                    "frame_index": np.asarray(g["frame_index"][()], dtype=np.int64)
-                    if "frame_index" in g else None,
-                    "attrs": {k: _attr(v) for k, v in g.attrs.items()},
-                }
-            if "knot_matrix" in an:
-                for name, ds in an["knot_matrix"].items():
-                    if name.startswith("frame_"):
-                        case.knot_matrices[int(name[6:])] = np.asarray(ds[()], dtype=float)
-            if "shape" in an and "mode" in an["shape"]:
-                case.modes = np.asarray(an["shape"]["mode"][()], dtype=np.int32)
-                for holder in (an["shape"]["mode"], an["shape"]):
-                    if "case_mode" in holder.attrs:
-                        case.case_mode = int(_attr(holder.attrs["case_mode"]))
-                        break
+        if "analysis" in f:
+            try:
+                _read_analysis(f["analysis"], case)
+            except (OSError, KeyError, RuntimeError) as exc:
+                # a damaged /analysis is never taken for a missing one
+                raise ValueError(f"{path}: /analysis cannot be read ({exc}): it is damaged, e.g. by "
+                                 "a knotflow-analyze run of an older version killed while it wrote "
+                                 f"it; run knotflow-analyze --force {path}") from exc
     return case
+
+
+def _read_analysis(an, case: Case) -> None:
+    """/analysis of a case file into ``case``; every group listed is read (h5py's ``in`` takes a
+    group it cannot read for an absent one, so every member and the members of its groups are
+    opened first: a damaged one raises here)."""
+    members = [an[name] for name in list(an.keys())]
+    for member in members:
+        if isinstance(member, h5py.Group):
+            [member[sub] for sub in list(member.keys())]   # noqa: B018 (opened to check)
+    if "knots" in an:
+        g = an["knots"]
+        case.knots = {
+            "frame_index": np.asarray(g["frame_index"][()], dtype=np.int64),
+            "time": np.asarray(g["time"][()], dtype=float),
+            "kf": np.asarray(g["kf"][()], dtype=float),
+            "spectrum": np.asarray(g["spectrum"][()], dtype=float)
+            if "spectrum" in g else None,
+            "types": _attr(g["spectrum"].attrs["types"])
+            if "spectrum" in g and "types" in g["spectrum"].attrs else list(KNOT_TYPES),
+            "dominant": _strings(g["dominant"]) if "dominant" in g else None,
+            "attrs": {k: _attr(v) for k, v in g.attrs.items()},
+        }
+    if "events" in an:
+        g = an["events"]
+        case.events = {
+            "kind": _strings(g["kind"]) if "kind" in g else [],
+            "time": np.asarray(g["time"][()], dtype=float) if "time" in g else None,
+            "frame_index": np.asarray(g["frame_index"][()], dtype=np.int64)
+            if "frame_index" in g else None,
+            "attrs": {k: _attr(v) for k, v in g.attrs.items()},
+        }
+    if "knot_matrix" in an:
+        for name, ds in an["knot_matrix"].items():
+            if name.startswith("frame_"):
+                case.knot_matrices[int(name[6:])] = np.asarray(ds[()], dtype=float)
+    if "shape" in an and "mode" in an["shape"]:
+        case.modes = np.asarray(an["shape"]["mode"][()], dtype=np.int32)
+        for holder in (an["shape"]["mode"], an["shape"]):
+            if "case_mode" in holder.attrs:
+                case.case_mode = int(_attr(holder.attrs["case_mode"]))
+                break
 
 
 def read_frame(path, frame: int = -1) -> np.ndarray:
@@ -454,10 +471,7 @@ def read_xyz(path) -> np.ndarray:
 
 
 def write_xyz(path, r, comment: str | None = None) -> None:
-    """Write points (n, 3) as a text coordinate file."""
-    with open(path, "w", encoding="utf-8") as fh:
-        if comment:
-            for line in comment.splitlines():
-                fh.write(f"# {line}\n")
-        for p in np.asarray(r, dtype=float):
-            fh.write(f"{p[0]:.17g} {p[1]:.17g} {p[2]:.17g}\n")
+    """Write points (n, 3) as a text coordinate file (whole or not at all: knotflow_tools.atomic)."""
+    lines = [f"# {line}\n" for line in (comment or "").splitlines()]
+    lines += [f"{p[0]:.17g} {p[1]:.17g} {p[2]:.17g}\n" for p in np.asarray(r, dtype=float)]
+    write_text(path, "".join(lines))

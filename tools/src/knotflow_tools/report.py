@@ -10,6 +10,7 @@ import os
 import sys
 
 from .analysis import analyze_case
+from .atomic import write_text
 from .io import read_case
 from .plot import mode_name, plot_case
 from .rheology import rheology_summary
@@ -98,10 +99,8 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
         })
     summary_name, summary = _read_summary(sweep_dir)
     md = _markdown(sweep_dir, rows, summary_name, summary)
-    with open(os.path.join(outdir, "report.md"), "w", encoding="utf-8") as fh:
-        fh.write(md)
-    with open(os.path.join(outdir, "report.html"), "w", encoding="utf-8") as fh:
-        fh.write(_html(sweep_dir, rows, summary_name, summary))
+    write_text(os.path.join(outdir, "report.md"), md)
+    write_text(os.path.join(outdir, "report.html"), _html(sweep_dir, rows, summary_name, summary))
     return {"rows": rows, "md": os.path.join(outdir, "report.md"),
             "html": os.path.join(outdir, "report.html")}
 
