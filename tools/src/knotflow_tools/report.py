@@ -3,6 +3,7 @@ cases with a stresslet, figures (md + html)."""
 
 from __future__ import annotations
 
+import contextlib
 import glob
 import html
 import json
@@ -50,7 +51,21 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
     beside each case file and (``viewer``) an interactive 3-D viewer per case in the HTML."""
     outdir = os.path.join(sweep_dir, "report")
     figdir = os.path.join(outdir, "figures")
+    made = [d for d in (outdir, figdir) if not os.path.isdir(d)]
     os.makedirs(figdir, exist_ok=True)
+    try:
+        return _build_report(sweep_dir, outdir, figdir, closures, stride, seed, movie,
+                             movie_max_frames, viewer)
+    except BaseException:
+        # a report that could not be written (a full disk) leaves no empty directory behind
+        for d in reversed(made):
+            with contextlib.suppress(OSError):
+                os.rmdir(d)
+        raise
+
+
+def _build_report(sweep_dir, outdir, figdir, closures, stride, seed, movie, movie_max_frames,
+                  viewer) -> dict:
     rows = []
     for path in find_case_files(sweep_dir):
         try:
