@@ -5,7 +5,9 @@
 !> (-DKNOTFLOW_WITH_MPI=OFF), `knotflow SCENE.nml` runs every case in one process. Finished
 !> cases are skipped and interrupted ones resume from their checkpoint when the same command is
 !> run again.
-!> Exit status: 0 all cases finished, 2 bad input (nothing written), 3 some cases failed.
+!> Exit status: 0 all cases finished, 2 bad input (nothing written), 3 some cases failed, 75
+!> stopped by SIGTERM or SIGINT (each running case at its last written frame: run the same
+!> command again; kf_signals, docs/robustness.md).
 program knotflow
   use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
   use kf_strings, only: to_str
@@ -24,7 +26,8 @@ program knotflow
   use kf_stepper, only: stepper_t
   use kf_stepper_factory, only: make_stepper
   use kf_comm, only: comm_t, comm_init, comm_finalize
-  use kf_task_farm, only: run_task_farm, task_result_t, task_ok, task_failed, task_skipped
+  use kf_task_farm, only: run_task_farm, task_result_t, task_ok, task_failed, task_skipped, task_stopped
+  use kf_signals, only: catch_stop_signals, stop_signal, signal_name, exit_resubmit
   use kf_sweep_tasks, only: sweep_tasks_t, status_word
   use kf_exit, only: exit_program_now
   use kf_cli, only: standard_option, argument, version_line, die
@@ -52,7 +55,7 @@ program knotflow
   character(len=:), allocatable :: scene_file, directory, scenes_dir
   logical :: dry_run
   logical :: summary_failed = .false.
-  integer :: me = 0, nfailed, threads, k
+  integer :: me = 0, nfailed, nstopped, threads, k
   logical :: threads_set
   real(wp) :: load
 
@@ -66,6 +69,7 @@ program knotflow
   call comm_init(comm, error)
   if (allocated(error)) call die(program_name, error%message, 2)
   call keep_freed_heap()   ! after MPI start-up, which sets its own allocator options
+  call catch_stop_signals()   ! SIGTERM/SIGINT: each case stops after its current frame
   call ignore_file_size_signal()   ! a write past `ulimit -f` fails (EFBIG) and is reported
   me = comm%rank()
   if (me < 0) call die(program_name, 'cannot get the rank of this process (MPI)', 2)
@@ -150,13 +154,16 @@ program knotflow
   end if
   call run_task_farm(comm, sw%n_cases(), tasks, results, error)
   if (allocated(error)) call stop_all(error%message, 1)
-  nfailed = count(results%status /= task_ok .and. results%status /= task_skipped)
+  nfailed = count(results%status /= task_ok .and. results%status /= task_skipped .and. results%status /= task_stopped)
+  nstopped = count(results%status == task_stopped)
   if (me == 0) call write_summary()
+  if (me == 0 .and. nstopped > 0) call stopped_line()
   call h5_finalize()
   call comm_finalize(error)
   ! Every file is closed and MPI finalised: end without the libraries' exit handlers, because
   ! after a write that failed (full disk) HDF5 1.10's handler crashes on the file whose close
   ! failed, which would turn a reported failure into a segmentation fault.
+  if (nstopped > 0) call exit_program_now(exit_resubmit)
   call exit_program_now(merge(3, 0, nfailed > 0 .or. summary_failed))
 
 contains
@@ -292,6 +299,7 @@ contains
     end if
     line = 'knotflow: '//to_str(count(results%status == task_ok))//' finished, '// &
       to_str(count(results%status == task_skipped))//' skipped (already finished), '//to_str(nfailed)//' failed'
+    if (nstopped > 0) line = line//', '//to_str(nstopped)//' stopped'
     if (.not. summary_failed) line = line//'; summary in '//directory//'/summary.txt'
     write (output_unit, '(a)') line
     do k = 1, size(results)
@@ -301,6 +309,19 @@ contains
       end if
     end do
   end subroutine write_summary
+
+  !> The closing line of a run a stop signal ended (rank 0; the signal reached every rank under
+  !> mpirun, or another rank alone).
+  subroutine stopped_line()
+    character(len=:), allocatable :: why
+    integer :: nrunning
+    why = 'a stop signal'
+    if (stop_signal() /= 0) why = signal_name(stop_signal())
+    nrunning = count(results%status == task_stopped .and. index(results%message, 'not started') /= 1)
+    write (output_unit, '(a)') 'knotflow: stopped by '//why//': '//to_str(nrunning)// &
+      ' case(s) stopped after their last frame (checkpoint written), '//to_str(nstopped - nrunning)// &
+      ' not started; run the same command again to go on (exit status '//to_str(exit_resubmit)//')'
+  end subroutine stopped_line
 
   function json_escape(s) result(t)
     character(len=*), intent(in) :: s

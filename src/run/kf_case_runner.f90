@@ -25,10 +25,12 @@ module kf_case_runner
   use kf_fs, only: remove_file, move_aside, file_exists, file_in_use, file_not_writable
   use kf_case_match, only: check_reusable
   use kf_h5, only: h5_extend_truncated, h5_raise_end
+  use kf_signals, only: stop_signal, signal_name
   implicit none
   private
 
-  integer, parameter, public :: case_ok = 0, case_failed = 1, case_skipped = 2
+  !> Outcomes of a case; case_stopped: a stop signal (kf_signals) ended it after a whole frame.
+  integer, parameter, public :: case_ok = 0, case_failed = 1, case_skipped = 2, case_stopped = 3
 
   !> Receives the progress lines of a case (an object, not a procedure argument: the program's
   !> reporter carries its state, e.g. the rank, without an internal procedure and its trampoline).
@@ -317,6 +319,11 @@ contains
         return
       end if
       nframes = nframes + 1
+      if (stop_signal() /= 0 .and. t < sc%integrator%t_end*(1.0_wp - 1.0e-12_wp)) then
+        ! SIGTERM or SIGINT: the frame and its checkpoint are written; stop here
+        call stopped()
+        return
+      end if
       call system_clock(clock_now)
       if (real(clock_now - clock_last, wp)/rate >= sc%output%progress_interval) then
         clock_last = clock_now
@@ -464,6 +471,17 @@ contains
       end if
       if (allocated(err)) message = message//' (the case file could not record it: '//err%message//')'
     end subroutine fail
+
+    !> A stop signal arrived (kf_signals): the frame just written and its checkpoint are whole;
+    !> the file is closed with status 'running', so that the next run resumes it here.
+    subroutine stopped()
+      type(error_t), allocatable :: err
+      status = case_stopped
+      message = 'stopped by '//signal_name(stop_signal())//' at t = '//to_str_exact(t)// &
+        ' (its frame and checkpoint written): the next run resumes it there'
+      call file%close(err)
+      if (allocated(err)) message = message//' (closing the case file failed: '//err%message//')'
+    end subroutine stopped
 
     !> Writing the case file failed (full disk, file size limit, I/O error): the case fails
     !> with the reason, the file keeps its status 'running' and its last complete checkpoint,

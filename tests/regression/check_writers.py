@@ -17,7 +17,12 @@ D  knotflow-analyze killed (SIGKILL through strace) at every write of an analysi
    (with and without --force, alternately) exits 0 with /analysis equal to the uninterrupted
    analysis, and between the kill and the rerun the case file is the one before (untouched) or
    the analysed one, whole.
-Usage: check_writers.py KNOTFLOW KNOTFLOW_ANALYZE WORKDIR [PARTS]   (PARTS: e.g. 'CD'; default ACDE)
+S  SIGTERM and SIGINT (a scheduler's time limit, Ctrl-C) during a 2-case sweep: knotflow stops
+   each running case after its current frame, marks the others not started, prints a closing
+   line saying so and exits with status 75 (resubmit); the same command then resumes and ends
+   with every frame equal, bit for bit, to an uninterrupted run. Two signals in a row end it at
+   once, with status 75 too, and the rerun still ends equal.
+Usage: check_writers.py KNOTFLOW KNOTFLOW_ANALYZE WORKDIR [PARTS]   (PARTS: e.g. 'CD'; default ACDES)
 """
 import hashlib
 import os
@@ -31,7 +36,7 @@ import h5py
 import numpy as np
 
 exe, analyze, work = (os.path.abspath(a) if os.sep in a else a for a in sys.argv[1:4])
-parts = sys.argv[4] if len(sys.argv) > 4 else "ACDE"
+parts = sys.argv[4] if len(sys.argv) > 4 else "ACDES"
 if os.path.ismount(os.path.join(work, "full")):
     subprocess.run(["umount", os.path.join(work, "full")], check=False)
 shutil.rmtree(work, ignore_errors=True)
@@ -291,6 +296,61 @@ def part_d():
                   % (writes, renames, ", ".join("%s %d times" % kv for kv in sorted(states.items()))))
 
 
+def part_s():
+    def scene(name):
+        return write(name + ".nml", """&chain shape = 'trefoil', orientation = 'c' /
+&integrator t_end = 12.0 /
+&output directory = '%s', frame_interval = 1.0, progress_interval = 0.0 /
+&sweep bending_a = 1.0, 2.0 /
+""" % path(name))
+
+    def frames(name):
+        out = {}
+        for case in ("A1.00", "A2.00"):
+            with h5py.File(path(name, case + ".h5"), "r") as h:
+                status = h.attrs["status"]
+                status = status.decode() if isinstance(status, bytes) else status
+                out[case] = (status, h["frames/time"][()], h["frames/positions"][()])
+        return out
+
+    r = run([exe, scene("stop_ref")])
+    assert r.returncode == 0, (r.returncode, r.stdout, r.stderr)
+    reference = frames("stop_ref")
+    for name, signals in (("stop_term", [signal.SIGTERM]), ("stop_int", [signal.SIGINT]),
+                          ("stop_twice", [signal.SIGTERM, signal.SIGTERM])):
+        sc = scene(name)
+        p = subprocess.Popen([exe, sc], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                             env=ENV, cwd=work)
+        lines, n = [], 0
+        for line in p.stdout:
+            lines.append(line)
+            if ": t = " in line:
+                n += 1
+                if n == 3:
+                    for sig in signals:
+                        p.send_signal(sig)
+        p.wait(timeout=120)
+        out = "".join(lines)
+        assert p.returncode == 75, (name, p.returncode, out)
+        if len(signals) == 1:
+            word = "SIGTERM" if signals[0] == signal.SIGTERM else "SIGINT"
+            assert ("knotflow: stopped by %s: 1 case(s) stopped after their last frame (checkpoint "
+                    "written), 1 not started; run the same command again to go on (exit status 75)"
+                    % word) in out, out
+            assert "case A1.00 stopped: stopped by %s at t = " % word in out, out
+            with open(path(name, "summary.txt")) as f:
+                assert [ln.split()[3] for ln in f if not ln.startswith("#")] == ["stopped", "stopped"]
+        r = run([exe, sc])
+        assert r.returncode == 0, (name, r.returncode, r.stdout, r.stderr)
+        assert "case A1.00: resuming at t = " in r.stdout, r.stdout
+        got = frames(name)
+        for case, (status, t, pos) in reference.items():
+            assert got[case][0] == "finished", (name, case, got[case][0])
+            assert np.array_equal(got[case][1], t) and np.array_equal(got[case][2], pos), (name, case)
+    print("S: SIGTERM, SIGINT, and two SIGTERMs: exit status 75 with a closing line; the rerun "
+          "resumes and ends equal to the uninterrupted run bit for bit")
+
+
 for letter in parts:
-    {"A": part_a, "C": part_c, "D": part_d, "E": part_e}[letter]()
+    {"A": part_a, "C": part_c, "D": part_d, "E": part_e, "S": part_s}[letter]()
 print("check_writers: all passed")
