@@ -157,7 +157,8 @@ def test_movie_on_a_full_disk(full_disk):
                        capture_output=True, text=True)
     assert r.returncode == cli.EXIT_USAGE, (r.returncode, r.stderr[-2000:])
     lines = r.stderr.strip().splitlines()
-    assert lines[-1].startswith(f"knotflow-movie: error: cannot write {out}: "), r.stderr[-2000:]
+    assert lines[-1] == (f"knotflow-movie: error: cannot write {out}: No space left on device "
+                         "(ffmpeg, exit status 1)"), r.stderr[-2000:]
     assert "Traceback" not in r.stderr
     assert not out.exists()
     assert _leftovers(mount) == []

@@ -12,6 +12,7 @@ time.  MP4 (H.264, yuv420p) is written with ffmpeg when it is on PATH; otherwise
 
 from __future__ import annotations
 
+import errno
 import os
 import shutil
 import subprocess
@@ -278,12 +279,20 @@ def render_movie(case: Case, out, frames=None, kf=None, fps: int = 10, width: in
     return out
 
 
+#: The operating system's reasons a write fails, as ffmpeg prints them (strerror).
+_WRITE_REASONS = tuple(os.strerror(e) for e in (errno.ENOSPC, errno.EFBIG, errno.EDQUOT, errno.EIO,
+                                                errno.EACCES, errno.EROFS))
+
+
 def _encoder_reason(exc: subprocess.CalledProcessError) -> str:
-    """The encoder's own last words (ffmpeg's last line on stderr, e.g. 'No space left on
-    device'), or its exit status."""
+    """Why the encoder failed: the operating system's reason when ffmpeg names one (e.g. 'No
+    space left on device'), else ffmpeg's last line on stderr, with its exit status."""
     err = exc.stderr or b""
     text = err.decode(errors="replace") if isinstance(err, bytes) else str(err)
     lines = [line.strip() for line in text.splitlines() if line.strip()]
+    named = [r for line in lines for r in _WRITE_REASONS if r in line]
+    if named:
+        return f"{named[-1]} (ffmpeg, exit status {exc.returncode})"
     return (f"{lines[-1]} (ffmpeg, exit status {exc.returncode})" if lines
             else f"ffmpeg exited with status {exc.returncode}")
 
