@@ -5,6 +5,8 @@
 
 from __future__ import annotations
 
+import errno
+import fcntl
 import os
 import re
 import stat
@@ -172,6 +174,11 @@ def _read(path, ds):
     try:
         return ds[()]
     except OSError as exc:
+        missing = _missing_filters(ds)
+        if missing:
+            raise ValueError(f"{path}: {ds.name}: cannot read: it needs the HDF5 filter "
+                             f"{', '.join(missing)}, which this HDF5 library does not have (the "
+                             "file is not damaged; read it where that filter is installed)") from exc
         raise ValueError(f"{path}: {ds.name}: cannot read (damaged data: checksum mismatch or "
                          f"I/O error: {exc})") from exc
 
@@ -289,6 +296,11 @@ def open_case(path):
             why = "no such file"
         elif os.path.isdir(path):
             why = "it is a directory"
+        elif not os.access(path, os.R_OK):
+            why = f"not readable: {os.strerror(errno.EACCES)}"
+        elif _locked_by_writer(path):
+            why = ("it is open for writing in another process, which holds its HDF5 file lock "
+                   "(a knotflow run still writing it, or a viewer): wait for it or close it there")
         elif os.path.getsize(path) == 0:
             why = "an empty file, not HDF5"
         else:
@@ -298,6 +310,35 @@ def open_case(path):
                    else "not an HDF5 file")
         detail = " ".join(str(exc).split())
         raise ValueError(f"{path}: cannot open as a case file ({why}: {detail})") from None
+
+
+def _locked_by_writer(path) -> bool:
+    """Does another process hold an exclusive lock on ``path`` (HDF5 takes one for a file it
+    opens for writing)? A shared lock that cannot be had says so."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    except OSError:
+        return False
+    finally:
+        os.close(fd)
+    return False
+
+
+def _missing_filters(ds) -> list:
+    """The filters of a dataset's pipeline this HDF5 library does not have, as 'name (id)'."""
+    plist = ds.id.get_create_plist()
+    missing = []
+    for k in range(plist.get_nfilters()):
+        fid, _, _, name = plist.get_filter(k)
+        if not h5py.h5z.filter_avail(fid):
+            missing.append(f"'{name.decode(errors='replace')}' (id {fid})")
+    return missing
 
 
 def _frame_dataset(path, fr, name, ndim):
