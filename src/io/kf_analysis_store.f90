@@ -27,6 +27,9 @@ module kf_analysis_store
     real(wp), allocatable :: spectrum(:, :)          !< (size(type_names), frames)
     character(len=:), allocatable :: type_names(:)  !< names of the rows of `spectrum`
     character(len=:), allocatable :: dominant(:)    !< type name of each frame
+    !> digest of each frame's time and positions (kf_knot_case: frame_digests); absent in files
+    !> analysed before it existed
+    integer(i8), allocatable :: frame_digest(:)
   end type knots_record_t
 
   !> Knot transitions (/analysis/events).
@@ -117,6 +120,10 @@ contains
     if (.not. allocated(error)) call h5_read(this%file, group//'/time', rec%time, error)
     if (.not. allocated(error)) call h5_read(this%file, group//'/kf', rec%kf, error)
     if (.not. allocated(error)) call h5_read(this%file, group//'/spectrum', rec%spectrum, error)
+    if (.not. allocated(error)) then
+      if (h5_exists(this%file, group//'/frame_digest')) &
+        call h5_read(this%file, group//'/frame_digest', rec%frame_digest, error)
+    end if
     if (allocated(error)) found = .false.
   end subroutine read_knots
 
@@ -254,6 +261,8 @@ contains
     if (.not. allocated(error)) call h5_write(file, group//'/spectrum', rec%spectrum, error)
     if (.not. allocated(error)) call h5_write_attr(file, group//'/spectrum', 'types', rec%type_names, error)
     if (.not. allocated(error)) call h5_write(file, group//'/dominant', rec%dominant, error)
+    if (.not. allocated(error) .and. allocated(rec%frame_digest)) &
+      call h5_write(file, group//'/frame_digest', rec%frame_digest, error)
   end subroutine write_knots
 
   subroutine write_events(file, root, rec, error)

@@ -22,7 +22,10 @@ S  SIGTERM and SIGINT (a scheduler's time limit, Ctrl-C) during a 2-case sweep: 
    line saying so and exits with status 75 (resubmit); the same command then resumes and ends
    with every frame equal, bit for bit, to an uninterrupted run. Two signals in a row end it at
    once, with status 75 too, and the rerun still ends equal.
-Usage: check_writers.py KNOTFLOW KNOTFLOW_ANALYZE WORKDIR [PARTS]   (PARTS: e.g. 'CD'; default ACDES)
+R  knotflow-analyze on a file whose frame 2 was rewritten after its analysis (a straight chain
+   in place of a knotted one): the stored k_f of that frame is not reused but computed again
+   (a line says so), equal to an analysis from scratch (--force); the other frames are reused.
+Usage: check_writers.py KNOTFLOW KNOTFLOW_ANALYZE WORKDIR [PARTS]   (PARTS: e.g. 'CD'; default ACDERS)
 """
 import hashlib
 import os
@@ -36,7 +39,7 @@ import h5py
 import numpy as np
 
 exe, analyze, work = (os.path.abspath(a) if os.sep in a else a for a in sys.argv[1:4])
-parts = sys.argv[4] if len(sys.argv) > 4 else "ACDES"
+parts = sys.argv[4] if len(sys.argv) > 4 else "ACDERS"
 if os.path.ismount(os.path.join(work, "full")):
     subprocess.run(["umount", os.path.join(work, "full")], check=False)
 shutil.rmtree(work, ignore_errors=True)
@@ -351,6 +354,44 @@ def part_s():
           "resumes and ends equal to the uninterrupted run bit for bit")
 
 
+def part_r():
+    d = path("rewritten")
+    os.makedirs(d)
+    sc = write("r.nml", """&chain shape = 'trefoil', orientation = 'c' /
+&integrator t_end = 3.0 /
+&output directory = '%s', case_name = 'c', frame_interval = 1.0 /
+""" % d)
+    r = run([exe, sc])
+    assert r.returncode == 0, (r.returncode, r.stdout, r.stderr)
+    f = os.path.join(d, "c.h5")
+    ANALYZE = [analyze, "--closures", "40"]
+    r = run(ANALYZE + [f])
+    assert r.returncode == 0 and "4 frames (4 new)" in r.stdout, (r.stdout, r.stderr)
+    with h5py.File(f, "r+") as h:
+        old_kf = h["analysis/knots/kf"][()]
+        pos = h["frames/positions"]
+        n = pos.shape[1]
+        line = np.zeros((n, 3))
+        line[:, 0] = np.arange(n, dtype=float)
+        pos[2] = line
+    r = run(ANALYZE + [f])
+    assert r.returncode == 0, (r.stdout, r.stderr)
+    assert "k_f stored for 1 frame(s) whose time or positions changed since: computed again" in r.stdout, r.stdout
+    assert "4 frames (1 new)" in r.stdout, r.stdout
+    with h5py.File(f, "r") as h:
+        kf_reused = h["analysis/knots/kf"][()]
+    g = path("rewritten_force.h5")
+    shutil.copy(f, g)
+    r = run(ANALYZE + ["--force", g])
+    assert r.returncode == 0, (r.stdout, r.stderr)
+    with h5py.File(g, "r") as h:
+        kf_scratch = h["analysis/knots/kf"][()]
+    assert old_kf[2] > 0 and kf_reused[2] == 0.0, (old_kf, kf_reused)
+    assert np.array_equal(kf_reused, kf_scratch), (kf_reused, kf_scratch)
+    print("R: a frame rewritten after its analysis: its stored k_f (%.3g) dropped and computed again "
+          "(%.3g, as from scratch); the other 3 frames reused" % (old_kf[2], kf_reused[2]))
+
+
 for letter in parts:
-    {"A": part_a, "C": part_c, "D": part_d, "E": part_e, "S": part_s}[letter]()
+    {"A": part_a, "C": part_c, "D": part_d, "E": part_e, "R": part_r, "S": part_s}[letter]()
 print("check_writers: all passed")
