@@ -190,3 +190,16 @@ def test_damaged_analysis_is_not_taken_for_none(tmp_path):
         fh.write(bytes(data))
     with pytest.raises(ValueError, match=r"/analysis cannot be read .* knotflow-analyze --force"):
         io.read_case(path)
+
+
+def test_report_lists_a_hidden_case(tmp_path):
+    """A case file named '.hidden.h5' (case_name '.hidden', which knotflow now refuses) was left
+    out of the report in silence; now it is listed as refused, beside the good case."""
+    from knotflow_tools.report import build_report
+    write_case(tmp_path / "c.h5", unknotting_trefoil_frames(4))
+    write_case(tmp_path / ".hidden.h5", unknotting_trefoil_frames(4), attrs={"case_name": ".hidden"})
+    res = build_report(str(tmp_path), closures=5, movie=False, viewer=False)
+    by_file = {r["file"]: r for r in res["rows"]}
+    assert sorted(by_file) == [".hidden.h5", "c.h5"]
+    assert "case name '.hidden' refused" in by_file[".hidden.h5"]["status"]
+    assert by_file["c.h5"]["status"] == "finished"

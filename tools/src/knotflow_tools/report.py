@@ -13,16 +13,19 @@ import sys
 from .analysis import analyze_case
 from .atomic import write_text
 from .io import read_case
+from .names import check_case_name
 from .plot import mode_name, plot_case
 from .rheology import rheology_summary
 from .xdmf import write_xdmf, xdmf_path
 
 
 def find_case_files(sweep_dir) -> list:
-    """Case files (*.h5) in the sweep directory and its immediate subdirectories."""
-    files = glob.glob(os.path.join(sweep_dir, "*.h5")) + glob.glob(
-        os.path.join(sweep_dir, "*", "*.h5"))
-    return sorted(f for f in files if os.sep + "report" + os.sep not in f)
+    """Case files (*.h5) in the sweep directory and its immediate subdirectories, hidden ones
+    ('.name.h5') included: none is left out in silence (a hidden case name is then refused)."""
+    files = []
+    for pattern in ("*.h5", ".*.h5", os.path.join("*", "*.h5"), os.path.join("*", ".*.h5")):
+        files += glob.glob(os.path.join(glob.escape(str(sweep_dir)), pattern))
+    return sorted(set(f for f in files if os.sep + "report" + os.sep not in f))
 
 
 def _read_summary(sweep_dir):
@@ -70,6 +73,7 @@ def _build_report(sweep_dir, outdir, figdir, closures, stride, seed, movie, movi
     for path in find_case_files(sweep_dir):
         try:
             case = read_case(path)
+            check_case_name(case.name, f"{path}: attribute case_name")
         except (OSError, KeyError, ValueError, TypeError, RuntimeError, MemoryError) as exc:
             # whatever a bad file holds, the good cases are reported and the bad one listed
             rows.append({"file": os.path.basename(path), "name": os.path.basename(path),
