@@ -453,7 +453,16 @@ contains
     integer(c_int), intent(in) :: operation
     type(error_t), allocatable, intent(out) :: error
     integer(c_int) :: fd
-    fd = c_open(path//c_null_char, ior(o_rdwr, o_creat), int(o'644', c_int))
+    integer :: try
+    ! An existing lock file is opened as it is; a missing one is created exclusively
+    ! (O_CREAT|O_EXCL), so a dangling link planted under its name never creates a file elsewhere.
+    fd = -1
+    do try = 1, 3
+      fd = c_open(path//c_null_char, o_rdwr, 0_c_int)
+      if (fd >= 0) exit
+      fd = c_open(path//c_null_char, ior(o_rdwr, ior(o_creat, o_excl)), int(o'644', c_int))
+      if (fd >= 0) exit
+    end do
     if (fd < 0) then
       call fatal_error(error, "cannot create the lock file '"//path//"'")
       return

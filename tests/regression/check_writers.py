@@ -4,7 +4,8 @@ A  Symbolic links planted where knotflow writes: `out/summary.txt` and `out/summ
    pointing to a victim file (a 2-case sweep into `out`), `D/<case>.nml` and `D/<case>.nml.tmp`
    (--write-scenes D), a dangling link at a case file's name, a link at the write probe's name
    `.knotflow_write_probe`: the run succeeds, every victim keeps its content, nothing is created
-   where a link points, and the files written are regular files.
+   where a link points, and the files written are regular files. A dangling link at the lock
+   file `.knotflow.lock` is refused (exit 2) and creates nothing.
 E  A full disk (a 200 kB tmpfs filled up when run as root, else a file size limit of 100 bytes,
    `ulimit -f`): a rerun of a finished sweep exits 3 naming summary.txt and the operating
    system's reason, and leaves summary.txt and summary.json exactly as they were; --write-scenes
@@ -115,8 +116,14 @@ def part_a():
     leftovers = [n for n in os.listdir(path("out")) + os.listdir(path("scenes")) if n.endswith(".tmp")
                  and not os.path.islink(path("out", n)) and not os.path.islink(path("scenes", n))]
     assert leftovers == [], leftovers
+    # a dangling link at the directory's lock file: refused, nothing created where it points
+    os.makedirs(path("out_lock"))
+    os.symlink("../created_by_lock_link", path("out_lock", ".knotflow.lock"))
+    r = run([exe, sweep("lock.nml", path("out_lock"))])
+    assert r.returncode == 2 and "cannot create the lock file" in r.stderr, (r.returncode, r.stderr)
+    assert not os.path.exists(path("created_by_lock_link")), "a lock file was created through a link"
     print("A: links at summary.txt(.tmp), the write probe, a case file and written scenes: replaced, "
-          "never written through")
+          "never written through; a dangling link at the lock file refused")
 
 
 # ---- E: a full disk
