@@ -23,6 +23,7 @@ module kf_case_runner
   use kf_run_diagnostics, only: run_diagnostics_t, diag_pair_cutoff
   use kf_rheology, only: fibre_stresslet_t
   use kf_fs, only: remove_file, move_aside, file_exists, file_in_use, file_not_writable
+  use kf_file_type, only: is_symbolic_link
   use kf_case_match, only: check_reusable
   use kf_h5, only: h5_extend_truncated, h5_raise_end
   use kf_signals, only: stop_signal, signal_name
@@ -99,6 +100,13 @@ contains
     path = case_path(sc)
     name = trim(sc%output%case_name)
     hydro_base = 0
+    ! knotflow writes its case files itself, never through a link planted at their name
+    if (is_symbolic_link(path)) then
+      status = case_failed
+      message = 'case file '//path//' not used: it is a symbolic link (knotflow never writes through one): '// &
+        'remove the link, or put the file itself there; nothing was changed'
+      return
+    end if
     ! A file another process holds for writing cannot even be read: say so rather than call it
     ! damaged.
     if (refused_access(.false.)) return

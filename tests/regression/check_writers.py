@@ -2,9 +2,9 @@
 
 A  Symbolic links planted where knotflow writes: `out/summary.txt` and `out/summary.txt.tmp`
    pointing to a victim file (a 2-case sweep into `out`), `D/<case>.nml` and `D/<case>.nml.tmp`
-   (--write-scenes D), a dangling link at a case file's name, a link at the write probe's name
-   `.knotflow_write_probe`: the run succeeds, every victim keeps its content, nothing is created
-   where a link points, and the files written are regular files. A dangling link at the lock
+   (--write-scenes D), a link at the write probe's name `.knotflow_write_probe`: every victim
+   keeps its content and the files written are regular files; a dangling link at a case file's
+   name fails that case (exit 3, naming the link), nothing is created where it points. A dangling link at the lock
    file `.knotflow.lock` is refused (exit 2) and creates nothing.
 E  A full disk (a 200 kB tmpfs filled up when run as root, else a file size limit of 100 bytes,
    `ulimit -f`): a rerun of a finished sweep exits 3 naming summary.txt and the operating
@@ -98,12 +98,16 @@ def part_a():
     os.symlink("../created_by_link.h5", path("out", "A1.00.h5"))   # dangling
     sc = sweep("a.nml", path("out"))
     r = run([exe, sc])
-    assert r.returncode == 0, (r.returncode, r.stdout, r.stderr)
+    # the case whose file is a link fails, naming it; the other runs; the summary is written
+    assert r.returncode == 3, (r.returncode, r.stdout, r.stderr)
+    assert "FAILED A1.00: case file %s not used: it is a symbolic link" % path("out", "A1.00.h5") in r.stdout, r.stdout
     assert content(victim) == b"VICTIM\n", content(victim)
     assert not os.path.exists(path("created_by_link.h5")), "a case file was created through a link"
-    for name in ("summary.txt", "summary.json", "A1.00.h5", "A2.00.h5"):
+    assert os.path.islink(path("out", "A1.00.h5")), "the link was changed"
+    for name in ("summary.txt", "summary.json", "A2.00.h5"):
         assert not os.path.islink(path("out", name)) and os.path.isfile(path("out", name)), name
     assert b"A2.00" in content(path("out", "summary.txt"))
+    os.remove(path("out", "A1.00.h5"))
     os.makedirs(path("scenes"))
     for name in ("A1.00.nml", "A1.00.nml.tmp", "A2.00.nml"):
         os.symlink("../victim.txt", path("scenes", name))
