@@ -124,7 +124,7 @@ def _leftovers(directory):
     return [n for _, _, files in os.walk(directory) for n in files if ".tmp" in n]
 
 
-def test_full_disk_keeps_old_files(full_disk, tmp_path):
+def test_full_disk_keeps_old_files(full_disk, tmp_path, capsys):
     mount, fill = full_disk
     case = str(write_case(mount / "c.h5", unknotting_trefoil_frames(4)))
     old_text = mount / "kept.txt"
@@ -136,44 +136,43 @@ def test_full_disk_keeps_old_files(full_disk, tmp_path):
         atomic.write_text(str(old_text), "new content " * 1000)
     assert old_text.read_text() == "old content\n"
     # knotflow-xdmf: one error line naming the file and the reason, the old file kept
-    r = subprocess.run([shutil.which("knotflow-xdmf") or "knotflow-xdmf", case],
-                       capture_output=True, text=True)
-    assert r.returncode == cli.EXIT_USAGE, (r.stdout, r.stderr)
-    assert r.stderr.strip() == (f"knotflow-xdmf: error: {case}: cannot write {xdmf.xdmf_path(case)}: "
-                                "No space left on device"), r.stderr
+    capsys.readouterr()
+    assert cli.main_xdmf([case]) == cli.EXIT_USAGE
+    err = capsys.readouterr().err
+    assert err.strip() == (f"knotflow-xdmf: error: {case}: cannot write {xdmf.xdmf_path(case)}: "
+                           "No space left on device"), err
     assert _bytes(xdmf.xdmf_path(case)) == old_xdmf
     assert _leftovers(mount) == []
 
 
 @pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="ffmpeg not installed: MP4 not tested")
-def test_movie_on_a_full_disk(full_disk):
+def test_movie_on_a_full_disk(full_disk, capsys):
     """knotflow-movie on a full disk: one error line naming the movie and ffmpeg's reason, exit
     status 2, no 0-byte .mp4 and no temporary file (before: a 47-line traceback, a 0-byte .mp4)."""
     mount, fill = full_disk
     case = str(write_case(mount / "m.h5", unknotting_trefoil_frames(4)))
     fill()
     out = mount / "m.mp4"
-    r = subprocess.run([shutil.which("knotflow-movie") or "knotflow-movie", case, "--out", str(out)],
-                       capture_output=True, text=True)
-    assert r.returncode == cli.EXIT_USAGE, (r.returncode, r.stderr[-2000:])
-    lines = r.stderr.strip().splitlines()
+    capsys.readouterr()
+    assert cli.main_movie([case, "--out", str(out)]) == cli.EXIT_USAGE
+    err = capsys.readouterr().err
+    lines = err.strip().splitlines()
     assert lines[-1] == (f"knotflow-movie: error: cannot write {out}: No space left on device "
-                         "(ffmpeg, exit status 1)"), r.stderr[-2000:]
-    assert "Traceback" not in r.stderr
+                         "(ffmpeg, exit status 1)"), err[-2000:]
     assert not out.exists()
     assert _leftovers(mount) == []
 
 
-def test_report_on_a_full_disk(full_disk):
+def test_report_on_a_full_disk(full_disk, capsys):
     mount, fill = full_disk
     sweep = mount / "sweep"
     sweep.mkdir()
     write_case(sweep / "c.h5", unknotting_trefoil_frames(4))
     fill()
-    r = subprocess.run([shutil.which("knotflow-report") or "knotflow-report", str(sweep),
-                        "--no-movie", "--closures", "5"], capture_output=True, text=True)
-    assert r.returncode == cli.EXIT_USAGE, (r.returncode, r.stderr[-2000:])
-    assert "error: cannot write " + str(sweep) in r.stderr and "No space left on device" in r.stderr
+    capsys.readouterr()
+    assert cli.main_report([str(sweep), "--no-movie", "--closures", "5"]) == cli.EXIT_USAGE
+    err = capsys.readouterr().err
+    assert "error: cannot write " + str(sweep) in err and "No space left on device" in err, err
     assert _leftovers(mount) == []
     assert not (sweep / "report").exists() or any((sweep / "report").rglob("*"))
 
