@@ -101,9 +101,14 @@ kf_pbs_same_job() {
 
 # Did knotflow run to its end? Status 2 (input refused) or 0/3 with its closing line
 # ("knotflow: N finished, M skipped ...") in its output, the file $2. Status 0 without that line
-# is a launch that failed (srun 22.05 reports a failed step launch with status 0).
+# is a launch that failed (srun 22.05 reports a failed step launch with status 0). Status 75
+# (KF_EXIT_RESUBMIT): stopped by SIGTERM or SIGINT (a time limit, scancel) after each running
+# case's last frame: not ended, the follow-up goes on (docs/robustness.md); so does any other
+# status (mpirun signalled itself may report 1).
+KF_EXIT_RESUBMIT=75
 kf_sweep_ended() {
   local status="$1" out="$2"
+  (( status == KF_EXIT_RESUBMIT )) && return 1
   (( status == 2 )) && return 0
   (( status == 0 || status == 3 )) && grep -qE '^knotflow: [0-9]+ finished, [0-9]+ skipped' "${out}"
 }

@@ -134,12 +134,20 @@ queue() {
 }
 
 worker() {
-  local id="$1" sweep case action scene
+  local id="$1" sweep case action scene status
   while read -r sweep case action scene; do
     mkdir "$results/claims/$sweep.$case" 2>/dev/null || continue
     kf_log "worker $id: $sweep/$case ($action: $scene)"
-    "$knotflow" "$scene" >>"$results/campaign_$sweep.$case.log" 2>&1 \
-      || kf_log "worker $id: $sweep/$case exited with status $? (see $results/campaign_$sweep.$case.log)"
+    status=0
+    "$knotflow" "$scene" >>"$results/campaign_$sweep.$case.log" 2>&1 || status=$?
+    if [ "$status" = 75 ]; then
+      # stopped by SIGTERM/SIGINT after its last frame (docs/robustness.md): the next run of
+      # this script resumes it; this worker takes no further case
+      kf_log "worker $id: $sweep/$case stopped by a signal (status 75), resumed by the next run; worker stops"
+      break
+    fi
+    [ "$status" = 0 ] \
+      || kf_log "worker $id: $sweep/$case exited with status $status (see $results/campaign_$sweep.$case.log)"
   done <"$results/queue.txt"
 }
 

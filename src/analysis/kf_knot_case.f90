@@ -3,6 +3,7 @@
 !> (seed, frame index), so the result does not depend on how frames are shared among ranks),
 !> transitions, modes from the shape series and spectra of R_g, phi and the end-to-end vector.
 module kf_knot_case
+  use, intrinsic :: iso_fortran_env, only: int8
   use kf_kinds, only: wp, i8
   use kf_strings, only: to_str
   use kf_error, only: error_t
@@ -32,7 +33,7 @@ module kf_knot_case
   end type shape_analysis_t
 
   public :: select_frames, analyse_frame_knots, analyse_shapes, frame_stream, stored_positions, &
-    merge_frame_knots, same_frames
+    merge_frame_knots, same_frames, frame_digests
 
 contains
 
@@ -163,6 +164,29 @@ contains
       if (keep(m)) keep(m) = all(r_old(:, :, k) == r(:, :, k))
     end do
   end function same_frames
+
+  !> A digest of each frame index(m) (0-based) of the trajectory t, r(3, N, frames): its time and
+  !> positions, bit for bit (two sums modulo a prime over their bytes, as the checkpoint digest).
+  !> Stored with results per frame, so that a result is reused only while its frame is unchanged.
+  pure function frame_digests(index, t, r) result(d)
+    integer(i8), intent(in) :: index(:)
+    real(wp), intent(in) :: t(:), r(:, :, :)
+    integer(i8) :: d(size(index))
+    integer(i8), parameter :: prime = 2147483629_i8
+    integer(int8), allocatable :: bytes(:)
+    integer(i8) :: a, b
+    integer :: m, k
+    do m = 1, size(index)
+      bytes = transfer([t(index(m) + 1), reshape(r(:, :, index(m) + 1), [size(r, 1)*size(r, 2)])], [0_int8])
+      a = 1
+      b = 0
+      do k = 1, size(bytes)
+        a = mod(a + iand(int(bytes(k), i8), 255_i8), prime)
+        b = mod(b + a, prime)
+      end do
+      d(m) = b*2147483648_i8 + a
+    end do
+  end function frame_digests
 
   !> The knots of the frames `todo` (0-based) of a trajectory with frame times t: frame todo(k)
   !> from the stored results (kf, spectrum(:, m) at m = pos_of(k) > 0) or, where pos_of(k) = 0,

@@ -5,17 +5,19 @@
 !> (-DKNOTFLOW_WITH_MPI=OFF), `knotflow SCENE.nml` runs every case in one process. Finished
 !> cases are skipped and interrupted ones resume from their checkpoint when the same command is
 !> run again.
-!> Exit status: 0 all cases finished, 2 bad input (nothing written), 3 some cases failed.
+!> Exit status: 0 all cases finished, 2 bad input (nothing written), 3 some cases failed, 75
+!> stopped by SIGTERM or SIGINT (each running case at its last written frame: run the same
+!> command again; kf_signals, docs/robustness.md).
 program knotflow
   use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
   use kf_strings, only: to_str
   use kf_memory, only: keep_freed_heap
-  use kf_error, only: error_t, fatal_error
+  use kf_error, only: error_t
   use kf_scene, only: scene_t
   use kf_scene_items, only: scene_text
   use kf_sweep, only: sweep_t, read_sweep
   use kf_fs, only: make_directory, check_writable_directory, check_directory_creatable, lock_directory, lock_case, &
-                   rename_file, ignore_file_size_signal
+                   write_file_atomic, ignore_file_size_signal
   use kf_h5, only: h5_initialize, h5_finalize
   use kf_case_runner, only: case_path
   use kf_case_match, only: check_reusable
@@ -24,7 +26,8 @@ program knotflow
   use kf_stepper, only: stepper_t
   use kf_stepper_factory, only: make_stepper
   use kf_comm, only: comm_t, comm_init, comm_finalize
-  use kf_task_farm, only: run_task_farm, task_result_t, task_ok, task_failed, task_skipped
+  use kf_task_farm, only: run_task_farm, task_result_t, task_ok, task_failed, task_skipped, task_stopped
+  use kf_signals, only: catch_stop_signals, stop_signal, signal_name, exit_resubmit
   use kf_sweep_tasks, only: sweep_tasks_t, status_word
   use kf_exit, only: exit_program_now
   use kf_cli, only: standard_option, argument, version_line, die
@@ -52,7 +55,7 @@ program knotflow
   character(len=:), allocatable :: scene_file, directory, scenes_dir
   logical :: dry_run
   logical :: summary_failed = .false.
-  integer :: me = 0, nfailed, threads, k
+  integer :: me = 0, nfailed, nstopped, threads, k
   logical :: threads_set
   real(wp) :: load
 
@@ -66,6 +69,7 @@ program knotflow
   call comm_init(comm, error)
   if (allocated(error)) call die(program_name, error%message, 2)
   call keep_freed_heap()   ! after MPI start-up, which sets its own allocator options
+  call catch_stop_signals()   ! SIGTERM/SIGINT: each case stops after its current frame
   call ignore_file_size_signal()   ! a write past `ulimit -f` fails (EFBIG) and is reported
   me = comm%rank()
   if (me < 0) call die(program_name, 'cannot get the rank of this process (MPI)', 2)
@@ -150,13 +154,16 @@ program knotflow
   end if
   call run_task_farm(comm, sw%n_cases(), tasks, results, error)
   if (allocated(error)) call stop_all(error%message, 1)
-  nfailed = count(results%status /= task_ok .and. results%status /= task_skipped)
+  nfailed = count(results%status /= task_ok .and. results%status /= task_skipped .and. results%status /= task_stopped)
+  nstopped = count(results%status == task_stopped)
   if (me == 0) call write_summary()
+  if (me == 0 .and. nstopped > 0) call stopped_line()
   call h5_finalize()
   call comm_finalize(error)
   ! Every file is closed and MPI finalised: end without the libraries' exit handlers, because
   ! after a write that failed (full disk) HDF5 1.10's handler crashes on the file whose close
   ! failed, which would turn a reported failure into a segmentation fault.
+  if (nstopped > 0) call exit_program_now(exit_resubmit)
   call exit_program_now(merge(3, 0, nfailed > 0 .or. summary_failed))
 
 contains
@@ -175,14 +182,14 @@ contains
 
   !> Each case's scene as a single-case input, DIR/<case>.nml (kf_scene_items: scene_text, the
   !> text that reads back to the same scene; its output directory and case name are the sweep's,
-  !> so it runs, resumes or skips the very file the sweep would). Each is written to
-  !> '<name>.tmp' and renamed, so a scene file is either complete or absent.
+  !> so it runs, resumes or skips the very file the sweep would). Each is written whole or not
+  !> at all (kf_fs: write_file_atomic: a new temporary file, every write checked, renamed), so a
+  !> scene file is complete or as it was; a failed write stops with the path and the reason.
   subroutine write_case_scenes(err)
     type(error_t), allocatable, intent(out) :: err
     type(scene_t) :: sc
     character(len=:), allocatable :: name, path
-    character(len=256) :: msg
-    integer :: k, u, ios, iosc
+    integer :: k
     call make_directory(scenes_dir, err)
     if (.not. allocated(err)) call check_writable_directory(scenes_dir, err)
     if (allocated(err)) then
@@ -192,23 +199,12 @@ contains
     do k = 1, sw%n_cases()
       call sw%case_scene(k, sc, name)
       path = scenes_dir//'/'//name//'.nml'
-      msg = ''
-      open (newunit=u, file=path//'.tmp', status='replace', action='write', iostat=ios, iomsg=msg)
-      if (ios == 0) then
-        write (u, '(a)', iostat=ios, iomsg=msg) '! case '//name//' of '//scene_file//' (knotflow --write-scenes)'
-        if (ios == 0) write (u, '(a)', advance='no', iostat=ios, iomsg=msg) scene_text(sc)
-        close (u, iostat=iosc)
-        if (ios == 0 .and. iosc /= 0) then
-          ios = iosc
-          msg = 'close failed'
-        end if
-      end if
-      if (ios /= 0) then
-        call fatal_error(err, '--write-scenes: cannot write '''//path//'.tmp'': '//trim(msg))
+      call write_file_atomic(path, '! case '//name//' of '//scene_file//' (knotflow --write-scenes)'// &
+                             new_line('a')//scene_text(sc), err)
+      if (allocated(err)) then
+        err%message = '--write-scenes: '//err%message
         return
       end if
-      call rename_file(path//'.tmp', path, err)
-      if (allocated(err)) return
     end do
     write (output_unit, '(a)') 'knotflow: '//to_str(sw%n_cases())//' scene(s) written to '//scenes_dir
   end subroutine write_case_scenes
@@ -269,73 +265,42 @@ contains
       ' more case file(s) with another scene: '//trim(adjustl(others))//')'
   end subroutine check_existing_cases
 
-  !> summary.txt (one line per case) and summary.json in the output directory, each written to
-  !> '<name>.tmp' (every write and the close checked) and renamed over the old one, so a summary
-  !> is either complete or the previous one. A summary that cannot be written is reported on
-  !> stderr and counts as a failure (exit status 3).
+  !> summary.txt (one line per case) and summary.json in the output directory, each written
+  !> whole or not at all (kf_fs: write_file_atomic: a new temporary file of a unique name, every
+  !> write, the fsync and the close checked, then renamed over the old one), so a summary is
+  !> either complete or the previous one, and never written through a planted link. A summary
+  !> that cannot be written is reported on stderr with its path and the operating system's
+  !> reason and counts as a failure (exit status 3).
   subroutine write_summary()
     type(scene_t) :: sc
-    character(len=:), allocatable :: name, line, tmp
-    character(len=256) :: msg
-    integer :: k, ut, uj, ios, iosj
-    logical :: ok
-    ok = .false.
-    msg = ''
-    ! Temporary names of their own for single-case runs, which may share the directory.
-    tmp = '.tmp'
-    if (sw%n_cases() == 1) tmp = '.'//single_case_name()//'.tmp'
-    open (newunit=ut, file=directory//'/summary.txt'//tmp, status='replace', action='write', iostat=ios, iomsg=msg)
-    if (ios == 0) open (newunit=uj, file=directory//'/summary.json'//tmp, status='replace', action='write', &
-                        iostat=ios, iomsg=msg)
-    if (ios == 0) then
-      iosj = 0
-      write (ut, '(a)', iostat=ios, iomsg=msg) '# case  bending_a  orientation  status  rank  file  message'
-      if (ios == 0) write (uj, '(a)', iostat=ios, iomsg=msg) '{"scene": "'//json_escape(scene_file)//'", "cases": ['
-      do k = 1, size(results)
-        if (ios /= 0) exit
-        call sw%case_scene(k, sc, name)
-        line = name//'  '//to_str(sc%forces%bending_a, '(g0.6)')//'  '//sc%chain%orientation//'  '// &
-          status_word(results(k)%status)//'  '//to_str(results(k)%rank)//'  '//case_path(sc)//'  '// &
-          trim(results(k)%message)
-        write (ut, '(a)', iostat=ios, iomsg=msg) line
-        if (ios == 0) write (uj, '(a)', iostat=ios, iomsg=msg) '  {"case": "'//name//'", "bending_a": '// &
-          to_str(sc%forces%bending_a, '(g0.6)')//', "orientation": "'//sc%chain%orientation//'", "status": "'// &
-          status_word(results(k)%status)//'", "rank": '//to_str(results(k)%rank)//', "file": "'// &
-          json_escape(case_path(sc))//'", "message": "'//json_escape(trim(results(k)%message))//'"}'// &
-          merge(',', ' ', k < size(results))
-      end do
-      if (ios == 0) write (uj, '(a)', iostat=ios, iomsg=msg) ']}'
-      close (ut, iostat=iosj)
-      if (ios == 0 .and. iosj /= 0) then
-        ios = iosj
-        msg = 'closing summary.txt'//tmp//' failed'
-      end if
-      close (uj, iostat=iosj)
-      if (ios == 0 .and. iosj /= 0) then
-        ios = iosj
-        msg = 'closing summary.json'//tmp//' failed'
-      end if
-      ok = ios == 0
-    end if
-    if (ok) then
-      block
-        type(error_t), allocatable :: err
-        call rename_file(directory//'/summary.txt'//tmp, directory//'/summary.txt', err)
-        if (.not. allocated(err)) call rename_file(directory//'/summary.json'//tmp, directory//'/summary.json', err)
-        if (allocated(err)) then
-          ok = .false.
-          msg = err%message
-        end if
-      end block
-    end if
-    if (.not. ok) then
-      write (error_unit, '(a)') 'knotflow: error: cannot write the summary in '//directory//': '//trim(msg)// &
-        ' (the case files hold the results)'
+    character(len=:), allocatable :: name, line, txt, json
+    character(len=1), parameter :: nl = new_line('a')
+    type(error_t), allocatable :: err
+    integer :: k
+    txt = '# case  bending_a  orientation  status  rank  file  message'//nl
+    json = '{"scene": "'//json_escape(scene_file)//'", "cases": ['//nl
+    do k = 1, size(results)
+      call sw%case_scene(k, sc, name)
+      txt = txt//name//'  '//to_str(sc%forces%bending_a, '(g0.6)')//'  '//sc%chain%orientation//'  '// &
+        status_word(results(k)%status)//'  '//to_str(results(k)%rank)//'  '//case_path(sc)//'  '// &
+        trim(results(k)%message)//nl
+      json = json//'  {"case": "'//name//'", "bending_a": '// &
+        to_str(sc%forces%bending_a, '(g0.6)')//', "orientation": "'//sc%chain%orientation//'", "status": "'// &
+        status_word(results(k)%status)//'", "rank": '//to_str(results(k)%rank)//', "file": "'// &
+        json_escape(case_path(sc))//'", "message": "'//json_escape(trim(results(k)%message))//'"}'// &
+        merge(',', ' ', k < size(results))//nl
+    end do
+    json = json//']}'//nl
+    call write_file_atomic(directory//'/summary.txt', txt, err)
+    if (.not. allocated(err)) call write_file_atomic(directory//'/summary.json', json, err)
+    if (allocated(err)) then
+      write (error_unit, '(a)') 'knotflow: error: the summary: '//err%message//' (the case files hold the results)'
       summary_failed = .true.
     end if
     line = 'knotflow: '//to_str(count(results%status == task_ok))//' finished, '// &
       to_str(count(results%status == task_skipped))//' skipped (already finished), '//to_str(nfailed)//' failed'
-    if (ok) line = line//'; summary in '//directory//'/summary.txt'
+    if (nstopped > 0) line = line//', '//to_str(nstopped)//' stopped'
+    if (.not. summary_failed) line = line//'; summary in '//directory//'/summary.txt'
     write (output_unit, '(a)') line
     do k = 1, size(results)
       if (results(k)%status == task_failed) then
@@ -344,6 +309,19 @@ contains
       end if
     end do
   end subroutine write_summary
+
+  !> The closing line of a run a stop signal ended (rank 0; the signal reached every rank under
+  !> mpirun, or another rank alone).
+  subroutine stopped_line()
+    character(len=:), allocatable :: why
+    integer :: nrunning
+    why = 'a stop signal'
+    if (stop_signal() /= 0) why = signal_name(stop_signal())
+    nrunning = count(results%status == task_stopped .and. index(results%message, 'not started') /= 1)
+    write (output_unit, '(a)') 'knotflow: stopped by '//why//': '//to_str(nrunning)// &
+      ' case(s) stopped after their last frame (checkpoint written), '//to_str(nstopped - nrunning)// &
+      ' not started; run the same command again to go on (exit status '//to_str(exit_resubmit)//')'
+  end subroutine stopped_line
 
   function json_escape(s) result(t)
     character(len=*), intent(in) :: s

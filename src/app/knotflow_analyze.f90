@@ -29,7 +29,7 @@ program knotflow_analyze
   use kf_analysis_store, only: analysis_store_t, knots_record_t, matrix_record_t
   use kf_analysis_records, only: knots_record, events_record, shape_record
   use kf_knot_case, only: frame_knots_t, shape_analysis_t, select_frames, analyse_frame_knots, analyse_shapes, &
-    stored_positions, merge_frame_knots, same_frames
+    stored_positions, merge_frame_knots, same_frames, frame_digests
   use kf_transitions, only: detect_transitions, default_low, default_high
   implicit none
 
@@ -570,7 +570,7 @@ contains
     integer(i8), allocatable :: todo(:), need(:), mframes(:), compute(:)
     integer, allocatable :: ev_kind(:), ev_pos(:), pos_of(:)
     type(frame_knots_t) :: fresh, all
-    type(knots_record_t) :: prev
+    type(knots_record_t) :: prev, krec
     type(shape_analysis_t) :: shapes
     type(matrix_record_t), allocatable :: mats(:)
     logical :: found
@@ -591,6 +591,7 @@ contains
       else
         call store%read_knots(int(opt%closures, i8), opt%seed, prev, found, error)
       end if
+      if (.not. allocated(error)) call drop_changed_frames(path, t, r, prev)
       carried = 0
       if (.not. allocated(error) .and. len_trim(opt%reuse) > 0) &
         call carry_stored(trim(opt%reuse), t, r, opt, prev, carried, error)
@@ -635,13 +636,51 @@ contains
     call merge_frame_knots(todo, t, pos_of, prev%kf, prev%spectrum, fresh, all)
     call detect_transitions(all%kf, default_low, default_high, ev_kind, ev_pos)
     call analyse_shapes(r, t, shapes, error)
-    if (.not. allocated(error)) call store%write(knots_record(all, opt%closures, opt%seed), &
-                                                 events_record(all, ev_kind, ev_pos), mats, shape_record(shapes), error)
+    if (.not. allocated(error)) then
+      krec = knots_record(all, opt%closures, opt%seed)
+      krec%frame_digest = frame_digests(all%frame_index, t, r)
+      call store%write(krec, events_record(all, ev_kind, ev_pos), mats, shape_record(shapes), error)
+    end if
     if (.not. allocated(error)) write (output_unit, '(a,i0,a,i0,a,i0,a)') trim(path)//': ', size(todo), &
       ' frames (', size(need), ' new), ', size(ev_kind), ' events written to /analysis'
     if (.not. allocated(error) .and. len_trim(opt%reuse) > 0) write (output_unit, '(a,i0,a)') &
       trim(path)//': k_f of ', carried, ' frame(s) taken from '//trim(opt%reuse)
   end subroutine analyse_frames
+
+  !> Keep of the stored frame knots `prev` only those whose frame is still the same: its time and
+  !> (when the file stores digests) its positions' digest (a resumed run may have rewritten the
+  !> frames after its checkpoint, and /frames may have been changed otherwise); a line tells how
+  !> many were dropped, which are then computed again.
+  subroutine drop_changed_frames(path, t, r, prev)
+    character(len=*), intent(in) :: path
+    real(wp), intent(in) :: t(:), r(:, :, :)
+    type(knots_record_t), intent(inout) :: prev
+    logical, allocatable :: keep(:)
+    integer(i8), allocatable :: now(:)
+    integer :: m
+    allocate (keep(size(prev%frame_index)))
+    keep = prev%frame_index >= 0 .and. prev%frame_index < size(t)
+    if (size(prev%time) == size(keep)) then
+      do m = 1, size(keep)
+        if (keep(m)) keep(m) = prev%time(m) == t(prev%frame_index(m) + 1)
+      end do
+    end if
+    if (allocated(prev%frame_digest)) then
+      if (size(prev%frame_digest) == size(keep)) then
+        allocate (now(size(keep)))
+        now = frame_digests(merge(prev%frame_index, 0_i8, keep), t, r)
+        keep = keep .and. prev%frame_digest == now
+      end if
+      deallocate (prev%frame_digest)
+    end if
+    if (all(keep)) return
+    write (output_unit, '(a,i0,a)') trim(path)//': k_f stored for ', count(.not. keep), &
+      ' frame(s) whose time or positions changed since: computed again'
+    prev%frame_index = pack(prev%frame_index, keep)
+    if (size(prev%time) == size(keep)) prev%time = pack(prev%time, keep)
+    prev%kf = pack(prev%kf, keep)
+    prev%spectrum = prev%spectrum(:, pack([(m, m=1, size(keep))], keep))
+  end subroutine drop_changed_frames
 
   !> For --reuse, add to `prev` the k_f and spectra that the case file `old` stores with the same
   !> closures and seed for frames that are the same here (kf_knot_case `same_frames`: each

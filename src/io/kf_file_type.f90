@@ -9,7 +9,7 @@ module kf_file_type
   implicit none
   private
 
-  public :: check_regular_file
+  public :: check_regular_file, is_symbolic_link
 
   interface
     !> int statx(int dirfd, const char *path, int flags, unsigned mask, struct statx *buf)
@@ -22,7 +22,7 @@ module kf_file_type
     end function c_statx
   end interface
 
-  integer(c_int), parameter :: at_fdcwd = -100
+  integer(c_int), parameter :: at_fdcwd = -100, at_symlink_nofollow = 256
   integer(c_int), parameter :: statx_type = 1, statx_size = 512
   !> struct statx: 256 bytes; stx_mode (16 bits) at byte 28, stx_size (64 bits) at byte 40.
   integer, parameter :: statx_bytes = 256, mode_offset = 28, size_offset = 40
@@ -72,5 +72,19 @@ contains
     call fatal_error(error, what//" '"//trim(path)//"' is "//type_name// &
       ": only a regular file is read")
   end subroutine check_regular_file
+
+  !> Whether `path` itself is a symbolic link (statx with AT_SYMLINK_NOFOLLOW; false when it
+  !> does not exist).
+  logical function is_symbolic_link(path)
+    character(len=*), intent(in) :: path
+    integer(c_int8_t) :: buf(statx_bytes)
+    integer(c_int16_t) :: mode16
+    integer, parameter :: s_iflnk = int(o'120000')
+    is_symbolic_link = .false.
+    buf = 0_c_int8_t
+    if (c_statx(at_fdcwd, trim(path)//c_null_char, at_symlink_nofollow, statx_type, buf) /= 0) return
+    mode16 = transfer(buf(mode_offset + 1:mode_offset + 2), mode16)
+    is_symbolic_link = iand(iand(int(mode16), 65535), s_ifmt) == s_iflnk
+  end function is_symbolic_link
 
 end module kf_file_type

@@ -6,8 +6,9 @@ module kf_sweep_tasks
   use kf_strings, only: to_str
   use kf_scene, only: scene_t
   use kf_sweep, only: sweep_t
-  use kf_case_runner, only: run_case, case_path, case_reporter_t, case_ok, case_skipped
-  use kf_task_farm, only: task_worker_t, task_ok, task_failed, task_skipped
+  use kf_case_runner, only: run_case, case_path, case_reporter_t, case_ok, case_skipped, case_stopped
+  use kf_task_farm, only: task_worker_t, task_ok, task_failed, task_skipped, task_stopped
+  use kf_signals, only: stop_signal, signal_name
   use kf_run_segment, only: run_launch_t
   implicit none
   private
@@ -43,7 +44,7 @@ contains
     flush (this%unit)
   end subroutine rank_line
 
-  !> One case of the sweep.
+  !> One case of the sweep (none after a stop signal: kf_signals).
   subroutine run_sweep_case(this, itask, status, message)
     class(sweep_tasks_t), intent(inout) :: this
     integer, intent(in) :: itask
@@ -51,6 +52,11 @@ contains
     character(len=256), intent(out) :: message
     type(scene_t) :: sc
     character(len=:), allocatable :: name, msg
+    if (stop_signal() /= 0) then
+      status = task_stopped
+      message = 'not started: stopped by '//signal_name(stop_signal())
+      return
+    end if
     call this%sweep%case_scene(itask, sc, name)
     call this%reporter%line('case '//name//': started ('//case_path(sc)//')')
     call run_case(sc, this%reporter, status, msg, this%launch)
@@ -59,6 +65,8 @@ contains
       status = task_ok
     case (case_skipped)
       status = task_skipped
+    case (case_stopped)
+      status = task_stopped
     case default
       status = task_failed
     end select
@@ -87,6 +95,8 @@ contains
       word = 'skipped'
     case (task_failed)
       word = 'FAILED'
+    case (task_stopped)
+      word = 'stopped'
     case default
       word = 'not run'
     end select

@@ -17,13 +17,15 @@ module kf_task_farm
 
   public :: run_task_farm
 
-  !> Task outcomes (set by the worker) and "never ran".
-  integer, parameter, public :: task_ok = 0, task_failed = 1, task_skipped = 2, task_not_run = -1
+  !> Task outcomes (set by the worker: task_stopped when a stop signal ended it or kept it from
+  !> starting) and "never ran".
+  integer, parameter, public :: task_ok = 0, task_failed = 1, task_skipped = 2, task_stopped = 3, &
+    task_not_run = -1
   integer, parameter, public :: task_message_len = 256
 
   !> The outcome of one task.
   type, public :: task_result_t
-    integer :: status = task_not_run               !< task_ok, task_failed, task_skipped
+    integer :: status = task_not_run               !< task_ok, task_failed, task_skipped, task_stopped
     integer :: rank = -1                           !< the rank that ran it
     character(len=task_message_len) :: message = '' !< the worker's message
   end type task_result_t
@@ -38,7 +40,7 @@ module kf_task_farm
   end type task_worker_t
 
   abstract interface
-    !> Run task `itask` (1-based); status 0 ok, 1 failed, 2 skipped; a one-line message.
+    !> Run task `itask` (1-based); status 0 ok, 1 failed, 2 skipped, 3 stopped; a one-line message.
     subroutine task_run_i(this, itask, status, message)
       import :: task_worker_t
       class(task_worker_t), intent(inout) :: this

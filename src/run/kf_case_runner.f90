@@ -22,13 +22,16 @@ module kf_case_runner
   use kf_frame_records, only: observables_record, diagnostics_record, stresslet_record
   use kf_run_diagnostics, only: run_diagnostics_t, diag_pair_cutoff
   use kf_rheology, only: fibre_stresslet_t
-  use kf_fs, only: remove_file, move_aside
+  use kf_fs, only: remove_file, move_aside, file_exists, file_in_use, file_not_writable
+  use kf_file_type, only: is_symbolic_link
   use kf_case_match, only: check_reusable
   use kf_h5, only: h5_extend_truncated, h5_raise_end
+  use kf_signals, only: stop_signal, signal_name
   implicit none
   private
 
-  integer, parameter, public :: case_ok = 0, case_failed = 1, case_skipped = 2
+  !> Outcomes of a case; case_stopped: a stop signal (kf_signals) ended it after a whole frame.
+  integer, parameter, public :: case_ok = 0, case_failed = 1, case_skipped = 2, case_stopped = 3
 
   !> Receives the progress lines of a case (an object, not a procedure argument: the program's
   !> reporter carries its state, e.g. the rank, without an internal procedure and its trampoline).
@@ -97,11 +100,26 @@ contains
     path = case_path(sc)
     name = trim(sc%output%case_name)
     hydro_base = 0
+    ! knotflow writes its case files itself, never through a link planted at their name
+    if (is_symbolic_link(path)) then
+      status = case_failed
+      message = 'case file '//path//' not used: it is a symbolic link (knotflow never writes through one): '// &
+        'remove the link, or put the file itself there; nothing was changed'
+      return
+    end if
+    ! A file another process holds for writing cannot even be read: say so rather than call it
+    ! damaged.
+    if (refused_access(.false.)) return
     call case_file_status(path, state, error)
     if (allocated(error)) then
       status = case_failed
       message = error%message
       return
+    end if
+    ! Anything but skipping a finished file writes to it or moves it: a file in use by another
+    ! process or not writable for this one fails the case (nothing moved, nothing recomputed).
+    if (state /= 'missing' .and. state /= 'finished') then
+      if (refused_access(.true.)) return
     end if
     resumed = .false.
     with_diag = sc%output%diagnostics
@@ -183,6 +201,8 @@ contains
       end if
     end if
     if (index(state, 'corrupt: ') == 1) then
+      ! (a finished file found damaged: not yet checked for writing)
+      if (refused_access(.true.)) return
       ! Damaged or unreadable: moved aside (never deleted) and the case recomputed.
       call move_aside(path, moved_to, error)
       if (allocated(error)) then
@@ -307,6 +327,11 @@ contains
         return
       end if
       nframes = nframes + 1
+      if (stop_signal() /= 0 .and. t < sc%integrator%t_end*(1.0_wp - 1.0e-12_wp)) then
+        ! SIGTERM or SIGINT: the frame and its checkpoint are written; stop here
+        call stopped()
+        return
+      end if
       call system_clock(clock_now)
       if (real(clock_now - clock_last, wp)/rate >= sc%output%progress_interval) then
         clock_last = clock_now
@@ -338,6 +363,30 @@ contains
     if (ieee_is_finite(final%load_mean)) message = message//', mean load '//to_str_short(final%load_mean)
 
   contains
+
+    !> Whether the existing case file cannot be used as this run needs (for writing, or only for
+    !> reading): in use by another process (HDF5's file lock, kf_fs: file_in_use) or, for
+    !> writing, not writable for this process. Then the case fails with the reason, and the
+    !> file is left exactly as it is.
+    logical function refused_access(for_writing) result(refused)
+      logical, intent(in) :: for_writing
+      character(len=:), allocatable :: reason
+      refused = .false.
+      if (.not. file_exists(path)) return
+      reason = ''
+      if (file_in_use(path, for_writing)) then
+        reason = 'it is open in another process, which holds its HDF5 file lock (a viewer such as h5py, '// &
+          'HDFView or ParaView, or another run): close it there and run again'
+      else if (for_writing) then
+        reason = file_not_writable(path)
+        if (len(reason) > 0) reason = 'it cannot be written ('//reason//'): give it write permission (chmod u+w) '// &
+          'and run again'
+      end if
+      if (len(reason) == 0) return
+      refused = .true.
+      status = case_failed
+      message = 'case file '//path//' not used: '//reason//'; nothing was changed'
+    end function refused_access
 
     !> The counters of the hydrodynamic model (kf_hydro_model's hydro_stats_t), cumulative over
     !> resumes: saved with every checkpoint and written as the root attributes
@@ -430,6 +479,17 @@ contains
       end if
       if (allocated(err)) message = message//' (the case file could not record it: '//err%message//')'
     end subroutine fail
+
+    !> A stop signal arrived (kf_signals): the frame just written and its checkpoint are whole;
+    !> the file is closed with status 'running', so that the next run resumes it here.
+    subroutine stopped()
+      type(error_t), allocatable :: err
+      status = case_stopped
+      message = 'stopped by '//signal_name(stop_signal())//' at t = '//to_str_exact(t)// &
+        ' (its frame and checkpoint written): the next run resumes it there'
+      call file%close(err)
+      if (allocated(err)) message = message//' (closing the case file failed: '//err%message//')'
+    end subroutine stopped
 
     !> Writing the case file failed (full disk, file size limit, I/O error): the case fails
     !> with the reason, the file keeps its status 'running' and its last complete checkpoint,

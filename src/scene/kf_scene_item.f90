@@ -44,7 +44,8 @@ contains
     if (present(exact)) ex = exact
     select case (it%kind)
     case (item_string)
-      text = "'"//trim(it%s)//"'"
+      ! an apostrophe inside is doubled, as a namelist reads it back ('o''brien.xyz')
+      text = "'"//doubled_apostrophes(trim(it%s))//"'"
     case (item_integer)
       text = to_str(it%i)
     case (item_logical)
@@ -72,6 +73,18 @@ contains
       end if
     end function real_text
   end function item_value_text
+
+  !> `s` with every apostrophe doubled (the text of a string between apostrophes).
+  pure function doubled_apostrophes(s) result(t)
+    character(len=*), intent(in) :: s
+    character(len=:), allocatable :: t
+    integer :: k
+    t = ''
+    do k = 1, len(s)
+      t = t//s(k:k)
+      if (s(k:k) == "'") t = t//"'"
+    end do
+  end function doubled_apostrophes
 
   !> Attach the scene reference's words (allowed values, meaning) to an item.
   subroutine describe(it, allowed, meaning)

@@ -2,7 +2,7 @@
 !> reading of the group, its part of the item catalogue and its validation.
 module kf_scene_output
   use kf_kinds, only: wp
-  use kf_strings, only: to_str_exact
+  use kf_strings, only: to_str, to_str_exact
   use kf_error, only: error_t
   use kf_scene_item, only: scene_item_t, add_s, add_r, add_l, path_len
   use kf_scene_check, only: refuse, quoted, check_finite
@@ -13,7 +13,18 @@ module kf_scene_output
   character(len=*), parameter :: directory_allowed = 'a directory name'
   character(len=*), parameter :: frame_interval_allowed = 'a number > 0'
   character(len=*), parameter :: progress_interval_allowed = 'a number >= 0 (seconds; 0 = every frame)'
-  character(len=*), parameter :: case_name_allowed = 'letters, digits and _ . - + only'
+  !> The rule for case names: the stem of the case file and of the files named after it (locks,
+  !> scenes, ledger entries), so a name is data, never a path: these characters only, the first
+  !> a letter, a digit or '_' (no hidden name, no '.' or '..', no option-like '-x'), at most
+  !> `case_name_max_len` characters (the longest derived name, '.knotflow.<case>.lock' or
+  !> '<case>.h5.damaged.<k>', stays far below the 255 bytes of a file name). The Python tools
+  !> apply the same rule (knotflow_tools.names); tests/data/case_names.txt holds the names both
+  !> are tested against.
+  character(len=*), parameter, public :: case_name_characters = &
+    'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.-+'
+  character(len=*), parameter :: case_name_first = &
+    'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_'
+  integer, parameter, public :: case_name_max_len = 100
 
   !> &output: files and progress.
   type, public :: output_params_t
@@ -25,7 +36,7 @@ module kf_scene_output
     logical :: stresslet = .false.                  !< the fibre's stresslet and rheology per frame
   end type output_params_t
 
-  public :: read_output_group, output_items, check_output
+  public :: read_output_group, output_items, check_output, case_name_problem
 
 contains
 
@@ -52,7 +63,7 @@ contains
     type(scene_item_t), allocatable, intent(inout) :: items(:)
     call add_s(items, 'output.directory', p%directory, directory_allowed, &
       'where the case files go; created if missing, must be writable')
-    call add_s(items, 'output.case_name', p%case_name, case_name_allowed, &
+    call add_s(items, 'output.case_name', p%case_name, case_name_allowed(), &
       "the case file's name stem; '': from the swept parameters, e.g. A2.20_orc, or 'case'")
     call add_r(items, 'output.frame_interval', p%frame_interval, frame_interval_allowed, &
       'simulated time between frames')
@@ -87,10 +98,37 @@ contains
       call refuse(error, file, 'output', 'progress_interval', to_str_exact(p%progress_interval), &
         progress_interval_allowed); return
     end if
-    if (verify(trim(p%case_name), 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.-+') /= 0) then
-      call refuse(error, file, 'output', 'case_name', quoted(p%case_name), &
-        case_name_allowed); return
+    if (len_trim(p%case_name) > 0) then
+      if (len(case_name_problem(trim(p%case_name))) > 0) then
+        call refuse(error, file, 'output', 'case_name', quoted(p%case_name), &
+          case_name_allowed()); return
+      end if
     end if
   end subroutine check_output
+
+  !> The allowed case names, in the words of the refusals and of the scene reference.
+  pure function case_name_allowed() result(text)
+    character(len=:), allocatable :: text
+    text = 'letters, digits and _ . - + only, starting with a letter, a digit or _, at most '// &
+      to_str(case_name_max_len)//' characters'
+  end function case_name_allowed
+
+  !> What is wrong with the case name `name` by the rule above, '' when nothing.
+  pure function case_name_problem(name) result(problem)
+    character(len=*), intent(in) :: name
+    character(len=:), allocatable :: problem
+    integer :: k
+    problem = ''
+    if (len(name) == 0) then
+      problem = 'an empty name'
+    else if (len(name) > case_name_max_len) then
+      problem = 'longer than '//to_str(case_name_max_len)//' characters'
+    else if (verify(name(1:1), case_name_first) /= 0) then
+      problem = 'it starts with '''//name(1:1)//''''
+    else
+      k = verify(name, case_name_characters)
+      if (k > 0) problem = 'the character '''//name(k:k)//''' at position '//to_str(k)
+    end if
+  end function case_name_problem
 
 end module kf_scene_output

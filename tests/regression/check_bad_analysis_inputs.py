@@ -83,6 +83,12 @@ def damaged_chunk(f):
                      fletcher32=True)
 
 
+def lzf_positions(f):
+    del f["frames/positions"]
+    f.create_dataset("frames/positions", data=POS, maxshape=(None, 59, 3), chunks=(2, 59, 3),
+                     compression="lzf")
+
+
 def huge_declared(f):
     """frames/positions declared (10^8, 59, 3) with 4 frames written: a small file."""
     del f["frames/positions"]
@@ -143,6 +149,13 @@ CORPUS = [
     ("huge_declared.h5", lambda: case("huge_declared.h5", extra=huge_declared),
      "declares shape (100000000, 59, 3)", "declares shape (100000000, 59, 3)"),
     ("fifo.h5", lambda: os.mkfifo(path("fifo.h5")), "is a FIFO (named pipe)", "is a FIFO (named pipe)"),
+    # issue 37: a filter this HDF5 library lacks, and a file another process holds open for
+    # writing, were called "truncated or damaged"
+    ("missing_filter.h5", None, "it needs the HDF5 filter 'lzf' (id 32008), which this HDF5 library does not have",
+     "it needs the HDF5 filter 'lzf' (id 32008), which this HDF5 library does not have"),
+    ("being_written.h5", lambda: case("being_written.h5"),
+     "it is open in another process, which holds its HDF5 file lock",
+     "it is open for writing in another process, which holds its HDF5 file lock"),
     ("comments_only.xyz", lambda: text("comments_only.xyz", ["# nothing\n", "\n"]), "contains no points",
      "no coordinates"),
     ("one_bead.xyz", lambda: text("one_bead.xyz", ["1 2 3\n"]), "the chain has 1 bead(s), at least 2",
@@ -161,6 +174,14 @@ def make_special():
     with open(path("damaged_chunk.h5"), "r+b") as fh:
         fh.seek(info.byte_offset + 100)
         fh.write(b"\x7f" * 8)
+    # LZF (id 32000) turned into id 32008 (bitshuffle), which neither h5py nor the library has
+    case("missing_filter.h5", extra=lzf_positions)
+    with open(path("missing_filter.h5"), "r+b") as fh:
+        data = bytearray(fh.read())
+        k = data.find(b"lzf\0")
+        assert data[k - 8:k - 6] == b"\x00\x7d", data[k - 12:k + 4]
+        fh.seek(k - 8)
+        fh.write(b"\x08\x7d")
 
 
 def digest(p):
@@ -174,6 +195,11 @@ make_special()
 for name, make, _, _ in CORPUS:
     if make:
         make()
+# another process holds being_written.h5 open for writing (HDF5's exclusive lock) meanwhile
+holder = subprocess.Popen([python, "-c", "import h5py, sys; f = h5py.File(sys.argv[1], 'r+'); "
+                           "print('open', flush=True); sys.stdin.read()", path("being_written.h5")],
+                          stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env)
+assert holder.stdout.readline().strip() == "open"
 
 checked = 0
 for name, _, frag_analyze, frag_kf in CORPUS:
@@ -197,6 +223,8 @@ for name, _, frag_analyze, frag_kf in CORPUS:
         assert "Traceback" not in r.stderr and "Backtrace" not in r.stderr, (tool, name, r.stderr)
         assert digest(p) == before, (tool, name, "the input was changed")
         checked += 1
+holder.stdin.close()
+holder.wait(timeout=60)
 print("%d bad analysis inputs, each refused by both tools (%d runs): one error line naming "
       "the file and the problem, non-zero exit status, the input untouched" % (len(CORPUS), checked))
 

@@ -94,6 +94,8 @@ for name, text, fragments, needs in CASES:
 # The bad-scene corpus: one scene per rule of the reader and the validation, each with the exact
 # message that must follow "knotflow: error: <file>: " (run in a scratch directory: the default
 # output directory ./results must not appear).
+#: The case-name rule in the words of the refusal (kf_scene_output: case_name_allowed).
+CASE_NAME_ALLOWED = ("letters, digits and _ . - + only, starting with a letter, a digit or _, at most 100 characters")
 CORPUS = [
     ('unknown_group',
      "&chains shape = 'trefoil' /",
@@ -214,7 +216,27 @@ CORPUS = [
      '&output: progress_interval = -1.0 is not allowed (a number >= 0 (seconds; 0 = every frame))'),
     ('case_name_slash',
      "&output case_name = 'a/b' /",
-     "&output: case_name = 'a/b' is not allowed (letters, digits and _ . - + only)"),
+     "&output: case_name = 'a/b' is not allowed (%s)" % CASE_NAME_ALLOWED),
+    # names that are paths or hidden files (issue 37: '.hidden' was accepted and then left out
+    # by knotflow-report, '..' wrote '...h5'), option-like names, and names too long for the
+    # files named after them (a 240-character name passed --dry-run, computed the case and
+    # failed writing the summary)
+    ('case_name_hidden',
+     "&output case_name = '.hidden' /",
+     "&output: case_name = '.hidden' is not allowed (%s)" % CASE_NAME_ALLOWED),
+    ('case_name_dotdot',
+     "&output case_name = '..' /",
+     "&output: case_name = '..' is not allowed (%s)" % CASE_NAME_ALLOWED),
+    ('case_name_option',
+     "&output case_name = '-rf' /",
+     "&output: case_name = '-rf' is not allowed (%s)" % CASE_NAME_ALLOWED),
+    ('case_name_240',
+     "&output case_name = '%s' /" % ("n" * 240),
+     "&output: case_name = '%s' is not allowed (%s)" % ("n" * 240, CASE_NAME_ALLOWED)),
+    ('case_name_sweep_too_long',
+     "&output case_name = '%s' /\n&sweep bending_a = 1.0 /" % ("n" * 95),
+     "&output: case_name = '%s_A1.00' is not allowed (%s) [in &sweep case %s_A1.00]"
+     % ("n" * 95, CASE_NAME_ALLOWED, "n" * 95)),
     ('group_twice',
      "&chain shape = 'trefoil' / &chain orientation = 'b' /",
      'group &chain appears twice'),
@@ -260,11 +282,13 @@ for name, text, message in CORPUS:
     path = os.path.join(corpus_dir, name + ".nml")
     with open(path, "w") as f:
         f.write(text + "\n")
-    r = subprocess.run([exe, path], capture_output=True, text=True, timeout=120,
-                       cwd=os.path.join(corpus_dir, "run"))
-    assert r.returncode == 2, (name, r.returncode, r.stdout, r.stderr)
-    assert r.stderr.strip() == "knotflow: error: " + path + ": " + message, (name, r.stderr, message)
-    assert os.listdir(os.path.join(corpus_dir, "run")) == [], (name, "wrote something")
+    # a dry run refuses what the run refuses
+    for extra in ([], ["--dry-run"]) if name.startswith("case_name") else ([],):
+        r = subprocess.run([exe, path] + extra, capture_output=True, text=True, timeout=120,
+                           cwd=os.path.join(corpus_dir, "run"))
+        assert r.returncode == 2, (name, extra, r.returncode, r.stdout, r.stderr)
+        assert r.stderr.strip() == "knotflow: error: " + path + ": " + message, (name, r.stderr, message)
+        assert os.listdir(os.path.join(corpus_dir, "run")) == [], (name, "wrote something")
     ran += 1
 
 # Not a scene at all: a directory, a binary file, an empty file (the output directory would be

@@ -12,6 +12,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from .atomic import save_figure, write_text  # noqa: E402
+
 BEGIN = "<!-- accuracy:begin -->"
 END = "<!-- accuracy:end -->"
 REUSE_BEGIN = "<!-- reuse:begin -->"
@@ -138,7 +140,7 @@ def plot_errors(models: list[dict], path: str) -> None:
     ax.set_ylabel("RMS relative velocity error")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, ncol=2, loc="best")
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
 
 
@@ -161,7 +163,7 @@ def plot_tolerance(tol: list[dict], path: str) -> None:
     for a in (a1, a2):
         a.grid(True, which="both", alpha=0.3)
         a.legend(fontsize=8)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
 
 
@@ -182,7 +184,7 @@ def plot_scaling(scaling: list[dict], fits: list[dict], path: str) -> None:
     ax.set_ylabel("time per evaluation [s]")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
 
 
@@ -305,8 +307,7 @@ def update_readme(path: str, block: str) -> None:
     with open(path) as f:
         text = f.read()
     text = replace_block(text, block, BEGIN, END, path)
-    with open(path, "w") as f:
-        f.write(text)
+    write_text(path, text)
 
 
 def read_keys(path: str) -> dict:
@@ -506,7 +507,7 @@ def plot_stiffness(tables: dict, boundary: float, path: str) -> None:
         ax.set_ylim(0, 1.3*boundary)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7, loc="lower right")
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
 
 
@@ -665,8 +666,7 @@ def write_block(markdown: str, section: str, begin: str, end: str) -> None:
     if begin not in text:
         text = text.rstrip("\n") + "\n\n%s\n%s\n" % (begin, end)
     text = replace_block(text, section, begin, end, markdown)
-    with open(markdown, "w") as f:
-        f.write(text)
+    write_text(markdown, text)
 
 
 def update_reuse(markdown: str, directory: str) -> str:
@@ -709,8 +709,7 @@ def build_report(directory: str, markdown: str, figdir: str, readme: str | None 
         i, j = old.find(begin), old.find(end)
         if 0 <= i < j:   # these sections have their own commands: keep them
             text = text.rstrip("\n") + "\n\n" + old[i:j + len(end)] + "\n"
-    with open(markdown, "w") as f:
-        f.write(text)
+    write_text(markdown, text)
     if readme and summary:
         meta = _meta(directory)
         block = ("Measured by `bash scripts/accuracy.sh`%s (load average %s; details and "

@@ -44,7 +44,10 @@ import re
 
 import numpy as np
 
+from .atomic import write_bytes
+from .atomic import write_text as _write_text
 from .io import RUN_FIELDS, open_case, read_case, read_runs, write_xyz
+from .names import check_case_name
 
 LEDGER_VERSION = 1
 FRAME_COLUMNS = ("t", "kf", "rg", "a", "b", "c", "theta", "phi", "close_pairs", "mode",
@@ -139,9 +142,7 @@ def _write_positions(ledger: str, sweep: str, case: str, times, frames) -> None:
             with open(path, "rb") as fh:
                 if fh.read() == data:
                     continue
-        with open(path + ".tmp", "wb") as fh:
-            fh.write(data)
-        os.replace(path + ".tmp", path)
+        write_bytes(path, data)
     for path in _chunk_files(ledger, sweep, case):
         if path not in wanted:
             os.remove(path)
@@ -180,13 +181,6 @@ def frame_rows(case, offset: float) -> np.ndarray:
     return np.column_stack(cols)
 
 
-def _write_text(path: str, text: str) -> None:
-    """Write whole or not at all (temporary file renamed)."""
-    with open(path + ".tmp", "w", encoding="utf-8") as fh:
-        fh.write(text)
-    os.replace(path + ".tmp", path)
-
-
 def _rows_text(rows: np.ndarray) -> str:
     lines = [",".join(FRAME_COLUMNS)]
     for r in rows:
@@ -208,9 +202,11 @@ def digest(path: str, ledger: str, sweep: str, closures: int, positions_every: f
     as the segment's file) to the ledger and return the case's entry.
 
     Refused (ValueError, nothing written): k_f not from `closures` closures per frame, a file
-    that would leave a gap or rewrite an earlier segment than the newest, another scene."""
+    that would leave a gap or rewrite an earlier segment than the newest, another scene, a
+    case name that is not a case name by the scene's rule (knotflow_tools.names): the ledger's
+    file names are derived from it, so it must not be a path."""
     case = read_case(path)
-    name, offset = split_name(case.name)
+    name, offset = split_name(check_case_name(case.name, f"{path}: attribute case_name"))
     entry = load(ledger, sweep, name)
     if case.knots is None:
         raise ValueError(f"{path}: no /analysis/knots (run knotflow-analyze first)")
@@ -339,6 +335,7 @@ def plan(scenes_dir: str, results: str, ledger: str, sweep: str) -> list:
     out: list[tuple[str, str, str | None]] = []
     for name in names:
         scene = os.path.join(scenes_dir, name + ".nml")
+        check_case_name(name, scene)
         entry = load(ledger, sweep, name)
         if entry is None:
             out.append((name, "run", scene))
@@ -366,7 +363,8 @@ def plan(scenes_dir: str, results: str, ledger: str, sweep: str) -> list:
 
 
 def _continuation_path(results: str, sweep: str, segment: dict) -> str:
-    return os.path.join(results, sweep, "continued", segment["case_name"] + ".nml")
+    name = check_case_name(segment["case_name"], f"ledger of {sweep}: segment {segment.get('file')}")
+    return os.path.join(results, sweep, "continued", name + ".nml")
 
 
 def _started(path: str) -> str:

@@ -5,6 +5,8 @@
 
 from __future__ import annotations
 
+import errno
+import fcntl
 import os
 import re
 import stat
@@ -13,6 +15,7 @@ from dataclasses import dataclass, field
 import h5py
 import numpy as np
 
+from .atomic import write_text
 from .knots import KNOT_TYPES
 
 OBSERVABLES = ("rg", "a", "b", "c", "theta", "phi", "close_pairs")
@@ -171,6 +174,11 @@ def _read(path, ds):
     try:
         return ds[()]
     except OSError as exc:
+        missing = _missing_filters(ds)
+        if missing:
+            raise ValueError(f"{path}: {ds.name}: cannot read: it needs the HDF5 filter "
+                             f"{', '.join(missing)}, which this HDF5 library does not have (the "
+                             "file is not damaged; read it where that filter is installed)") from exc
         raise ValueError(f"{path}: {ds.name}: cannot read (damaged data: checksum mismatch or "
                          f"I/O error: {exc})") from exc
 
@@ -288,6 +296,11 @@ def open_case(path):
             why = "no such file"
         elif os.path.isdir(path):
             why = "it is a directory"
+        elif not os.access(path, os.R_OK):
+            why = f"not readable: {os.strerror(errno.EACCES)}"
+        elif _locked_by_writer(path):
+            why = ("it is open for writing in another process, which holds its HDF5 file lock "
+                   "(a knotflow run still writing it, or a viewer): wait for it or close it there")
         elif os.path.getsize(path) == 0:
             why = "an empty file, not HDF5"
         else:
@@ -297,6 +310,35 @@ def open_case(path):
                    else "not an HDF5 file")
         detail = " ".join(str(exc).split())
         raise ValueError(f"{path}: cannot open as a case file ({why}: {detail})") from None
+
+
+def _locked_by_writer(path) -> bool:
+    """Does another process hold an exclusive lock on ``path`` (HDF5 takes one for a file it
+    opens for writing)? A shared lock that cannot be had says so."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    except OSError:
+        return False
+    finally:
+        os.close(fd)
+    return False
+
+
+def _missing_filters(ds) -> list:
+    """The filters of a dataset's pipeline this HDF5 library does not have, as 'name (id)'."""
+    plist = ds.id.get_create_plist()
+    missing = []
+    for k in range(plist.get_nfilters()):
+        fid, _, _, name = plist.get_filter(k)
+        if not h5py.h5z.filter_avail(fid):
+            missing.append(f"'{name.decode(errors='replace')}' (id {fid})")
+    return missing
 
 
 def _frame_dataset(path, fr, name, ndim):
@@ -366,41 +408,57 @@ def read_case(path) -> Case:
         elif totals:
             case.diagnostic_totals, case.diagnostic_totals_source = totals, "attributes"
         case.runs = read_runs(path, f)
-        an = f.get("analysis")
-        if an is not None:
-            if "knots" in an:
-                g = an["knots"]
-                case.knots = {
-                    "frame_index": np.asarray(g["frame_index"][()], dtype=np.int64),
-                    "time": np.asarray(g["time"][()], dtype=float),
-                    "kf": np.asarray(g["kf"][()], dtype=float),
-                    "spectrum": np.asarray(g["spectrum"][()], dtype=float)
-                    if "spectrum" in g else None,
-                    "types": _attr(g["spectrum"].attrs["types"])
-                    if "spectrum" in g and "types" in g["spectrum"].attrs else list(KNOT_TYPES),
-                    "dominant": _strings(g["dominant"]) if "dominant" in g else None,
-                    "attrs": {k: _attr(v) for k, v in g.attrs.items()},
-                }
-            if "events" in an:
-                g = an["events"]
-                case.events = {
-                    "kind": _strings(g["kind"]) if "kind" in g else [],
-                    "time": np.asarray(g["time"][()], dtype=float) if "time" in g else None,
-                    "frame_index": np.asarray(g["frame_index"][()], dtype=np.int64)
-                    if "frame_index" in g else None,
-                    "attrs": {k: _attr(v) for k, v in g.attrs.items()},
-                }
-            if "knot_matrix" in an:
-                for name, ds in an["knot_matrix"].items():
-                    if name.startswith("frame_"):
-                        case.knot_matrices[int(name[6:])] = np.asarray(ds[()], dtype=float)
-            if "shape" in an and "mode" in an["shape"]:
-                case.modes = np.asarray(an["shape"]["mode"][()], dtype=np.int32)
-                for holder in (an["shape"]["mode"], an["shape"]):
-                    if "case_mode" in holder.attrs:
-                        case.case_mode = int(_attr(holder.attrs["case_mode"]))
-                        break
+        if "analysis" in f:
+            try:
+                _read_analysis(f["analysis"], case)
+            except (OSError, KeyError, RuntimeError) as exc:
+                # a damaged /analysis is never taken for a missing one
+                raise ValueError(f"{path}: /analysis cannot be read ({exc}): it is damaged, e.g. by "
+                                 "a knotflow-analyze run of an older version killed while it wrote "
+                                 f"it; run knotflow-analyze --force {path}") from exc
     return case
+
+
+def _read_analysis(an, case: Case) -> None:
+    """/analysis of a case file into ``case``; every group listed is read (h5py's ``in`` takes a
+    group it cannot read for an absent one, so every member and the members of its groups are
+    opened first: a damaged one raises here)."""
+    members = [an[name] for name in list(an.keys())]
+    for member in members:
+        if isinstance(member, h5py.Group):
+            [member[sub] for sub in list(member.keys())]   # noqa: B018 (opened to check)
+    if "knots" in an:
+        g = an["knots"]
+        case.knots = {
+            "frame_index": np.asarray(g["frame_index"][()], dtype=np.int64),
+            "time": np.asarray(g["time"][()], dtype=float),
+            "kf": np.asarray(g["kf"][()], dtype=float),
+            "spectrum": np.asarray(g["spectrum"][()], dtype=float)
+            if "spectrum" in g else None,
+            "types": _attr(g["spectrum"].attrs["types"])
+            if "spectrum" in g and "types" in g["spectrum"].attrs else list(KNOT_TYPES),
+            "dominant": _strings(g["dominant"]) if "dominant" in g else None,
+            "attrs": {k: _attr(v) for k, v in g.attrs.items()},
+        }
+    if "events" in an:
+        g = an["events"]
+        case.events = {
+            "kind": _strings(g["kind"]) if "kind" in g else [],
+            "time": np.asarray(g["time"][()], dtype=float) if "time" in g else None,
+            "frame_index": np.asarray(g["frame_index"][()], dtype=np.int64)
+            if "frame_index" in g else None,
+            "attrs": {k: _attr(v) for k, v in g.attrs.items()},
+        }
+    if "knot_matrix" in an:
+        for name, ds in an["knot_matrix"].items():
+            if name.startswith("frame_"):
+                case.knot_matrices[int(name[6:])] = np.asarray(ds[()], dtype=float)
+    if "shape" in an and "mode" in an["shape"]:
+        case.modes = np.asarray(an["shape"]["mode"][()], dtype=np.int32)
+        for holder in (an["shape"]["mode"], an["shape"]):
+            if "case_mode" in holder.attrs:
+                case.case_mode = int(_attr(holder.attrs["case_mode"]))
+                break
 
 
 def read_frame(path, frame: int = -1) -> np.ndarray:
@@ -454,10 +512,7 @@ def read_xyz(path) -> np.ndarray:
 
 
 def write_xyz(path, r, comment: str | None = None) -> None:
-    """Write points (n, 3) as a text coordinate file."""
-    with open(path, "w", encoding="utf-8") as fh:
-        if comment:
-            for line in comment.splitlines():
-                fh.write(f"# {line}\n")
-        for p in np.asarray(r, dtype=float):
-            fh.write(f"{p[0]:.17g} {p[1]:.17g} {p[2]:.17g}\n")
+    """Write points (n, 3) as a text coordinate file (whole or not at all: knotflow_tools.atomic)."""
+    lines = [f"# {line}\n" for line in (comment or "").splitlines()]
+    lines += [f"{p[0]:.17g} {p[1]:.17g} {p[2]:.17g}\n" for p in np.asarray(r, dtype=float)]
+    write_text(path, "".join(lines))

@@ -12,8 +12,10 @@ time.  MP4 (H.264, yuv420p) is written with ffmpeg when it is on PATH; otherwise
 
 from __future__ import annotations
 
+import errno
 import os
 import shutil
+import subprocess
 import sys
 import time as _time
 
@@ -24,6 +26,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from .analysis import observables_of  # noqa: E402
+from .atomic import WriteError, replacing  # noqa: E402
 from .io import Case  # noqa: E402
 
 COL_FIRST = "tab:blue"      #: first half of the chain
@@ -259,15 +262,39 @@ def render_movie(case: Case, out, frames=None, kf=None, fps: int = 10, width: in
     bar = Progress(len(frames), os.path.basename(out), stream) if progress else None
     try:
         os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
-        with writer.saving(mf.fig, out, dpi=mf.dpi):
-            for k, fi in enumerate(frames):
-                mf.draw(fi)
-                writer.grab_frame()
-                if bar:
-                    bar.update(k + 1)
+        # written to a temporary file renamed when complete (knotflow_tools.atomic): a movie
+        # that cannot be written (full disk) leaves the old one, or none, and names the reason
+        with replacing(out) as tmp:
+            try:
+                with writer.saving(mf.fig, tmp, dpi=mf.dpi):
+                    for k, fi in enumerate(frames):
+                        mf.draw(fi)
+                        writer.grab_frame()
+                        if bar:
+                            bar.update(k + 1)
+            except subprocess.CalledProcessError as exc:
+                raise WriteError(out, _encoder_reason(exc)) from exc
     finally:
         mf.close()
     return out
+
+
+#: The operating system's reasons a write fails, as ffmpeg prints them (strerror).
+_WRITE_REASONS = tuple(os.strerror(e) for e in (errno.ENOSPC, errno.EFBIG, errno.EDQUOT, errno.EIO,
+                                                errno.EACCES, errno.EROFS))
+
+
+def _encoder_reason(exc: subprocess.CalledProcessError) -> str:
+    """Why the encoder failed: the operating system's reason when ffmpeg names one (e.g. 'No
+    space left on device'), else ffmpeg's last line on stderr, with its exit status."""
+    err = exc.stderr or b""
+    text = err.decode(errors="replace") if isinstance(err, bytes) else str(err)
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    named = [r for line in lines for r in _WRITE_REASONS if r in line]
+    if named:
+        return f"{named[-1]} (ffmpeg, exit status {exc.returncode})"
+    return (f"{lines[-1]} (ffmpeg, exit status {exc.returncode})" if lines
+            else f"ffmpeg exited with status {exc.returncode}")
 
 
 def case_kf(case: Case, closures: int = 0, frames=None, seed: int = 1):

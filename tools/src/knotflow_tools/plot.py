@@ -13,6 +13,7 @@ import numpy as np  # noqa: E402
 from matplotlib.cm import ScalarMappable  # noqa: E402
 
 from .analysis import CaseAnalysis  # noqa: E402
+from .atomic import save_figure  # noqa: E402
 from .io import Case  # noqa: E402
 from .rheology import running_mean  # noqa: E402
 
@@ -56,7 +57,7 @@ def plot_kf(case: Case, ana: CaseAnalysis, path) -> str:
     ax.set_title(f"{_title(case)}   ({ana.kf_source} k_f, {nev} event{'s' if nev != 1 else ''})",
                  pad=14, fontsize=10)
     ax.legend(loc="lower left", fontsize=8)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
     return str(path)
 
@@ -89,7 +90,7 @@ def plot_shape(case: Case, ana: CaseAnalysis, path) -> str:
             ax.axvline(ev.time, color="0.6", ls=":", lw=1)
     axes[0].set_title(f"{_title(case)}   case mode: {mode_name(ana.case_mode)}",
                       fontsize=10)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
     return str(path)
 
@@ -133,7 +134,7 @@ def plot_rheology(case: Case, ana: CaseAnalysis, path) -> str:
     ax.set_xlabel("$k_f$")
     ax.set_ylabel("viscosity")
     axes[0].set_title(f"{_title(case)}   intrinsic viscosity form (5/2: free beads)", fontsize=10)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
     return str(path)
 
@@ -171,7 +172,7 @@ def plot_knot_matrix(mat: np.ndarray, path, title: str = "") -> str:
     ax.set_ylabel("start bead i")
     ax.set_title(title + "\n(pale blue: not computed)", fontsize=9)
     fig.colorbar(im, ax=ax, label="$k_f$ of subchain i..j")
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
     return str(path)
 
@@ -194,7 +195,7 @@ def plot_shape_map(series: list, path, title: str = "") -> str:
     ax.set_ylabel("a / b")
     ax.set_title(title, fontsize=9)
     fig.legend(loc="outside lower center", ncols=2, fontsize=7, markerscale=3)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
     return str(path)
 
@@ -233,7 +234,7 @@ def plot_snapshots(case: Case, path, frames=None) -> str:
         _draw_chain(ax, case.positions[fi])
         ax.set_title(f"frame {fi}, t = {case.time[fi]:.4g}", fontsize=9)
     fig.suptitle(_title(case), fontsize=10)
-    fig.savefig(path, dpi=100)
+    save_figure(fig, path, dpi=100)
     plt.close(fig)
     return str(path)
 

@@ -3,6 +3,7 @@ cases with a stresslet, figures (md + html)."""
 
 from __future__ import annotations
 
+import contextlib
 import glob
 import html
 import json
@@ -10,17 +11,21 @@ import os
 import sys
 
 from .analysis import analyze_case
+from .atomic import write_text
 from .io import read_case
+from .names import check_case_name
 from .plot import mode_name, plot_case
 from .rheology import rheology_summary
 from .xdmf import write_xdmf, xdmf_path
 
 
 def find_case_files(sweep_dir) -> list:
-    """Case files (*.h5) in the sweep directory and its immediate subdirectories."""
-    files = glob.glob(os.path.join(sweep_dir, "*.h5")) + glob.glob(
-        os.path.join(sweep_dir, "*", "*.h5"))
-    return sorted(f for f in files if os.sep + "report" + os.sep not in f)
+    """Case files (*.h5) in the sweep directory and its immediate subdirectories, hidden ones
+    ('.name.h5') included: none is left out in silence (a hidden case name is then refused)."""
+    files = []
+    for pattern in ("*.h5", ".*.h5", os.path.join("*", "*.h5"), os.path.join("*", ".*.h5")):
+        files += glob.glob(os.path.join(glob.escape(str(sweep_dir)), pattern))
+    return sorted(set(f for f in files if os.sep + "report" + os.sep not in f))
 
 
 def _read_summary(sweep_dir):
@@ -49,11 +54,26 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
     beside each case file and (``viewer``) an interactive 3-D viewer per case in the HTML."""
     outdir = os.path.join(sweep_dir, "report")
     figdir = os.path.join(outdir, "figures")
+    made = [d for d in (outdir, figdir) if not os.path.isdir(d)]
     os.makedirs(figdir, exist_ok=True)
+    try:
+        return _build_report(sweep_dir, outdir, figdir, closures, stride, seed, movie,
+                             movie_max_frames, viewer)
+    except BaseException:
+        # a report that could not be written (a full disk) leaves no empty directory behind
+        for d in reversed(made):
+            with contextlib.suppress(OSError):
+                os.rmdir(d)
+        raise
+
+
+def _build_report(sweep_dir, outdir, figdir, closures, stride, seed, movie, movie_max_frames,
+                  viewer) -> dict:
     rows = []
     for path in find_case_files(sweep_dir):
         try:
             case = read_case(path)
+            check_case_name(case.name, f"{path}: attribute case_name")
         except (OSError, KeyError, ValueError, TypeError, RuntimeError, MemoryError) as exc:
             # whatever a bad file holds, the good cases are reported and the bad one listed
             rows.append({"file": os.path.basename(path), "name": os.path.basename(path),
@@ -98,10 +118,8 @@ def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
         })
     summary_name, summary = _read_summary(sweep_dir)
     md = _markdown(sweep_dir, rows, summary_name, summary)
-    with open(os.path.join(outdir, "report.md"), "w", encoding="utf-8") as fh:
-        fh.write(md)
-    with open(os.path.join(outdir, "report.html"), "w", encoding="utf-8") as fh:
-        fh.write(_html(sweep_dir, rows, summary_name, summary))
+    write_text(os.path.join(outdir, "report.md"), md)
+    write_text(os.path.join(outdir, "report.html"), _html(sweep_dir, rows, summary_name, summary))
     return {"rows": rows, "md": os.path.join(outdir, "report.md"),
             "html": os.path.join(outdir, "report.html")}
 

@@ -9,6 +9,8 @@ from typing import Any
 
 import numpy as np
 
+from .atomic import save_figure, write_text
+
 SERIES = ("viscosity", "psi1", "psi2")
 
 
@@ -296,7 +298,7 @@ def plot_against_kf(rows, path, series=("viscosity", "psi1")):
         ax.set_ylim(lo - 0.1 * (hi - lo), hi + 0.1 * (hi - lo))
         ax.set_xlabel("$k_f$")
         ax.set_ylabel(LABELS[s])
-    fig.savefig(path, dpi=80)
+    save_figure(fig, path, dpi=80)
     plt.close(fig)
     return path
 
@@ -316,7 +318,7 @@ def plot_series(rows, path, name="viscosity"):
     ax.set_xlabel(r"time $\dot\gamma t$ (linear below 10, logarithmic above)")
     ax.set_ylabel(LABELS[name])
     ax.set_title(f"{LABELS[name]} of every case; red: knotted frames", fontsize=9)
-    fig.savefig(path, dpi=80)
+    save_figure(fig, path, dpi=80)
     plt.close(fig)
     return path
 
@@ -343,7 +345,7 @@ def plot_against_mode(cases, path, series=("viscosity", "psi1"), t_from=0.0):
         ax.set_xticks(range(1, len(labels) + 1), labels, fontsize=7)
         ax.set_ylabel(LABELS[s])
         ax.set_xlabel("case and shape mode (– : neither)")
-    fig.savefig(path, dpi=80)
+    save_figure(fig, path, dpi=80)
     plt.close(fig)
     return path
 
@@ -407,10 +409,8 @@ def write_rheology(knot_dirs, mode_dirs, out, t_from=0.0, threshold=KNOT_THRESHO
                                     t_from=t_from)
         md += [f"![{title}]({os.path.basename(fig)})", ""]
         result[by] = _jsonable(rows, summary)
-    with open(os.path.join(out, "rheology.md"), "w", encoding="utf-8") as fh:
-        fh.write("\n".join(md) + "\n")
-    with open(os.path.join(out, "rheology.json"), "w", encoding="utf-8") as fh:
-        json.dump(result, fh, indent=1, default=float)
+    write_text(os.path.join(out, "rheology.md"), "\n".join(md) + "\n")
+    write_text(os.path.join(out, "rheology.json"), json.dumps(result, indent=1, default=float))
     return result
 
 

@@ -19,6 +19,7 @@ import h5py
 import numpy as np
 
 from . import io
+from .atomic import write_text
 
 COLUMNS = (
     ("case", "case"),
@@ -155,5 +156,4 @@ def write_summary(path, title, table) -> None:
     note = ("Values marked f are sampled at frames (the file has no run diagnostics); "
             "durations in time units 1/shear rate; strain |l - l0|/l0; overlapping pairs: "
             "any i < j closer than d = 1; min distance over |i - j| > 1.\n")
-    with open(path, "w") as f:
-        f.write("# %s\n\n%s\n%s" % (title, table, note))
+    write_text(path, "# %s\n\n%s\n%s" % (title, table, note))

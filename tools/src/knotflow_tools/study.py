@@ -56,6 +56,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from . import study_statistics  # noqa: E402
+from .atomic import save_figure, write_text  # noqa: E402
 from .campaign import find_ledger_cases, load_case  # noqa: E402
 from .io import write_xyz  # noqa: E402
 from .plot import _draw_chain  # noqa: E402
@@ -142,7 +143,7 @@ def plot_trefoil_grid(rows, path):
     fig.suptitle("Open trefoils, N = 99: k_f(t) (dashed: red unknot, green knot events; "
                  "red title: differs from the study; a case not finished shows its status and "
                  "the time reached)", fontsize=9)
-    fig.savefig(path, dpi=100)
+    save_figure(fig, path, dpi=100)
     plt.close(fig)
     return path
 
@@ -160,7 +161,7 @@ def plot_candycane_shapes(rows, path):
     axes[0].legend(fontsize=8, ncol=len(rows))
     axes[-1].set_xlabel(r"time $\dot\gamma t$")
     fig.suptitle("Candy-cane, N = 152: shape (as Fig. 2b of the study)", fontsize=10)
-    fig.savefig(path, dpi=100)
+    save_figure(fig, path, dpi=100)
     plt.close(fig)
     return path
 
@@ -178,7 +179,7 @@ def plot_candycane_kf(rows, path):
     fig, ax = plt.subplots(figsize=(9, 3), constrained_layout=True)
     _draw_kf(ax, [(f"A = {r['A']:g}", r["_ana"].time, r["_ana"].kf) for r in rows], 8)
     ax.set_xlabel(r"time $\dot\gamma t$")
-    fig.savefig(path, dpi=100)
+    save_figure(fig, path, dpi=100)
     plt.close(fig)
     return path
 
@@ -211,7 +212,7 @@ def plot_ensemble_kf(rows, ensemble, path):
         _draw_kf(ax, series, 7)
         ax.set_title(f"Candy-cane A = {a:g}: the random rotations", fontsize=9)
     axes[-1, 0].set_xlabel(r"time $\dot\gamma t$")
-    fig.savefig(path, dpi=100)
+    save_figure(fig, path, dpi=100)
     plt.close(fig)
     return path
 
@@ -225,7 +226,7 @@ def plot_candycane_snapshots(rows, path, times=(0, 250, 500, 1000, 2000)):
             ax = fig.add_subplot(len(rows), len(times), i * len(times) + j + 1, projection="3d")
             _draw_chain(ax, case.positions[k])
             ax.set_title(f"A = {r['A']:g}, t = {case.time[k]:g}", fontsize=9)
-    fig.savefig(path, dpi=90)
+    save_figure(fig, path, dpi=90)
     plt.close(fig)
     return path
 
@@ -254,7 +255,7 @@ def plot_matrices(rows, path, per_case=3):
         ax.set_xlabel("i", fontsize=8)
         ax.set_ylabel("j", fontsize=8)
     fig.colorbar(im, ax=axes, shrink=0.6, label="K(i, j)")
-    fig.savefig(path, dpi=100)
+    save_figure(fig, path, dpi=100)
     plt.close(fig)
     return path
 
@@ -444,11 +445,11 @@ def ensemble_tables(rows):
 
 def write_trefoil_csv(rows, path):
     """trefoil_kf.csv: case, t, k_f (one line per case and frame with k_f)."""
-    with open(path, "w", encoding="utf-8") as fh:
-        fh.write("case,t,k_f\n")
-        for r in rows:
-            for t, k in zip(r["time"], r["kf"]):
-                fh.write(f"{r['case']},{t:.6g},{k:.4g}\n")
+    lines = ["case,t,k_f\n"]
+    for r in rows:
+        for t, k in zip(r["time"], r["kf"]):
+            lines.append(f"{r['case']},{t:.6g},{k:.4g}\n")
+    write_text(path, "".join(lines))
     return path
 
 
@@ -458,16 +459,16 @@ CANDYCANE_CSV = ("rg", "a", "b", "c", "theta", "phi", "close_pairs")
 def write_candycane_csv(rows, path):
     """candycane_shape.csv: case, t, R_g, a, b, c, theta, phi, close_pairs, k_f (one line per
     case and frame; k_f empty on a frame without it)."""
-    with open(path, "w", encoding="utf-8") as fh:
-        fh.write("case,t,R_g,a,b,c,theta,phi,close_pairs,k_f\n")
-        for r in rows:
-            case, ana = r["_case"], r["_ana"]
-            kf = dict(zip((int(k) for k in ana.frame_index), ana.kf))
-            o = ana.observables
-            for k, t in enumerate(case.time):
-                vals = ",".join(f"{float(o[name][k]):.6g}" for name in CANDYCANE_CSV)
-                kk = f"{kf[k]:.4g}" if k in kf else ""
-                fh.write(f"{r['case']},{t:.6g},{vals},{kk}\n")
+    lines = ["case,t,R_g,a,b,c,theta,phi,close_pairs,k_f\n"]
+    for r in rows:
+        case, ana = r["_case"], r["_ana"]
+        kf = dict(zip((int(k) for k in ana.frame_index), ana.kf))
+        o = ana.observables
+        for k, t in enumerate(case.time):
+            vals = ",".join(f"{float(o[name][k]):.6g}" for name in CANDYCANE_CSV)
+            kk = f"{kf[k]:.4g}" if k in kf else ""
+            lines.append(f"{r['case']},{t:.6g},{vals},{kk}\n")
+    write_text(path, "".join(lines))
     return path
 
 
@@ -561,10 +562,8 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
         md += lines
     if comparison:
         result["comparison"] = comparison
-    with open(os.path.join(out, "results.md"), "w", encoding="utf-8") as fh:
-        fh.write("\n".join(md) + "\n")
-    with open(os.path.join(out, "results.json"), "w", encoding="utf-8") as fh:
-        json.dump(result, fh, indent=1)
+    write_text(os.path.join(out, "results.md"), "\n".join(md) + "\n")
+    write_text(os.path.join(out, "results.json"), json.dumps(result, indent=1))
     return result
 
 

@@ -16,6 +16,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from .analysis import analyze_case  # noqa: E402
+from .atomic import save_figure  # noqa: E402
 from .campaign import load_case  # noqa: E402
 from .knots import knot_core  # noqa: E402
 from .plot import _draw_chain  # noqa: E402
@@ -388,6 +389,6 @@ def plot_slipknots(rows, path, confirm_dir=None):
         _draw_chain(ax3, r["_case"].positions[m["frame"]], core=core)
         ax3.set_title("\n".join(lines), fontsize=8, color="k" if verdict == CONFIRMED
                       else "tab:red")
-    fig.savefig(path, dpi=100)
+    save_figure(fig, path, dpi=100)
     plt.close(fig)
     return path

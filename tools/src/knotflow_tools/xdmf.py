@@ -22,12 +22,14 @@ Per time step (``Time`` = ``/frames/time[k]``):
 
 from __future__ import annotations
 
+import io
 import os
 import xml.etree.ElementTree as ET
 
 import h5py
 import numpy as np
 
+from .atomic import write_bytes
 from .io import check_declared_size, check_regular_file, checkpoint_frames
 
 XDMF_SUFFIX = ".xdmf2"
@@ -193,13 +195,12 @@ def write_xdmf(case_path, out_path=None) -> str:
     path.  Re-run it after the case file gained frames or /analysis."""
     out_path = out_path or xdmf_path(case_path)
     tree = build_xdmf(case_path, out_path)
-    tmp = f"{out_path}.tmp{os.getpid()}"
-    with open(tmp, "wb") as fh:
-        fh.write(b'<?xml version="1.0" encoding="utf-8"?>\n')
-        fh.write(b'<!DOCTYPE Xdmf SYSTEM "Xdmf.dtd" []>\n')
-        tree.write(fh, encoding="utf-8", xml_declaration=False)
-        fh.write(b"\n")
-    os.replace(tmp, out_path)
+    buf = io.BytesIO()
+    buf.write(b'<?xml version="1.0" encoding="utf-8"?>\n')
+    buf.write(b'<!DOCTYPE Xdmf SYSTEM "Xdmf.dtd" []>\n')
+    tree.write(buf, encoding="utf-8", xml_declaration=False)
+    buf.write(b"\n")
+    write_bytes(out_path, buf.getvalue())
     return str(out_path)
 
 
