@@ -1,9 +1,18 @@
 !> How the hydrodynamics treats overlapping beads (&hydro overlap; docs/limitations.md).
 !>
-!> 'pair' is the BWE procedure as PHYSICS.md words it: an overlapping pair's lubrication
-!> correction (and its multipole pair blocks, docs/multipole.md) is evaluated at (1 + eps_lub)
-!> times its unit separation and everything else is left as it is (kf_lubrication and
-!> kf_multipole_system clamp each pair's distance). The pair's ambient velocity difference
+!> 'bwe' is the reference study's rule, as PHYSICS.md 3.3 words it: a pair with r <= 1 has its
+!> lubrication correction evaluated at (1 + eps_lub) r^, and everything else is left as it is -
+!> the many-body multipole friction and every other pair's correction at the real positions, the
+!> dynamics of the real positions. Its part lives in the model (kf_hydro_factory passes
+!> `literal_bwe` to the multipole model: kf_lubrication evaluates such a pair at 1 + eps_lub,
+!> kf_multipole_system clamps nothing); here it leaves the configuration alone, as 'pair' does.
+!> Where the many-body system is not positive definite at overlapping positions, the run stops
+!> with the Cholesky error (docs/stability.md "The literal BWE rule").
+!>
+!> 'pair' (the default; a variant of ours, not BWE): an overlapping pair's lubrication
+!> correction and also its multipole pair blocks (docs/multipole.md) are evaluated at
+!> (1 + eps_lub) times its unit separation, for every pair closer than 1 + eps_lub
+!> (kf_lubrication and kf_multipole_system clamp each pair's distance). The pair's ambient velocity difference
 !> G (r_j - r_i) is then that of the overlapping geometry while its hydrodynamic coupling to the
 !> strain is that of a pair at contact; the mismatch, about (1 + eps_lub - r) G r^, is not
 !> resisted, so in the compressional quadrant of the shear a pressed pair approaches at a rate
@@ -34,7 +43,7 @@ module kf_overlap_rule
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_pair_geometry, only: pair_geometry_t
-  use kf_scene_hydro, only: overlap_pair, overlap_separate, overlap_relax, overlap_names
+  use kf_scene_hydro, only: overlap_pair, overlap_separate, overlap_relax, overlap_bwe, overlap_names
   use kf_scene_check, only: name_list
   implicit none
   private
@@ -69,6 +78,10 @@ module kf_overlap_rule
   contains
     procedure :: hydro_configuration => pair_configuration
   end type overlap_pair_t
+
+  !> 'bwe': the hydrodynamics of the real positions as well (the model applies the rule).
+  type, extends(overlap_pair_t) :: overlap_bwe_t
+  end type overlap_bwe_t
 
   !> 'separate': the hydrodynamics of the nearest configuration with all pairs >= 1 + eps_lub.
   type, extends(overlap_rule_t) :: overlap_separate_t
@@ -106,6 +119,8 @@ contains
     select case (trim(name))
     case (overlap_pair)
       allocate (overlap_pair_t :: rule)
+    case (overlap_bwe)
+      allocate (overlap_bwe_t :: rule)
     case (overlap_separate, overlap_relax)
       if (.not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) then
         call fatal_error(error, 'overlap rule '//trim(name)//': eps_lub = '//to_str(eps_lub, '(es12.4)')// &

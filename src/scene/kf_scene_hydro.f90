@@ -20,10 +20,11 @@ module kf_scene_hydro
   character(len=*), parameter, public :: update_names(2) = [character(len=8) :: update_stage, update_adaptive]
 
   character(len=*), parameter, public :: overlap_pair = 'pair', overlap_separate = 'separate', &
-    overlap_relax = 'relax'
-  !> The valid values of &hydro overlap (multipole).
-  character(len=*), parameter, public :: overlap_names(3) = [character(len=8) :: overlap_pair, overlap_separate, &
-    overlap_relax]
+    overlap_relax = 'relax', overlap_bwe = 'bwe'
+  !> The valid values of &hydro overlap (multipole). 'bwe' is the reference study's rule as
+  !> PHYSICS.md 3.3 words it; the others are the project's variants (kf_overlap_rule).
+  character(len=*), parameter, public :: overlap_names(4) = [character(len=8) :: overlap_pair, overlap_separate, &
+    overlap_relax, overlap_bwe]
   !> The default of &hydro overlap_time (in units of 1/shear rate; kf_overlap_rule says why).
   real(wp), parameter :: overlap_time_default = 0.1_wp
 
@@ -46,8 +47,10 @@ module kf_scene_hydro
     real(wp) :: eps_lub = -1.0_wp
     !> multipole: adaptive (reuse, the default) | stage (exact every stage)
     character(len=name_len) :: update = update_adaptive
-    !> Overlap rule of the multipole model: pair (BWE per pair, the default), separate (the
-    !> configuration without overlaps) or relax (separate, and overlaps undone over overlap_time)
+    !> Overlap rule of the multipole model: pair (lubrication and multipole blocks of a pair
+    !> clamped at 1 + eps_lub, the default), separate (the configuration without overlaps), relax
+    !> (separate, and overlaps undone over overlap_time) or bwe (the study's rule: only the
+    !> lubrication correction of a pair with r <= 1, at 1 + eps_lub)
     character(len=name_len) :: overlap = overlap_pair
     !> relax: the time over which an overlap is undone
     real(wp) :: overlap_time = overlap_time_default
