@@ -93,7 +93,8 @@ module kf_hydro_multipole
     type(multipole_system_t), private :: sys
     type(lubrication_t) :: lub
     integer :: n_lub_pairs = 0           !< pairs corrected at the last prepare
-    integer :: n_overlaps = 0            !< overlapping pairs (r <= 1) at the last prepare
+    !> pairs whose many-body blocks were clamped to 1 + eps_lub at the last prepare (none with literal_bwe)
+    integer :: n_overlaps = 0
     real(wp), private :: t_lubrication = 0.0_wp   !< seconds in the lubrication part of the last prepare
     type(pair_blocks_t), private :: pairs
     real(wp), allocatable, private :: mu(:, :)    !< 3N x 3N translational mobility

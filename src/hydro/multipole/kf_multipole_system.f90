@@ -12,11 +12,13 @@
 !> Results are in project units (PHYSICS.md section 1): an isolated sphere has translational
 !> mobility 1/3 and rotational mobility 1; Cartesian ordering per sphere [U(3), Omega(3)].
 !>
-!> Overlapping spheres (BWE rule applied to the multipole part too): the pair blocks of a pair
-!> with centre distance r < min_distance = 1 + eps_lub are evaluated at r = min_distance along
-!> the line of centres (the plain system is not positive definite for overlapping spheres);
-!> this is the distance at which kf_lubrication evaluates that pair's correction, so the pair
-!> part of the corrected friction is continuous.
+!> Overlapping spheres: with min_distance > 0 (the clamp of the overlap rules 'pair', 'separate'
+!> and 'relax', min_distance = 1 + eps_lub) the pair blocks of a pair with centre distance
+!> r < min_distance are evaluated at r = min_distance along the line of centres (the plain system
+!> is not positive definite for deeply overlapping spheres); this is the distance at which
+!> kf_lubrication's clamp evaluates that pair's correction, so the pair part of the corrected
+!> friction is continuous. With min_distance <= 0 (the literal BWE rule, 'bwe') nothing is
+!> clamped: the system of the real positions, whose loss of positive definiteness is reported.
 module kf_multipole_system
   use kf_kinds, only: wp
   use kf_strings, only: to_str
@@ -251,10 +253,17 @@ contains
     this%t_factor = real(c2 - c1, wp)/real(crate, wp)
     if (info /= 0) then
       if (info > 0) then
-        call fatal_error(error, 'Cholesky factorisation of the multipole system failed: matrix not '// &
-                         'positive definite (leading minor '//to_str(info)//'); '//to_str(this%n_overlapping)// &
-                         ' pairs at r <= 1, '//to_str(this%n_clamped)//' evaluated at the clamp distance '// &
-                         '(mutually overlapping spheres are not supported)')
+        if (this%min_distance > 0.0_wp) then
+          ! with the clamp: the message of the rules 'pair', 'separate' and 'relax', unchanged
+          call fatal_error(error, 'Cholesky factorisation of the multipole system failed: matrix not '// &
+                           'positive definite (leading minor '//to_str(info)//'); '//to_str(this%n_clamped)// &
+                           ' overlapping pairs (mutually overlapping spheres are not supported)')
+        else
+          call fatal_error(error, 'Cholesky factorisation of the multipole system failed: matrix not '// &
+                           'positive definite (leading minor '//to_str(info)//'); '//to_str(this%n_overlapping)// &
+                           ' overlapping pairs (r <= 1), none clamped: the many-body system of the real '// &
+                           'positions is not positive definite there')
+        end if
       else
         call fatal_error(error, 'dpotrf: illegal argument '//to_str(info)//' for the multipole system')
       end if
