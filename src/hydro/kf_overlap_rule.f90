@@ -12,8 +12,8 @@
 !> 'pair' (the default; a variant of ours, not BWE): an overlapping pair's lubrication
 !> correction and also its multipole pair blocks (docs/multipole.md) are evaluated at
 !> (1 + eps_lub) times its unit separation, for every pair closer than 1 + eps_lub
-!> (kf_lubrication and kf_multipole_system clamp each pair's distance). The pair's ambient velocity difference
-!> G (r_j - r_i) is then that of the overlapping geometry while its hydrodynamic coupling to the
+!> (kf_lubrication and kf_multipole_system clamp each pair's distance). The pair's ambient
+!> velocity difference G (r_j - r_i) is then that of the overlapping geometry while its hydrodynamic coupling to the
 !> strain is that of a pair at contact; the mismatch, about (1 + eps_lub - r) G r^, is not
 !> resisted, so in the compressional quadrant of the shear a pressed pair approaches at a rate
 !> that grows with its overlap (measured: an A = 1 trefoil's pair went from 0.9995 d at t = 24 to
@@ -24,8 +24,9 @@
 !> 1 + eps_lub apart, found by moving the two beads of each overlapping pair apart along their
 !> line of centres by equal amounts (which keeps every pair's midpoint, so the centre of the
 !> chain) until none is left; the beads then move with those velocities. For one isolated pair
-!> this is BWE's shift applied to the geometry as a whole, so its relative motion is that of a
-!> lubricated pair at the gap eps_lub. Forces are always those of the real positions.
+!> this is the shift to 1 + eps_lub applied to the geometry as a whole (a variant of ours, not
+!> BWE), so its relative motion is that of a lubricated pair at the gap eps_lub. Forces are
+!> always those of the real positions.
 !>
 !> 'relax' is 'separate' plus a kinematic contact rule: while beads overlap, every bead also moves
 !> towards its place in that configuration without overlaps, at the velocity (rh - r)/overlap_time
@@ -109,7 +110,7 @@ module kf_overlap_rule
 
 contains
 
-  !> The rule `name` (one of kf_scene_hydro's overlap_names) for the BWE parameter eps_lub > 0;
+  !> The rule `name` (one of kf_scene_hydro's overlap_names) for the overlap shift eps_lub > 0;
   !> `overlap_time` (> 0) is used by 'relax' only.
   subroutine make_overlap_rule(name, eps_lub, overlap_time, rule, error)
     character(len=*), intent(in) :: name

@@ -57,7 +57,7 @@ module kf_lubrication
 
 contains
 
-  !> Set up the corrections for truncation order `order` (1..6) and BWE parameter eps_lub > 0;
+  !> Set up the corrections for truncation order `order` (1..6) and overlap shift eps_lub > 0;
   !> `literal_bwe` (default .false.): the literal BWE rule instead of the clamp (module header).
   subroutine init(this, order, eps_lub, error, literal_bwe)
     class(lubrication_t), intent(inout) :: this
@@ -205,7 +205,7 @@ contains
 
   !> The correction of the strain-stresslet coupling summed over every pair of r(3, N) closer
   !> than the cutoff, as pairings sm(k, l) = B_k : (sum over pairs of dS_1 + dS_2 for the strain
-  !> B_l) with B_k = strain_basis(k), project units (the M functions; BWE rule as in
+  !> B_l) with B_k = strain_basis(k), project units (the M functions; overlap rule as in
   !> pair_correction). Zero at L = 1 (no strain functions).
   subroutine stresslet_correction(this, r, sm)
     class(lubrication_t), intent(in) :: this

@@ -88,7 +88,7 @@ module kf_hydro_multipole
     logical :: lubrication = .false.
     logical :: adaptive = .false.         !< update = 'adaptive'
     logical :: literal_bwe = .false.      !< overlap = 'bwe': no clamp of the many-body system
-    real(wp) :: eps_lub = 1.0e-4_wp      !< BWE shift: overlapping pairs are evaluated at 1 + eps_lub
+    real(wp) :: eps_lub = 1.0e-4_wp      !< overlap shift: overlapping pairs are evaluated at 1 + eps_lub
     real(wp) :: tolerance = 1.0e-4_wp    !< integration tolerance (units of d), for the budget
     type(multipole_system_t), private :: sys
     type(lubrication_t) :: lub
@@ -141,7 +141,7 @@ module kf_hydro_multipole
 
 contains
 
-  !> Order L (1..max_multipole_order), lubrication on/off, BWE shift eps_lub (0 < eps_lub < 0.5), update mode
+  !> Order L (1..max_multipole_order), lubrication on/off, overlap shift eps_lub (0 < eps_lub < 0.5), update mode
   !> ('stage', the default, or 'adaptive') and the integration tolerance (> 0, default 1e-4)
   !> that sets the reuse budget; `literal_bwe` (default .false.): the literal BWE rule (module
   !> header) instead of the clamp.
