@@ -130,6 +130,7 @@ program knotflow_mobility
       params%order = order
       params%lubrication = lubrication
       params%eps_lub = eps_lub
+      if (overlap /= overlap_pair) call die(program_name, '--overlap '//overlap//' is for the multipole model', 2)
       call make_hydro_model(params, eps_lub, model, error)
       if (allocated(error)) call die(program_name, error%message, 2)
     end block
