@@ -1,7 +1,7 @@
 !> Program knotflow-bench-reuse: accuracy and cost of the adaptive reuse of the multipole many-body
 !> part (`&hydro update = 'adaptive'`) against the exact solve at every stage ('stage'), on the
-!> study's model (multipole L = 2 + lubrication, BWE with eps_lub = tolerance, shear flow) with the
-!> overlap rule of the study's campaign (`--overlap`, default relax).
+!> study's model (multipole L = 2 + lubrication, eps_lub = tolerance, shear flow) with the overlap
+!> rule of the multipole campaign (`--overlap`, default relax, a variant of ours).
 !>
 !> Usage: knotflow-bench-reuse PART [options]
 !>   velocity   [--config C] [--t-end T] [--every K]: integrate with the adaptive path and, at
@@ -21,8 +21,9 @@
 !>              (overlap rule pair only: the model's reused part against its exact one, both
 !>              without the dynamics' configuration rules separate and relax)
 !> C: trefoil (N = 99, orientation c, A = 2.2; default), coil (inputs/configs/
-!> coil_candycane_A1.xyz, A = 1) or a coordinate file path (A = 1). --overlap pair|separate|relax:
-!> the &hydro overlap rule (default relax, as inputs/*_multipole.nml; rigid: pair). Output:
+!> coil_candycane_A1.xyz, A = 1) or a coordinate file path (A = 1). --overlap RULE: the &hydro
+!> overlap rule, one of kf_scene_hydro's overlap_names (default relax, as inputs/*_multipole.nml;
+!> rigid: pair). Output:
 !> `key = value` lines
 !> (read by knotflow-accuracy-report --reuse).
 program knotflow_bench_reuse
@@ -81,7 +82,8 @@ contains
     part = argument(1)
     call standard_option(program_name, part, 'usage: knotflow-bench-reuse velocity|trajectory|speed|overlaps|'// &
       'scaling|rigid|stiffness [--config trefoil|coil|FILE] [--t-end T] [--every K] [--eps-lub E]'// &
-      ' [--overlap pair|separate|relax] [--update U] [--tolerance TOL] [--table FILE]'//new_line('a')// &
+      ' [--overlap RULE (one of '//name_list(overlap_names)//')] [--update U] [--tolerance TOL]'// &
+      ' [--table FILE]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
       'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).')
     config = 'trefoil'

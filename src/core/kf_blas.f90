@@ -5,7 +5,7 @@ module kf_blas
   implicit none
   private
 
-  public :: dpotrf, dpotrs, dpotri, dtrsm, dgemm, dsyrk, dgemv, dsymv
+  public :: dpotrf, dpotrs, dpotri, dsyev, dtrsm, dgemm, dsyrk, dgemv, dsymv
 
   interface
     subroutine dpotrf(uplo, n, a, lda, info)
@@ -30,6 +30,15 @@ module kf_blas
       real(wp), intent(inout) :: a(lda, *)
       integer, intent(out) :: info
     end subroutine dpotri
+    subroutine dsyev(jobz, uplo, n, a, lda, w, work, lwork, info)
+      import :: wp
+      character(len=1), intent(in) :: jobz, uplo
+      integer, intent(in) :: n, lda, lwork
+      real(wp), intent(inout) :: a(lda, *)
+      real(wp), intent(out) :: w(*)
+      real(wp), intent(inout) :: work(*)
+      integer, intent(out) :: info
+    end subroutine dsyev
     subroutine dtrsm(side, uplo, transa, diag, m, n, alpha, a, lda, b, ldb)
       import :: wp
       character(len=1), intent(in) :: side, uplo, transa, diag

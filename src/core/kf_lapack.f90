@@ -2,12 +2,12 @@
 module kf_lapack
   use kf_kinds, only: wp
   use kf_strings, only: to_str
-  use kf_blas, only: dpotrf, dpotrs, dpotri
+  use kf_blas, only: dpotrf, dpotrs, dpotri, dsyev
   use kf_error, only: error_t, fatal_error
   implicit none
   private
 
-  public :: cholesky_factor, cholesky_solve, cholesky_invert
+  public :: cholesky_factor, cholesky_solve, cholesky_invert, symmetric_eigenvalues
 
   !> Solve A X = B (B a matrix or a vector) given the factor from cholesky_factor.
   interface cholesky_solve
@@ -32,6 +32,25 @@ contains
       end if
     end if
   end subroutine cholesky_factor
+
+  !> Eigenvalues w (ascending) of the symmetric matrix a, whose lower triangle is read; a is
+  !> overwritten. For diagnostics (LAPACK dsyev: its last bits may depend on the BLAS threads).
+  subroutine symmetric_eigenvalues(a, w, error, what)
+    real(wp), intent(inout) :: a(:, :)
+    real(wp), intent(out) :: w(:)
+    type(error_t), allocatable, intent(out) :: error
+    character(len=*), intent(in) :: what   !< name of the matrix, for the message
+    real(wp) :: query(1)
+    real(wp), allocatable :: work(:)
+    integer :: info, n
+    n = size(a, 1)
+    call dsyev('N', 'L', n, a, n, w, query, -1, info)
+    if (info == 0) then
+      allocate (work(max(1, int(query(1)))))
+      call dsyev('N', 'L', n, a, n, w, work, size(work), info)
+    end if
+    if (info /= 0) call fatal_error(error, 'dsyev: eigenvalues of the '//what//' failed (info '//to_str(info)//')')
+  end subroutine symmetric_eigenvalues
 
   !> Solve A X = B given the factor from cholesky_factor; B is overwritten by X.
   subroutine cholesky_solve_matrix(factor, b)

@@ -6,7 +6,7 @@ module kf_hydro_factory
   use kf_kinds, only: wp
   use kf_error, only: error_t, fatal_error
   use kf_scene_hydro, only: hydro_params_t, hydro_model_names => model_names, model_none, model_rpy, &
-                            model_multipole, check_hydro, effective_eps_lub
+                            model_multipole, check_hydro, effective_eps_lub, overlap_bwe
   use kf_hydro_model, only: hydro_model_t
   use kf_hydro_none, only: none_model_t
   use kf_hydro_rpy, only: rpy_model_t
@@ -42,7 +42,8 @@ contains
         type(multipole_model_t), allocatable :: mp
         allocate (mp)
         call mp%init(params%order, params%lubrication, effective_eps_lub(params, tolerance), error, &
-                     update=trim(params%update), tolerance=tolerance)
+                     update=trim(params%update), tolerance=tolerance, &
+                     literal_bwe=(params%overlap == overlap_bwe))
         if (allocated(error)) return
         call move_alloc(mp, model)
       end block

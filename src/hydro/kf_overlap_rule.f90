@@ -1,10 +1,19 @@
 !> How the hydrodynamics treats overlapping beads (&hydro overlap; docs/limitations.md).
 !>
-!> 'pair' is the BWE procedure as PHYSICS.md words it: an overlapping pair's lubrication
-!> correction (and its multipole pair blocks, docs/multipole.md) is evaluated at (1 + eps_lub)
-!> times its unit separation and everything else is left as it is (kf_lubrication and
-!> kf_multipole_system clamp each pair's distance). The pair's ambient velocity difference
-!> G (r_j - r_i) is then that of the overlapping geometry while its hydrodynamic coupling to the
+!> 'bwe' is the reference study's rule, as PHYSICS.md 3.3 words it: a pair with r <= 1 has its
+!> lubrication correction evaluated at (1 + eps_lub) r^, and everything else is left as it is -
+!> the many-body multipole friction and every other pair's correction at the real positions, the
+!> dynamics of the real positions. Its part lives in the model (kf_hydro_factory passes
+!> `literal_bwe` to the multipole model: kf_lubrication evaluates such a pair at 1 + eps_lub,
+!> kf_multipole_system clamps nothing); here it leaves the configuration alone, as 'pair' does.
+!> Where the many-body system is not positive definite at overlapping positions, the run stops
+!> with the Cholesky error (docs/stability.md "The literal BWE rule").
+!>
+!> 'pair' (the default; a variant of ours, not BWE): an overlapping pair's lubrication
+!> correction and also its multipole pair blocks (docs/multipole.md) are evaluated at
+!> (1 + eps_lub) times its unit separation, for every pair closer than 1 + eps_lub
+!> (kf_lubrication and kf_multipole_system clamp each pair's distance). The pair's ambient
+!> velocity difference G (r_j - r_i) is then that of the overlapping geometry while its hydrodynamic coupling to the
 !> strain is that of a pair at contact; the mismatch, about (1 + eps_lub - r) G r^, is not
 !> resisted, so in the compressional quadrant of the shear a pressed pair approaches at a rate
 !> that grows with its overlap (measured: an A = 1 trefoil's pair went from 0.9995 d at t = 24 to
@@ -15,8 +24,9 @@
 !> 1 + eps_lub apart, found by moving the two beads of each overlapping pair apart along their
 !> line of centres by equal amounts (which keeps every pair's midpoint, so the centre of the
 !> chain) until none is left; the beads then move with those velocities. For one isolated pair
-!> this is BWE's shift applied to the geometry as a whole, so its relative motion is that of a
-!> lubricated pair at the gap eps_lub. Forces are always those of the real positions.
+!> this is the shift to 1 + eps_lub applied to the geometry as a whole (a variant of ours, not
+!> BWE), so its relative motion is that of a lubricated pair at the gap eps_lub. Forces are
+!> always those of the real positions.
 !>
 !> 'relax' is 'separate' plus a kinematic contact rule: while beads overlap, every bead also moves
 !> towards its place in that configuration without overlaps, at the velocity (rh - r)/overlap_time
@@ -34,7 +44,7 @@ module kf_overlap_rule
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_pair_geometry, only: pair_geometry_t
-  use kf_scene_hydro, only: overlap_pair, overlap_separate, overlap_relax, overlap_names
+  use kf_scene_hydro, only: overlap_pair, overlap_separate, overlap_relax, overlap_bwe, overlap_names
   use kf_scene_check, only: name_list
   implicit none
   private
@@ -70,6 +80,10 @@ module kf_overlap_rule
     procedure :: hydro_configuration => pair_configuration
   end type overlap_pair_t
 
+  !> 'bwe': the hydrodynamics of the real positions as well (the model applies the rule).
+  type, extends(overlap_pair_t) :: overlap_bwe_t
+  end type overlap_bwe_t
+
   !> 'separate': the hydrodynamics of the nearest configuration with all pairs >= 1 + eps_lub.
   type, extends(overlap_rule_t) :: overlap_separate_t
     private
@@ -96,7 +110,7 @@ module kf_overlap_rule
 
 contains
 
-  !> The rule `name` (one of kf_scene_hydro's overlap_names) for the BWE parameter eps_lub > 0;
+  !> The rule `name` (one of kf_scene_hydro's overlap_names) for the overlap shift eps_lub > 0;
   !> `overlap_time` (> 0) is used by 'relax' only.
   subroutine make_overlap_rule(name, eps_lub, overlap_time, rule, error)
     character(len=*), intent(in) :: name
@@ -106,6 +120,8 @@ contains
     select case (trim(name))
     case (overlap_pair)
       allocate (overlap_pair_t :: rule)
+    case (overlap_bwe)
+      allocate (overlap_bwe_t :: rule)
     case (overlap_separate, overlap_relax)
       if (.not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) then
         call fatal_error(error, 'overlap rule '//trim(name)//': eps_lub = '//to_str(eps_lub, '(es12.4)')// &

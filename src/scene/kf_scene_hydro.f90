@@ -20,10 +20,11 @@ module kf_scene_hydro
   character(len=*), parameter, public :: update_names(2) = [character(len=8) :: update_stage, update_adaptive]
 
   character(len=*), parameter, public :: overlap_pair = 'pair', overlap_separate = 'separate', &
-    overlap_relax = 'relax'
-  !> The valid values of &hydro overlap (multipole).
-  character(len=*), parameter, public :: overlap_names(3) = [character(len=8) :: overlap_pair, overlap_separate, &
-    overlap_relax]
+    overlap_relax = 'relax', overlap_bwe = 'bwe'
+  !> The valid values of &hydro overlap (multipole). 'bwe' is the reference study's rule as
+  !> PHYSICS.md 3.3 words it; the others are the project's variants (kf_overlap_rule).
+  character(len=*), parameter, public :: overlap_names(4) = [character(len=8) :: overlap_pair, overlap_separate, &
+    overlap_relax, overlap_bwe]
   !> The default of &hydro overlap_time (in units of 1/shear rate; kf_overlap_rule says why).
   real(wp), parameter :: overlap_time_default = 0.1_wp
 
@@ -42,12 +43,15 @@ module kf_scene_hydro
     character(len=name_len) :: model = model_rpy    !< none | rpy | multipole
     integer :: order = 2                            !< multipole order L
     logical :: lubrication = .true.                 !< multipole: lubrication corrections
-    !> BWE overlap shift; < 0 (the default): not given, resolve_hydro sets the integration tolerance
+    !> overlap shift (pairs evaluated at 1 + eps_lub); < 0 (the default): not given, resolve_hydro
+    !> sets the integration tolerance
     real(wp) :: eps_lub = -1.0_wp
     !> multipole: adaptive (reuse, the default) | stage (exact every stage)
     character(len=name_len) :: update = update_adaptive
-    !> Overlap rule of the multipole model: pair (BWE per pair, the default), separate (the
-    !> configuration without overlaps) or relax (separate, and overlaps undone over overlap_time)
+    !> Overlap rule of the multipole model: pair (lubrication and multipole blocks of a pair
+    !> clamped at 1 + eps_lub, the default), separate (the configuration without overlaps), relax
+    !> (separate, and overlaps undone over overlap_time) or bwe (the study's rule: only the
+    !> lubrication correction of a pair with r <= 1, at 1 + eps_lub)
     character(len=name_len) :: overlap = overlap_pair
     !> relax: the time over which an overlap is undone
     real(wp) :: overlap_time = overlap_time_default
@@ -88,19 +92,21 @@ contains
       'multipole order L')
     call add_l(items, 'hydro.lubrication', p%lubrication, '.true. or .false.', 'multipole: lubrication corrections')
     call add_r(items, 'hydro.eps_lub', p%eps_lub, eps_lub_allowed, &
-      'multipole: the BWE shift of overlapping pairs; -1 (not given): the &integrator tolerance')
+      'multipole: overlapping pairs are evaluated at 1 + eps_lub (as the overlap rule says); -1 (not given): '// &
+      'the &integrator tolerance')
     call add_s(items, 'hydro.update', p%update, 'one of '//name_list(update_names), &
       'multipole: adaptive (the many-body part reused between refreshes within an error budget from the '// &
       'tolerance, lubrication exact at every stage) or stage (recomputed exactly at every Runge-Kutta stage: '// &
       'the reference); ignored by none and rpy')
     call add_s(items, 'hydro.overlap', p%overlap, 'one of '//name_list(overlap_names)//'; '// &
       quoted(overlap_pair)//' unless model = '//quoted(model_multipole), &
-      'multipole: how overlapping beads are treated, by rules of ours (the study''s BWE rule, which shifts only '// &
-      'the lubrication correction of a pair with r <= 1, is not implemented yet). pair: the '// &
-      'pair''s multipole blocks and lubrication correction at 1 + eps_lub along its line '// &
-      'of centres; separate: the whole hydrodynamics of the nearest configuration without overlaps; relax: '// &
-      'separate, and overlaps undone kinematically over overlap_time (docs/limitations.md says why the study '// &
-      'inputs use it)')
+      'multipole: how overlapping beads are treated. bwe: the study''s BWE rule, only the lubrication '// &
+      'correction of a pair with r <= 1 taken at 1 + eps_lub, everything else at the real positions (a run '// &
+      'stops with the Cholesky error where that many-body system is not positive definite; docs/stability.md); '// &
+      'the others are variants of ours: pair, the pair''s multipole blocks and lubrication correction at '// &
+      '1 + eps_lub along its line of centres (also for 1 < r < 1 + eps_lub); separate, the whole hydrodynamics '// &
+      'of the nearest configuration without overlaps; relax, separate and overlaps undone kinematically over '// &
+      'overlap_time (docs/limitations.md says why the study inputs use it)')
     call add_r(items, 'hydro.overlap_time', p%overlap_time, overlap_time_allowed//', '//overlap_time_relax_allowed, &
       'relax: the time, in units of 1/shear rate, over which an overlap is undone')
   end subroutine hydro_items

@@ -9,9 +9,11 @@
 !> g3 xi ln(1/xi)). The result is multiplied by a C2 taper that brings it to exactly zero at the
 !> cutoff r_c(L).
 !>
-!> BWE overlap rule: pairs at |d| <= 1 are evaluated at (1 + eps_lub) d/|d|. To keep the
-!> correction continuous, centre distances between 1 and 1 + eps_lub are clamped the same way:
-!> the correction is evaluated at max(|d|, 1 + eps_lub).
+!> Overlaps: pairs at |d| <= 1 are evaluated at (1 + eps_lub) d/|d|. Two forms (init's
+!> `literal_bwe`): the clamp (default; the overlap rules 'pair', 'separate', 'relax') keeps the
+!> correction continuous by evaluating every pair at max(|d|, 1 + eps_lub); the literal BWE rule
+!> ('bwe', PHYSICS.md 3.3) evaluates a pair at |d| when |d| > 1 and at 1 + eps_lub when |d| <= 1
+!> (the correction jumps down at contact: it diverges as |d| -> 1+).
 module kf_lubrication
   use kf_kinds, only: wp
   use kf_strings, only: to_str
@@ -35,6 +37,7 @@ module kf_lubrication
     private
     integer :: order = 0
     real(wp) :: eps_lub = 1.0e-4_wp
+    logical :: literal_bwe = .false.    !< only pairs at r <= 1 are moved to 1 + eps_lub
     real(wp) :: r_cut = 1.0_wp          !< cutoff centre distance
     real(wp) :: r_taper = 1.0_wp        !< start of the taper
     real(wp) :: h = 1.0_wp              !< grid step in u
@@ -46,6 +49,7 @@ module kf_lubrication
     procedure :: init
     procedure :: cutoff
     procedure :: correction_functions
+    procedure :: evaluation_distance
     procedure :: pair_correction
     procedure :: pair_blocks
     procedure :: stresslet_correction
@@ -53,12 +57,14 @@ module kf_lubrication
 
 contains
 
-  !> Set up the corrections for truncation order `order` (1..6) and BWE parameter eps_lub > 0.
-  subroutine init(this, order, eps_lub, error)
+  !> Set up the corrections for truncation order `order` (1..6) and overlap shift eps_lub > 0;
+  !> `literal_bwe` (default .false.): the literal BWE rule instead of the clamp (module header).
+  subroutine init(this, order, eps_lub, error, literal_bwe)
     class(lubrication_t), intent(inout) :: this
     integer, intent(in) :: order
     real(wp), intent(in) :: eps_lub
     type(error_t), allocatable, intent(out) :: error
+    logical, intent(in), optional :: literal_bwe
     integer :: k
 
     if (order < 1 .or. order > lub_max_order) then
@@ -73,6 +79,8 @@ contains
     end if
     this%order = order
     this%eps_lub = eps_lub
+    this%literal_bwe = .false.
+    if (present(literal_bwe)) this%literal_bwe = literal_bwe
     this%r_cut = lub_cutoff(order)
     this%r_taper = this%r_cut - taper_fraction*(this%r_cut - 1.0_wp)
     this%n = lub_n_grid(order)
@@ -91,6 +99,18 @@ contains
     class(lubrication_t), intent(in) :: this
     cutoff = this%r_cut
   end function cutoff
+
+  !> The centre distance at which the correction of a pair at distance r is evaluated: the
+  !> clamp max(r, 1 + eps_lub), or with literal_bwe r itself unless r <= 1 (then 1 + eps_lub).
+  pure real(wp) function evaluation_distance(this, r) result(re)
+    class(lubrication_t), intent(in) :: this
+    real(wp), intent(in) :: r
+    if (this%literal_bwe) then
+      re = merge(1.0_wp + this%eps_lub, r, r <= 1.0_wp)
+    else
+      re = max(r, 1.0_wp + this%eps_lub)
+    end if
+  end function evaluation_distance
 
   !> Corrections f_exact - f_L of the 22 resistance functions at centre distance r (r > 1),
   !> including the taper; zero for r >= cutoff. No overlap rule here (see pair_correction);
@@ -122,7 +142,7 @@ contains
 
   !> Pair correction for d = R_j - R_i: dzeta(12,12) (ordering [U_i, Omega_i, U_j, Omega_j] ->
   !> [F_i, T_i, F_j, T_j], symmetric) and dxe(12,3,3) (delta x_k = sum dxe(k,a,b) E(a,b)).
-  !> Zero for |d| >= cutoff; overlapping pairs follow the BWE rule.
+  !> Zero for |d| >= cutoff; overlapping pairs as evaluation_distance says.
   pure subroutine pair_correction(this, d, dzeta, dxe)
     class(lubrication_t), intent(in) :: this
     real(wp), intent(in) :: d(3)
@@ -141,7 +161,7 @@ contains
     else
       dhat = [0.0_wp, 0.0_wp, 1.0_wp]   ! coincident centres: no direction, take z
     end if
-    call this%correction_functions(max(r, 1.0_wp + this%eps_lub), df)
+    call this%correction_functions(this%evaluation_distance(r), df)
     call pair_tensors(df, dhat, dzeta, dxe)
   end subroutine pair_correction
 
@@ -185,7 +205,7 @@ contains
 
   !> The correction of the strain-stresslet coupling summed over every pair of r(3, N) closer
   !> than the cutoff, as pairings sm(k, l) = B_k : (sum over pairs of dS_1 + dS_2 for the strain
-  !> B_l) with B_k = strain_basis(k), project units (the M functions; BWE rule as in
+  !> B_l) with B_k = strain_basis(k), project units (the M functions; overlap rule as in
   !> pair_correction). Zero at L = 1 (no strain functions).
   subroutine stresslet_correction(this, r, sm)
     class(lubrication_t), intent(in) :: this
@@ -207,7 +227,7 @@ contains
       else
         dhat = [0.0_wp, 0.0_wp, 1.0_wp]
       end if
-      call this%correction_functions(max(dist, 1.0_wp + this%eps_lub), df)
+      call this%correction_functions(this%evaluation_distance(dist), df)
       do l = 1, 5
         do k = 1, 5
           sm(k, l) = sm(k, l) + sum(b(:, :, k)*pair_strain_stresslet(df, dhat, b(:, :, l)))

@@ -1,6 +1,10 @@
 !> The multipole hydrodynamic model (PHYSICS.md 3.3): N-sphere induced-force multipoles
 !> truncated at order L, optionally with two-sphere lubrication corrections (HYDROLIB scheme,
-!> MULTIPOLE.md 13.3) and the BWE overlap rule.
+!> MULTIPOLE.md 13.3) and an overlap treatment: by default (overlap rules 'pair', 'separate',
+!> 'relax') a pair closer than 1 + eps_lub has its multipole blocks and its lubrication
+!> correction evaluated at 1 + eps_lub; with `literal_bwe` (overlap = 'bwe', PHYSICS.md 3.3) the
+!> many-body system is that of the real positions and only the lubrication correction of a pair
+!> with r <= 1 is evaluated at 1 + eps_lub.
 !>
 !> In parts: the many-body system (kf_multipole_system: assembly, p-moment elimination,
 !> Cholesky factorisation, then its friction zeta_L and strain coupling x_L), the lubrication
@@ -83,12 +87,14 @@ module kf_hydro_multipole
     integer :: order = 2
     logical :: lubrication = .false.
     logical :: adaptive = .false.         !< update = 'adaptive'
-    real(wp) :: eps_lub = 1.0e-4_wp      !< BWE shift: overlapping pairs are evaluated at 1 + eps_lub
+    logical :: literal_bwe = .false.      !< overlap = 'bwe': no clamp of the many-body system
+    real(wp) :: eps_lub = 1.0e-4_wp      !< overlap shift: overlapping pairs are evaluated at 1 + eps_lub
     real(wp) :: tolerance = 1.0e-4_wp    !< integration tolerance (units of d), for the budget
     type(multipole_system_t), private :: sys
     type(lubrication_t) :: lub
     integer :: n_lub_pairs = 0           !< pairs corrected at the last prepare
-    integer :: n_overlaps = 0            !< overlapping pairs (r <= 1) at the last prepare
+    !> pairs whose many-body blocks were clamped to 1 + eps_lub at the last prepare (none with literal_bwe)
+    integer :: n_overlaps = 0
     real(wp), private :: t_lubrication = 0.0_wp   !< seconds in the lubrication part of the last prepare
     type(pair_blocks_t), private :: pairs
     real(wp), allocatable, private :: mu(:, :)    !< 3N x 3N translational mobility
@@ -130,14 +136,16 @@ module kf_hydro_multipole
     procedure :: reused_velocities => multipole_reused_velocities
     procedure :: stresslet => multipole_stresslet
     procedure :: prepare_seconds => multipole_prepare_seconds
+    procedure :: many_body_spectrum => multipole_many_body_spectrum
   end type multipole_model_t
 
 contains
 
-  !> Order L (1..max_multipole_order), lubrication on/off, BWE shift eps_lub (0 < eps_lub < 0.5), update mode
+  !> Order L (1..max_multipole_order), lubrication on/off, overlap shift eps_lub (0 < eps_lub < 0.5), update mode
   !> ('stage', the default, or 'adaptive') and the integration tolerance (> 0, default 1e-4)
-  !> that sets the reuse budget.
-  subroutine multipole_init(this, order, lubrication, eps_lub, error, update, tolerance)
+  !> that sets the reuse budget; `literal_bwe` (default .false.): the literal BWE rule (module
+  !> header) instead of the clamp.
+  subroutine multipole_init(this, order, lubrication, eps_lub, error, update, tolerance, literal_bwe)
     class(multipole_model_t), intent(inout) :: this
     integer, intent(in) :: order
     logical, intent(in) :: lubrication
@@ -145,6 +153,7 @@ contains
     type(error_t), allocatable, intent(out) :: error
     character(len=*), intent(in), optional :: update
     real(wp), intent(in), optional :: tolerance
+    logical, intent(in), optional :: literal_bwe
     character(len=:), allocatable :: mode
     real(wp) :: tol
 
@@ -170,8 +179,10 @@ contains
       call fatal_error(error, "multipole: update = '"//mode//"' is unknown (allowed: "//name_list(update_names)//')')
       return
     end select
+    this%literal_bwe = .false.
+    if (present(literal_bwe)) this%literal_bwe = literal_bwe
     if (lubrication) then
-      call this%lub%init(order, eps_lub, error)
+      call this%lub%init(order, eps_lub, error, literal_bwe=this%literal_bwe)
       if (allocated(error)) return
     end if
     this%order = order
@@ -183,7 +194,8 @@ contains
     this%n_hist = 0
     this%coef = -1.0_wp
     this%stats = hydro_stats_t()
-    call this%sys%init(order, 1.0_wp + eps_lub, error)
+    ! min_distance 0: the many-body system of the real positions (no pair clamped)
+    call this%sys%init(order, merge(0.0_wp, 1.0_wp + eps_lub, this%literal_bwe), error)
   end subroutine multipole_init
 
   !> Work arrays for nb beads.
@@ -278,6 +290,21 @@ contains
     this%t_lubrication = real(c1 - c0, wp)/real(crate, wp)
     call cholesky_factor(zeta, error, 'lubrication-corrected friction')
   end subroutine corrected_system
+
+  !> The eigenvalues (ascending) of the many-body system the model factorises at r (scaled real
+  !> form, kf_multipole_system `spectrum`: positive definite exactly when prepare's first
+  !> Cholesky factorisation succeeds) and `n_overlapping`, its pairs at r <= 1. Leaves the model
+  !> unprepared. For diagnostics (knotflow-mobility --output spectrum).
+  subroutine multipole_many_body_spectrum(this, r, w, n_overlapping, error)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    real(wp), allocatable, intent(out) :: w(:)
+    integer, intent(out) :: n_overlapping
+    type(error_t), allocatable, intent(out) :: error
+    this%n = 0
+    call this%sys%spectrum(r, w, error)
+    n_overlapping = this%sys%n_overlapping
+  end subroutine multipole_many_body_spectrum
 
   !> u = mu f.
   subroutine multipole_apply(this, f, u)

@@ -12,15 +12,18 @@
 !> Results are in project units (PHYSICS.md section 1): an isolated sphere has translational
 !> mobility 1/3 and rotational mobility 1; Cartesian ordering per sphere [U(3), Omega(3)].
 !>
-!> Overlapping spheres (BWE rule applied to the multipole part too): the pair blocks of a pair
-!> with centre distance r < min_distance = 1 + eps_lub are evaluated at r = min_distance along
-!> the line of centres (the plain system is not positive definite for overlapping spheres);
-!> this is the distance at which kf_lubrication evaluates that pair's correction, so the pair
-!> part of the corrected friction is continuous.
+!> Overlapping spheres: with min_distance > 0 (the clamp of the overlap rules 'pair', 'separate'
+!> and 'relax', min_distance = 1 + eps_lub) the pair blocks of a pair with centre distance
+!> r < min_distance are evaluated at r = min_distance along the line of centres (the plain system
+!> is not positive definite for deeply overlapping spheres); this is the distance at which
+!> kf_lubrication's clamp evaluates that pair's correction, so the pair part of the corrected
+!> friction is continuous. With min_distance <= 0 (the literal BWE rule, 'bwe') nothing is
+!> clamped: the system of the real positions, whose loss of positive definiteness is reported.
 module kf_multipole_system
   use kf_kinds, only: wp
   use kf_strings, only: to_str
   use kf_blas, only: dpotrf, dpotri, dtrsm, dgemm, dsyrk
+  use kf_lapack, only: symmetric_eigenvalues
   use kf_constants, only: pi
   use kf_error, only: error_t, fatal_error
   use kf_multipole_blocks, only: multipole_layout_t, pair_block_grouped, fam_phi, fam_p
@@ -45,6 +48,7 @@ module kf_multipole_system
     integer :: nqt = 0      !< unknowns of K outside P (they come first)
     integer :: n6 = 0       !< 6N
     integer, public :: n_clamped = 0 !< pairs closer than min_distance at the last factorise
+    integer, public :: n_overlapping = 0 !< pairs at r <= 1 at the last factorise (clamped or not)
     real(wp) :: scal(6) = 0.0_wp !< moment_hat = scal(c) * Cartesian force/torque component c
     real(wp), allocatable :: k(:, :)     !< K, then its Cholesky factor (lower triangle)
     real(wp), allocatable :: bp(:, :)    !< phi <- p couplings (rows phi, columns p)
@@ -59,6 +63,7 @@ module kf_multipole_system
   contains
     procedure :: init => system_init
     procedure :: factorise => system_factorise
+    procedure :: spectrum => system_spectrum
     procedure :: grand_mobility => system_grand_mobility
     procedure :: translational_mobility => system_translational_mobility
     procedure :: grand_friction => system_grand_friction
@@ -107,12 +112,24 @@ contains
     p = this%idx%p_index(i, c)
   end function system_pindex
 
+  !> The eigenvalues w (ascending) of the matrix that factorise(r) factorises (the scaled real
+  !> system after the p-moment elimination; positive definite exactly when its Cholesky
+  !> factorisation succeeds). Leaves the system unfactorised. For diagnostics.
+  subroutine system_spectrum(this, r, w, error)
+    class(multipole_system_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    real(wp), allocatable, intent(out) :: w(:)
+    type(error_t), allocatable, intent(out) :: error
+    call system_factorise(this, r, error, w)
+  end subroutine system_spectrum
+
   !> Assemble the scaled real system for centres r(3, N), eliminate the p-moments and
-  !> factorise (Cholesky).
-  subroutine system_factorise(this, r, error)
+  !> factorise (Cholesky); with `spectrum`: its eigenvalues instead of the factorisation.
+  subroutine system_factorise(this, r, error, spectrum)
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable, intent(out), optional :: spectrum(:)
     integer :: nsph, h, i, j, x, yr, n, q, info, na, nc, nphi, np, cs, t, pc
     integer :: lo(5), hi(5), ks(4, 2), bs(4, 2), ps(2)
     integer(8) :: c0, c1, c2, crate
@@ -148,6 +165,7 @@ contains
       hi = idx%hi
 
       this%n_clamped = 0
+      this%n_overlapping = 0
       do i = 1, nsph
         call starts(i, ks(:, 1), bs(:, 1), ps(1))
         do x = 1, 4
@@ -182,6 +200,7 @@ contains
             this%n = 0
             return
           end if
+          if (dist <= 1.0_wp) this%n_overlapping = this%n_overlapping + 1
           if (dist < this%min_distance) then
             d = d*(this%min_distance/dist)
             this%n_clamped = this%n_clamped + 1
@@ -222,15 +241,29 @@ contains
     end if
     call dsyrk('L', 'N', nc, np, -1.0_wp, this%bp(na + 1, 1), nphi, 1.0_wp, this%k(cs, cs), this%nr)
 
+    if (present(spectrum)) then
+      allocate (spectrum(this%nr))
+      call symmetric_eigenvalues(this%k, spectrum, error, 'multipole system')
+      this%n = 0
+      return
+    end if
     call dpotrf('L', this%nr, this%k, this%nr, info)
     call system_clock(c2)
     this%t_assembly = real(c1 - c0, wp)/real(crate, wp)
     this%t_factor = real(c2 - c1, wp)/real(crate, wp)
     if (info /= 0) then
       if (info > 0) then
-        call fatal_error(error, 'Cholesky factorisation of the multipole system failed: matrix not '// &
-                         'positive definite (leading minor '//to_str(info)//'); '//to_str(this%n_clamped)// &
-                         ' overlapping pairs (mutually overlapping spheres are not supported)')
+        if (this%min_distance > 0.0_wp) then
+          ! with the clamp: the message of the rules 'pair', 'separate' and 'relax', unchanged
+          call fatal_error(error, 'Cholesky factorisation of the multipole system failed: matrix not '// &
+                           'positive definite (leading minor '//to_str(info)//'); '//to_str(this%n_clamped)// &
+                           ' overlapping pairs (mutually overlapping spheres are not supported)')
+        else
+          call fatal_error(error, 'Cholesky factorisation of the multipole system failed: matrix not '// &
+                           'positive definite (leading minor '//to_str(info)//'); '//to_str(this%n_overlapping)// &
+                           ' overlapping pairs (r <= 1), none clamped: the many-body system of the real '// &
+                           'positions is not positive definite there')
+        end if
       else
         call fatal_error(error, 'dpotrf: illegal argument '//to_str(info)//' for the multipole system')
       end if
