@@ -20,7 +20,8 @@ module kf_analysis_farm
     integer, public :: size = 1
   end type analysis_farm_t
 
-  public :: farm_start, farm_on, farm_stop, farm_sum, farm_max, farm_barrier, farm_abort, farm_any, farm_share
+  public :: farm_start, farm_on, farm_stop, farm_sum, farm_max, farm_barrier, farm_abort, farm_any, farm_share, &
+    farm_failed
 
 contains
 
@@ -103,5 +104,17 @@ contains
     type(error_t), allocatable, intent(out) :: error
     call farm%comm%bcast(x, error)
   end subroutine farm_share
+
+  !> True on every rank when `error` is set on any rank (a collective call: every rank makes it
+  !> at the same point); a rank without an error of its own gets one naming `what`.
+  logical function farm_failed(farm, error, what) result(failed)
+    type(analysis_farm_t), intent(in) :: farm
+    type(error_t), allocatable, intent(inout) :: error
+    character(len=*), intent(in) :: what
+    type(error_t), allocatable :: comm_error
+    call farm_any(farm, allocated(error), failed, comm_error)
+    if (allocated(comm_error) .and. .not. allocated(error)) call move_alloc(comm_error, error)
+    if (failed .and. .not. allocated(error)) call fatal_error(error, what//': failed on another rank')
+  end function farm_failed
 
 end module kf_analysis_farm

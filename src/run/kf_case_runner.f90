@@ -32,6 +32,8 @@ module kf_case_runner
 
   !> Outcomes of a case; case_stopped: a stop signal (kf_signals) ended it after a whole frame.
   integer, parameter, public :: case_ok = 0, case_failed = 1, case_skipped = 2, case_stopped = 3
+  !> The status while the phases of run_case go on (never returned).
+  integer, parameter :: case_undecided = -1
 
   !> Receives the progress lines of a case (an object, not a procedure argument: the program's
   !> reporter carries its state, e.g. the rank, without an internal procedure and its trampoline).
@@ -67,6 +69,9 @@ contains
   !> Run (or resume, or skip) the case described by `sc`. Returns case_ok, case_failed or
   !> case_skipped and a one-line message. Failures are recorded in the case file's status.
   !> `launch` (MPI ranks, BLAS threads) goes into the /runs entry of this run segment.
+  !> In six named phases (contained procedures sharing the case's state below): the file's state,
+  !> start or resume, the parts, the file, the frame loop, the end. A phase that decides the case
+  !> (skipped, failed, stopped) sets `status`, and the phases after it do not run.
   subroutine run_case(sc, report, status, message, launch)
     type(scene_t), intent(in) :: sc
     class(case_reporter_t), intent(inout) :: report
@@ -100,269 +105,306 @@ contains
     path = case_path(sc)
     name = trim(sc%output%case_name)
     hydro_base = 0
-    ! knotflow writes its case files itself, never through a link planted at their name
-    if (is_symbolic_link(path)) then
-      status = case_failed
-      message = 'case file '//path//' not used: it is a symbolic link (knotflow never writes through one): '// &
-        'remove the link, or put the file itself there; nothing was changed'
-      return
-    end if
-    ! A file another process holds for writing cannot even be read: say so rather than call it
-    ! damaged.
-    if (refused_access(.false.)) return
-    call case_file_status(path, state, error)
-    if (allocated(error)) then
-      status = case_failed
-      message = error%message
-      return
-    end if
-    ! Anything but skipping a finished file writes to it or moves it: a file in use by another
-    ! process or not writable for this one fails the case (nothing moved, nothing recomputed).
-    if (state /= 'missing' .and. state /= 'finished') then
-      if (refused_access(.true.)) return
-    end if
-    resumed = .false.
-    with_diag = sc%output%diagnostics
-    with_stresslet = sc%output%stresslet
-    if (index(state, 'corrupt: ') == 1) then
-      ! A file cut short by a failed write (full disk) cannot be opened until it has its
-      ! recorded size again; its checkpoint is then checked like any other.
-      call h5_extend_truncated(path, extended, old_size, new_size, error)
-      if (allocated(error)) deallocate (error)
-      if (extended) then
-        call report%line('case '//name//': '//path//' was cut short by a failed write ('//to_str(old_size)//' of '// &
-                    to_str(new_size)//' bytes): extended to its recorded size to read its checkpoint')
-        call case_file_status(path, state, error)
+    status = case_undecided
+    ! each phase either leaves the case undecided, for the next one, or decides it (status set)
+    call check_file()
+    if (status == case_undecided) call choose_start()
+    if (status == case_undecided) call build_parts()
+    if (status == case_undecided) call start_file()
+    if (status == case_undecided) call frame_loop()
+    if (status == case_undecided) call finish_case()
+
+  contains
+
+    !> Phase 1, the file's state: a link, a file in use or not writable refuses the case; a file
+    !> cut short by a failed write is extended, one killed while writing has its end raised; `state`
+    !> is then 'missing', 'running', 'finished', 'failed: ...' or 'corrupt: ...'.
+    subroutine check_file()
+      ! knotflow writes its case files itself, never through a link planted at their name
+      if (is_symbolic_link(path)) then
+        status = case_failed
+        message = 'case file '//path//' not used: it is a symbolic link (knotflow never writes through one): '// &
+          'remove the link, or put the file itself there; nothing was changed'
+        return
+      end if
+      ! A file another process holds for writing cannot even be read: say so rather than call it
+      ! damaged.
+      if (refused_access(.false.)) return
+      call case_file_status(path, state, error)
+      if (allocated(error)) then
+        status = case_failed
+        message = error%message
+        return
+      end if
+      ! Anything but skipping a finished file writes to it or moves it: a file in use by another
+      ! process or not writable for this one fails the case (nothing moved, nothing recomputed).
+      if (state /= 'missing' .and. state /= 'finished') then
+        if (refused_access(.true.)) return
+      end if
+      resumed = .false.
+      with_diag = sc%output%diagnostics
+      with_stresslet = sc%output%stresslet
+      if (index(state, 'corrupt: ') == 1) then
+        ! A file cut short by a failed write (full disk) cannot be opened until it has its
+        ! recorded size again; its checkpoint is then checked like any other.
+        call h5_extend_truncated(path, extended, old_size, new_size, error)
+        if (allocated(error)) deallocate (error)
+        if (extended) then
+          call report%line('case '//name//': '//path//' was cut short by a failed write ('//to_str(old_size)//' of '// &
+                      to_str(new_size)//' bytes): extended to its recorded size to read its checkpoint')
+          call case_file_status(path, state, error)
+          if (allocated(error)) then
+            status = case_failed
+            message = error%message
+            return
+          end if
+        end if
+      end if
+      if (state == 'running') then
+        ! A kill while HDF5 flushed may have left objects written beyond the end the superblock
+        ! records: the end is raised to include them before the file is opened.
+        call h5_raise_end(path, extended, old_size, new_size, error)
+        if (allocated(error)) then
+          status = case_failed
+          message = error%message
+          return
+        end if
+        if (extended) call report%line('case '//name//': '//path//' holds '//to_str(new_size - old_size)// &
+          ' bytes written after the end its superblock records (killed while writing): end raised to '// &
+          to_str(new_size)//' bytes')
+      end if
+    end subroutine check_file
+
+    !> Phase 2, start or resume: a finished file that matches the scene and reads back whole is
+    !> skipped; a running one that matches is opened for the resume when its kept frames and its
+    !> checkpoint are good; a damaged one is moved aside, a failed one removed (computed again).
+    subroutine choose_start()
+      if (state == 'finished' .or. state == 'running') then
+        ! Reused only when the stored scene is the requested one (knotflow checks every case at
+        ! set-up already; this guards other callers).
+        call check_reusable(path, sc, error, unreadable)
+        if (allocated(error)) then
+          status = case_failed
+          message = error%message
+          return
+        end if
+        if (unreadable) state = 'corrupt: its scene attributes cannot be read'
+      end if
+      if (state == 'finished') then
+        ! A finished file is skipped only when it reads back completely (checksums included).
+        call verify_case_file(path, sc%integrator%t_end, error)
+        if (.not. allocated(error)) then
+          status = case_skipped
+          message = 'already finished ('//path//')'
+          return
+        end if
+        state = 'corrupt: marked finished, but '//error%message
+        deallocate (error)
+      end if
+      if (state == 'running') then
+        ! The frames a resume keeps are checked first (finite times and coordinates, times that
+        ! increase): a bad early frame is found now, not after the whole remaining run.
+        block
+          real(wp), allocatable :: kept_t(:), kept_r(:, :, :)
+          call read_frames(path, kept_t, kept_r, error)
+        end block
+        if (allocated(error)) then
+          state = 'corrupt: a frame it keeps is bad: '//error%message
+          deallocate (error)
+        end if
+      end if
+      if (state == 'running') then
+        call file%open_resume(path, r, t, dt, steps, rejected, nframes, error, saved, saved_counters)
+        if (.not. allocated(error)) then
+          resumed = .true.
+          ! a file written before the run diagnostics existed is continued without them
+          with_diag = with_diag .and. file%has_diagnostics()
+          ! (the scene match guarantees that a file asked for the stresslet was written with it)
+          with_stresslet = with_stresslet .and. file%has_stresslet()
+        else
+          state = 'corrupt: its checkpoint cannot be resumed: '//error%message
+          deallocate (error)
+        end if
+      end if
+      if (index(state, 'corrupt: ') == 1) then
+        ! (a finished file found damaged: not yet checked for writing)
+        if (refused_access(.true.)) return
+        ! Damaged or unreadable: moved aside (never deleted) and the case recomputed.
+        call move_aside(path, moved_to, error)
+        if (allocated(error)) then
+          status = case_failed
+          message = path//' is damaged ('//state(10:)//') and cannot be moved aside: '//error%message
+          return
+        end if
+        call report%line('case '//name//': '//path//' is damaged ('//state(10:)//'): moved to '//moved_to// &
+                    '; computing the case again')
+      else if (state /= 'missing' .and. .not. resumed) then
+        ! Failed cases are recomputed from scratch.
+        call remove_file(path)
+      end if
+    end subroutine choose_start
+
+    !> Phase 3, the parts: the initial chain (unless resumed), the dynamics, the stepper (its state
+    !> from the checkpoint when resumed), the run diagnostics and the stresslet when asked for.
+    subroutine build_parts()
+      if (.not. resumed) then
+        call build_initial_chain(sc%chain, r, rotation, error)
         if (allocated(error)) then
           status = case_failed
           message = error%message
           return
         end if
       end if
-    end if
-    if (state == 'running') then
-      ! A kill while HDF5 flushed may have left objects written beyond the end the superblock
-      ! records: the end is raised to include them before the file is opened.
-      call h5_raise_end(path, extended, old_size, new_size, error)
+      call dyn%init(sc, size(r, 2), error)
+      if (.not. allocated(error)) call make_stepper(sc%integrator, integ, error)
+      if (.not. allocated(error) .and. resumed) call restore_stepper(error)
       if (allocated(error)) then
+        if (resumed) call file%close()
         status = case_failed
         message = error%message
         return
       end if
-      if (extended) call report%line('case '//name//': '//path//' holds '//to_str(new_size - old_size)// &
-        ' bytes written after the end its superblock records (killed while writing): end raised to '// &
-        to_str(new_size)//' bytes')
-    end if
-    if (state == 'finished' .or. state == 'running') then
-      ! Reused only when the stored scene is the requested one (knotflow checks every case at
-      ! set-up already; this guards other callers).
-      call check_reusable(path, sc, error, unreadable)
-      if (allocated(error)) then
-        status = case_failed
-        message = error%message
-        return
-      end if
-      if (unreadable) state = 'corrupt: its scene attributes cannot be read'
-    end if
-    if (state == 'finished') then
-      ! A finished file is skipped only when it reads back completely (checksums included).
-      call verify_case_file(path, sc%integrator%t_end, error)
-      if (.not. allocated(error)) then
-        status = case_skipped
-        message = 'already finished ('//path//')'
-        return
-      end if
-      state = 'corrupt: marked finished, but '//error%message
-      deallocate (error)
-    end if
-    if (state == 'running') then
-      ! The frames a resume keeps are checked first (finite times and coordinates, times that
-      ! increase): a bad early frame is found now, not after the whole remaining run.
-      block
-        real(wp), allocatable :: kept_t(:), kept_r(:, :, :)
-        call read_frames(path, kept_t, kept_r, error)
-      end block
-      if (allocated(error)) then
-        state = 'corrupt: a frame it keeps is bad: '//error%message
-        deallocate (error)
-      end if
-    end if
-    if (state == 'running') then
-      call file%open_resume(path, r, t, dt, steps, rejected, nframes, error, saved, saved_counters)
-      if (.not. allocated(error)) then
-        resumed = .true.
-        ! a file written before the run diagnostics existed is continued without them
-        with_diag = with_diag .and. file%has_diagnostics()
-        ! (the scene match guarantees that a file asked for the stresslet was written with it)
-        with_stresslet = with_stresslet .and. file%has_stresslet()
-      else
-        state = 'corrupt: its checkpoint cannot be resumed: '//error%message
-        deallocate (error)
-      end if
-    end if
-    if (index(state, 'corrupt: ') == 1) then
-      ! (a finished file found damaged: not yet checked for writing)
-      if (refused_access(.true.)) return
-      ! Damaged or unreadable: moved aside (never deleted) and the case recomputed.
-      call move_aside(path, moved_to, error)
-      if (allocated(error)) then
-        status = case_failed
-        message = path//' is damaged ('//state(10:)//') and cannot be moved aside: '//error%message
-        return
-      end if
-      call report%line('case '//name//': '//path//' is damaged ('//state(10:)//'): moved to '//moved_to// &
-                  '; computing the case again')
-    else if (state /= 'missing' .and. .not. resumed) then
-      ! Failed cases are recomputed from scratch.
-      call remove_file(path)
-    end if
 
-    if (.not. resumed) then
-      call build_initial_chain(sc%chain, r, rotation, error)
-      if (allocated(error)) then
-        status = case_failed
-        message = error%message
-        return
+      if (with_diag) then
+        allocate (diag)
+        call diag%init(size(r, 2), sc%chain%bond_length)
+        ! one pair list per configuration: the dynamics' list also serves the diagnostics
+        call dyn%need_pairs(diag_pair_cutoff)
+        call diag%share_pairs(dyn%pairs)
       end if
-    end if
-    call dyn%init(sc, size(r, 2), error)
-    if (.not. allocated(error)) call make_stepper(sc%integrator, integ, error)
-    if (.not. allocated(error) .and. resumed) call restore_stepper(error)
-    if (allocated(error)) then
-      if (resumed) call file%close()
-      status = case_failed
-      message = error%message
-      return
-    end if
+      if (with_stresslet) allocate (st)
+      if (resumed) then
+        if (with_diag) call restore_diagnostics(error)
+        if (.not. allocated(error)) call read_hydro_counters(error)
+        if (allocated(error)) then
+          call file%close()
+          status = case_failed
+          message = error%message
+          return
+        end if
+      end if
+    end subroutine build_parts
 
-    if (with_diag) then
-      allocate (diag)
-      call diag%init(size(r, 2), sc%chain%bond_length)
-      ! one pair list per configuration: the dynamics' list also serves the diagnostics
-      call dyn%need_pairs(diag_pair_cutoff)
-      call diag%share_pairs(dyn%pairs)
-    end if
-    if (with_stresslet) allocate (st)
-    if (resumed) then
-      if (with_diag) call restore_diagnostics(error)
-      if (.not. allocated(error)) call read_hydro_counters(error)
-      if (allocated(error)) then
-        call file%close()
-        status = case_failed
-        message = error%message
-        return
-      end if
-    end if
-
-    saved%name = trim(sc%integrator%method)
-    if (resumed) then
-      call report%line('case '//name//': resuming at t = '//to_str_short(t)//' from its checkpoint ('// &
-                  to_str(nframes)//' frames)')
-      call segment%place(t, integ%steps())
-      call file%start_run(segment%record(t, integ%steps()), error)
-      if (allocated(error)) then
-        call write_failed(error%message)
-        return
-      end if
-    else
-      call file%create(path, name, size(r, 2), scene_text(sc), rotation, error)
-      if (.not. allocated(error)) call write_scene_attributes(file, sc, error)
-      if (.not. allocated(error) .and. with_diag) call file%enable_diagnostics(error)
-      if (.not. allocated(error) .and. with_stresslet) call file%enable_stresslet(error)
-      ! every root attribute rewritten with the frames exists before the first frame, so that
-      ! later frames overwrite them in place
-      if (.not. allocated(error)) call write_hydro_counters(error)
-      if (.not. allocated(error)) call file%start_run(segment%record(0.0_wp, 0_i8), error)
-      if (allocated(error)) then
-        call write_failed(error%message)
-        return
-      end if
-      t = 0.0_wp
-      nframes = 0
-      call compute_shape(r, obs, error)
-      if (.not. allocated(error) .and. with_stresslet) call dyn%stresslet(r, st, error)
-      if (.not. allocated(error)) then
-        if (with_diag) call diag%start(t, r)
-        call integ%get_state(saved%reals, saved%ints)
-        call frame_records()
-        call file%append_frame(t, r, observables_record(obs), 0_i8, 0_i8, integ%dt(), error, diag_rec, saved, &
-                               hydro_counts(), st_rec, segment%record(t, 0_i8))
+    !> Phase 4, the file: a new /runs entry in the resumed file, or a new file with its attributes,
+    !> groups and the first frame (t = 0).
+    subroutine start_file()
+      saved%name = trim(sc%integrator%method)
+      if (resumed) then
+        call report%line('case '//name//': resuming at t = '//to_str_short(t)//' from its checkpoint ('// &
+                    to_str(nframes)//' frames)')
+        call segment%place(t, integ%steps())
+        call file%start_run(segment%record(t, integ%steps()), error)
         if (allocated(error)) then
           call write_failed(error%message)
           return
         end if
-      end if
-      if (allocated(error)) then
-        call fail(error%message)
-        return
-      end if
-      nframes = 1
-    end if
-
-    call system_clock(clock0, rate)
-    clock_last = clock0
-    t_start = t
-    do while (t < sc%integrator%t_end*(1.0_wp - 1.0e-12_wp))
-      t_next = min(sc%integrator%t_end, real(nframes, wp)*sc%output%frame_interval)
-      if (t_next <= t) t_next = min(sc%integrator%t_end, t + sc%output%frame_interval)
-      call integ%advance(dyn, t, r, t_next, error, diag)
-      if (allocated(error)) then
-        call fail(error%message)
-        return
-      end if
-      call compute_shape(r, obs, error)
-      if (.not. allocated(error) .and. with_stresslet) call dyn%stresslet(r, st, error)
-      if (allocated(error)) then
-        call fail(error%message)
-        return
-      end if
-      call integ%get_state(saved%reals, saved%ints)
-      call frame_records()
-      call segment%sample_load()
-      call file%append_frame(t, r, observables_record(obs), integ%steps(), integ%rejected(), integ%dt(), error, &
-                             diag_rec, saved, hydro_counts(), st_rec, segment%record(t, integ%steps()))
-      if (.not. allocated(error)) call write_hydro_counters(error)
-      if (allocated(error)) then
-        call write_failed(error%message)
-        return
-      end if
-      nframes = nframes + 1
-      if (stop_signal() /= 0 .and. t < sc%integrator%t_end*(1.0_wp - 1.0e-12_wp)) then
-        ! SIGTERM or SIGINT: the frame and its checkpoint are written; stop here
-        call stopped()
-        return
-      end if
-      call system_clock(clock_now)
-      if (real(clock_now - clock_last, wp)/rate >= sc%output%progress_interval) then
-        clock_last = clock_now
-        call report%line(progress_line())
-      end if
-    end do
-    ! 'finished' only after the last frame is flushed and the file read back and verified.
-    final = segment%record(t, integ%steps())
-    call file%finish(sc%integrator%t_end, error, damaged, final)
-    if (allocated(error)) then
-      status = case_failed
-      if (damaged) then
-        message = error%message
-        call move_aside(path, moved_to, error)
-        if (allocated(error)) then
-          message = message//'; it cannot be moved aside: '//error%message
-        else
-          message = message//'; moved to '//moved_to//', the next run computes the case again'
-        end if
       else
-        call write_failed(error%message)
+        call file%create(path, name, size(r, 2), scene_text(sc), rotation, error)
+        if (.not. allocated(error)) call write_scene_attributes(file, sc, error)
+        if (.not. allocated(error) .and. with_diag) call file%enable_diagnostics(error)
+        if (.not. allocated(error) .and. with_stresslet) call file%enable_stresslet(error)
+        ! every root attribute rewritten with the frames exists before the first frame, so that
+        ! later frames overwrite them in place
+        if (.not. allocated(error)) call write_hydro_counters(error)
+        if (.not. allocated(error)) call file%start_run(segment%record(0.0_wp, 0_i8), error)
+        if (allocated(error)) then
+          call write_failed(error%message)
+          return
+        end if
+        t = 0.0_wp
+        nframes = 0
+        call compute_shape(r, obs, error)
+        if (.not. allocated(error) .and. with_stresslet) call dyn%stresslet(r, st, error)
+        if (.not. allocated(error)) then
+          if (with_diag) call diag%start(t, r)
+          call integ%get_state(saved%reals, saved%ints)
+          call frame_records()
+          call file%append_frame(t, r, observables_record(obs), 0_i8, 0_i8, integ%dt(), error, diag_rec, saved, &
+                                 hydro_counts(), st_rec, segment%record(t, 0_i8))
+          if (allocated(error)) then
+            call write_failed(error%message)
+            return
+          end if
+        end if
+        if (allocated(error)) then
+          call fail(error%message)
+          return
+        end if
+        nframes = 1
       end if
-      return
-    end if
-    status = case_ok
-    call system_clock(clock_now)
-    message = to_str(integ%steps())//' steps ('//to_str(integ%rejected())//' rejected), '// &
-              to_str_short(real(clock_now - clock0, wp)/rate)//' s'
-    if (ieee_is_finite(final%load_mean)) message = message//', mean load '//to_str_short(final%load_mean)
+    end subroutine start_file
 
-  contains
+    !> Phase 5, the frame loop: advance to the next frame time, append the frame and its checkpoint,
+    !> stop after a whole frame on a stop signal, report progress every progress_interval.
+    subroutine frame_loop()
+      call system_clock(clock0, rate)
+      clock_last = clock0
+      t_start = t
+      do while (t < sc%integrator%t_end*(1.0_wp - 1.0e-12_wp))
+        t_next = min(sc%integrator%t_end, real(nframes, wp)*sc%output%frame_interval)
+        if (t_next <= t) t_next = min(sc%integrator%t_end, t + sc%output%frame_interval)
+        call integ%advance(dyn, t, r, t_next, error, diag)
+        if (allocated(error)) then
+          call fail(error%message)
+          return
+        end if
+        call compute_shape(r, obs, error)
+        if (.not. allocated(error) .and. with_stresslet) call dyn%stresslet(r, st, error)
+        if (allocated(error)) then
+          call fail(error%message)
+          return
+        end if
+        call integ%get_state(saved%reals, saved%ints)
+        call frame_records()
+        call segment%sample_load()
+        call file%append_frame(t, r, observables_record(obs), integ%steps(), integ%rejected(), integ%dt(), error, &
+                               diag_rec, saved, hydro_counts(), st_rec, segment%record(t, integ%steps()))
+        if (.not. allocated(error)) call write_hydro_counters(error)
+        if (allocated(error)) then
+          call write_failed(error%message)
+          return
+        end if
+        nframes = nframes + 1
+        if (stop_signal() /= 0 .and. t < sc%integrator%t_end*(1.0_wp - 1.0e-12_wp)) then
+          ! SIGTERM or SIGINT: the frame and its checkpoint are written; stop here
+          call stopped()
+          return
+        end if
+        call system_clock(clock_now)
+        if (real(clock_now - clock_last, wp)/rate >= sc%output%progress_interval) then
+          clock_last = clock_now
+          call report%line(progress_line())
+        end if
+      end do
+    end subroutine frame_loop
+
+    !> Phase 6, the end: the file read back, verified and marked finished (a damaged one moved
+    !> aside), and the case's one-line summary.
+    subroutine finish_case()
+      ! 'finished' only after the last frame is flushed and the file read back and verified.
+      final = segment%record(t, integ%steps())
+      call file%finish(sc%integrator%t_end, error, damaged, final)
+      if (allocated(error)) then
+        status = case_failed
+        if (damaged) then
+          message = error%message
+          call move_aside(path, moved_to, error)
+          if (allocated(error)) then
+            message = message//'; it cannot be moved aside: '//error%message
+          else
+            message = message//'; moved to '//moved_to//', the next run computes the case again'
+          end if
+        else
+          call write_failed(error%message)
+        end if
+        return
+      end if
+      status = case_ok
+      call system_clock(clock_now)
+      message = to_str(integ%steps())//' steps ('//to_str(integ%rejected())//' rejected), '// &
+                to_str_short(real(clock_now - clock0, wp)/rate)//' s'
+      if (ieee_is_finite(final%load_mean)) message = message//', mean load '//to_str_short(final%load_mean)
+    end subroutine finish_case
 
     !> Whether the existing case file cannot be used as this run needs (for writing, or only for
     !> reading): in use by another process (HDF5's file lock, kf_fs: file_in_use) or, for

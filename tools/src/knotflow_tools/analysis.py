@@ -47,6 +47,24 @@ class CaseAnalysis:
         return len(self.events) > 0
 
 
+def kf_at(kf, t):
+    """(k_f, its time) of the latest analysed frame at or before time t, or None."""
+    if kf is None or not len(kf[0]):
+        return None
+    k = int(np.searchsorted(kf[0], t, side="right")) - 1
+    return (float(kf[1][k]), float(kf[0][k])) if k >= 0 else None
+
+
+def kf_label(kf, t, sub="<sub>f</sub>") -> str:
+    """'k_f = 0.830', with '(at t = ...)' when it comes from an earlier analysed frame."""
+    found = kf_at(kf, t)
+    if found is None:
+        return f"k{sub}: not analysed"
+    value, tk = found
+    at = "" if abs(tk - t) <= 1e-9 * max(1.0, abs(t)) else f" (at t = {tk:.4g})"
+    return f"k{sub} = {value:.3f}{at}"
+
+
 def knot_series(positions, frames, closures=200, seed=1):
     """k_f, spectrum rows and dominant types for the given frame indices."""
     kf, spec, dom = [], [], []

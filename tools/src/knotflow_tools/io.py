@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import errno
 import fcntl
+import glob
 import os
 import re
 import stat
@@ -516,3 +517,12 @@ def write_xyz(path, r, comment: str | None = None) -> None:
     lines = [f"# {line}\n" for line in (comment or "").splitlines()]
     lines += [f"{p[0]:.17g} {p[1]:.17g} {p[2]:.17g}\n" for p in np.asarray(r, dtype=float)]
     write_text(path, "".join(lines))
+
+
+def find_case_files(sweep_dir) -> list:
+    """Case files (*.h5) in the sweep directory and its immediate subdirectories, hidden ones
+    ('.name.h5') included: none is left out in silence (a hidden case name is then refused)."""
+    files = []
+    for pattern in ("*.h5", ".*.h5", os.path.join("*", "*.h5"), os.path.join("*", ".*.h5")):
+        files += glob.glob(os.path.join(glob.escape(str(sweep_dir)), pattern))
+    return sorted(set(f for f in files if os.sep + "report" + os.sep not in f))

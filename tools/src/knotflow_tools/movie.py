@@ -25,7 +25,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .analysis import observables_of  # noqa: E402
+from .analysis import kf_label, observables_of  # noqa: E402
 from .atomic import WriteError, replacing  # noqa: E402
 from .io import Case  # noqa: E402
 
@@ -207,7 +207,6 @@ class MovieFigure:
             m.set_xdata([t, t])
         kf_text = ""
         if self.kf is not None and len(self.kf[0]):
-            from .viewer import kf_label
             kf_text = ",  " + kf_label(self.kf, t, sub="$_f$")
         core_text = (f"\nknot core: beads {core[0]}-{core[1]} (knot matrix of frame {core[2]})"
                      if core is not None else "")

@@ -4,7 +4,6 @@ cases with a stresslet, figures (md + html)."""
 from __future__ import annotations
 
 import contextlib
-import glob
 import html
 import json
 import os
@@ -12,20 +11,11 @@ import sys
 
 from .analysis import analyze_case
 from .atomic import write_text
-from .io import read_case
+from .io import find_case_files, read_case
 from .names import check_case_name
 from .plot import mode_name, plot_case
 from .rheology import rheology_summary
 from .xdmf import write_xdmf, xdmf_path
-
-
-def find_case_files(sweep_dir) -> list:
-    """Case files (*.h5) in the sweep directory and its immediate subdirectories, hidden ones
-    ('.name.h5') included: none is left out in silence (a hidden case name is then refused)."""
-    files = []
-    for pattern in ("*.h5", ".*.h5", os.path.join("*", "*.h5"), os.path.join("*", ".*.h5")):
-        files += glob.glob(os.path.join(glob.escape(str(sweep_dir)), pattern))
-    return sorted(set(f for f in files if os.sep + "report" + os.sep not in f))
 
 
 def _read_summary(sweep_dir):

@@ -378,7 +378,7 @@ def write_rheology(knot_dirs, mode_dirs, out, t_from=0.0, threshold=KNOT_THRESHO
     import os
 
     from .campaign import find_ledger_cases, load_case
-    from .report import find_case_files
+    from .io import find_case_files
     os.makedirs(out, exist_ok=True)
     rule = (f"knotted when k_f >= {threshold:g} (no hysteresis)" if hysteresis is None else
             f"hysteresis: knotted above {hysteresis[1]:g}, unknotted below {hysteresis[0]:g}, "

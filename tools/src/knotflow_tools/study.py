@@ -58,9 +58,8 @@ import numpy as np  # noqa: E402
 from . import study_statistics  # noqa: E402
 from .atomic import save_figure, write_text  # noqa: E402
 from .campaign import find_ledger_cases, load_case  # noqa: E402
-from .io import write_xyz  # noqa: E402
+from .io import find_case_files, write_xyz  # noqa: E402
 from .plot import _draw_chain  # noqa: E402
-from .report import find_case_files  # noqa: E402
 from .study_compare import candycane_comparison, trefoil_comparison  # noqa: E402
 from .study_reference import STUDY_REKNOT_EVENTS, STUDY_REKNOT_SIMULATIONS, STUDY_TREFOIL_CASES  # noqa: E402
 from .study_rows import (  # noqa: E402

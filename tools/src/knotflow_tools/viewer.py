@@ -14,6 +14,7 @@ import html as _html
 
 import numpy as np
 
+from .analysis import kf_label
 from .io import Case
 from .movie import COL_FIRST, COL_SECOND, movie_frames
 
@@ -26,24 +27,6 @@ def plotly_js_tag() -> str:
     """A <script> element with the whole plotly.js library (about 4.8 MB), for offline use."""
     from plotly.offline import get_plotlyjs
     return "<script type='text/javascript'>" + get_plotlyjs() + "</script>"
-
-
-def kf_at(kf, t):
-    """(k_f, its time) of the latest analysed frame at or before time t, or None."""
-    if kf is None or not len(kf[0]):
-        return None
-    k = int(np.searchsorted(kf[0], t, side="right")) - 1
-    return (float(kf[1][k]), float(kf[0][k])) if k >= 0 else None
-
-
-def kf_label(kf, t, sub="<sub>f</sub>") -> str:
-    """'k_f = 0.830', with '(at t = ...)' when it comes from an earlier analysed frame."""
-    found = kf_at(kf, t)
-    if found is None:
-        return f"k{sub}: not analysed"
-    value, tk = found
-    at = "" if abs(tk - t) <= 1e-9 * max(1.0, abs(t)) else f" (at t = {tk:.4g})"
-    return f"k{sub} = {value:.3f}{at}"
 
 
 def _title(case, fi, kf):
