@@ -22,7 +22,7 @@ program knotflow_mobility
   use kf_hydro_model, only: hydro_model_t
   use kf_hydro_multipole, only: multipole_model_t
   use kf_multipole_system, only: max_multipole_order
-  use kf_hydro_factory, only: make_hydro_model, hydro_model_names
+  use kf_hydro_factory, only: make_hydro_model, hydro_model_names, standalone_eps_lub
   use kf_scene_check, only: name_list
   use kf_scene, only: hydro_params_t
   implicit none
@@ -40,7 +40,7 @@ program knotflow_mobility
   model_name = 'multipole'
   order = 2
   lubrication = .true.
-  eps_lub = 1.0e-4_wp
+  eps_lub = standalone_eps_lub
   output = 'mobility'
   file = ''
 

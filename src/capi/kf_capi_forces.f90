@@ -1,4 +1,4 @@
-!> The C interface of the chain forces (kf_forces, docs/python.md): springs, bending, excluded
+!> The C interface of the chain forces (kf_forces, docs/python-api.md): springs, bending, excluded
 !> volume and a constant external force, with the &forces group's parameters and validation.
 module kf_capi_forces
   use, intrinsic :: iso_c_binding, only: c_int, c_char, c_double

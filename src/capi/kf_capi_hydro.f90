@@ -1,4 +1,4 @@
-!> The C interface of the hydrodynamic models (docs/python.md). A model is an opaque handle made
+!> The C interface of the hydrodynamic models (docs/python-api.md). A model is an opaque handle made
 !> by knotflow_model_create from a specification (model name, multipole order, lubrication,
 !> eps_lub, overlap rule) through the library's factory (kf_hydro_factory, with the &hydro
 !> group's validation and names) and freed by knotflow_model_free. Independent handles share
@@ -15,18 +15,17 @@ module kf_capi_hydro
     c_null_ptr
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use kf_kinds, only: wp, i8
-  use kf_strings, only: to_str
+  use kf_strings, only: to_str, to_str_exact
   use kf_error, only: error_t, fatal_error
   use kf_capi_status, only: kf_ok, kf_invalid_argument, kf_failed, put_message, from_c_chars, check_positions, &
     elapsed_seconds
-  use kf_capi_names, only: default_eps_lub
   use kf_scene_item, only: name_len
-  use kf_scene_check, only: name_list
+  use kf_scene_check, only: name_list, refuse, quoted
   use kf_scene_hydro, only: hydro_params_t, update_stage, overlap_names
   use kf_scene_flow, only: flow_params_t, flow_linear
   use kf_flow, only: flow_t
   use kf_hydro_model, only: hydro_model_t
-  use kf_hydro_factory, only: make_hydro_model, hydro_model_names
+  use kf_hydro_factory, only: make_hydro_model, hydro_model_names, standalone_eps_lub
   use kf_overlap_rule, only: overlap_rule_t, make_overlap_rule
   use kf_pair_geometry, only: pair_geometry_t
   implicit none
@@ -45,16 +44,18 @@ module kf_capi_hydro
 
 contains
 
-  !> Create a model: `name`(name_len) one of the &hydro models (none, rpy, multipole); `order`
-  !> the multipole order L; `lubrication` /= 0 for the lubrication corrections; `eps_lub` the
-  !> BWE shift (< 0: knotflow-mobility's default 1e-4; 0 or >= 0.5 refused); `overlap`
-  !> (overlap_len) one of the overlap rules; `overlap_time` the relax rule's time (< 0: its
-  !> default). On success *handle is the new model (free it with knotflow_model_free), else
-  !> it is NULL and msg holds the reason (the &hydro group's own validation message).
+  !> Create a model: `name`(name_length) one of the &hydro models (none, rpy, multipole);
+  !> `order` the multipole order L; `lubrication` /= 0 for the lubrication corrections; `eps_lub`
+  !> the BWE shift (0 < eps_lub < 0.5; knotflow_defaults gives knotflow-mobility's default);
+  !> `overlap`(overlap_length) one of the overlap rules; `overlap_time` the relax rule's time
+  !> (knotflow_defaults gives the &hydro default, the only value allowed with other rules).
+  !> The values are checked by the &hydro group's own validation (kf_scene_hydro), and the
+  !> multipole model is built with update 'stage' (exact at every call). On success *handle is
+  !> the new model (free it with knotflow_model_free), else it is NULL and msg holds the reason.
   integer(c_int) function knotflow_model_create(name, name_length, order, lubrication, eps_lub, overlap, &
     overlap_length, overlap_time, handle, msg, msglen) bind(c, name='knotflow_model_create') result(status)
     integer(c_int), value, intent(in) :: name_length, overlap_length
-    character(kind=c_char), intent(in) :: name(name_length), overlap(overlap_length)
+    character(kind=c_char), intent(in) :: name(max(name_length, 0)), overlap(max(overlap_length, 0))
     integer(c_int), value, intent(in) :: order, lubrication
     real(c_double), value, intent(in) :: eps_lub, overlap_time
     type(c_ptr), intent(out) :: handle
@@ -66,27 +67,28 @@ contains
     character(len=:), allocatable :: model_name, rule_name
     handle = c_null_ptr
     status = kf_invalid_argument
-    model_name = from_c_chars(name, name_length)
-    rule_name = from_c_chars(overlap, overlap_length)
-    if (len(model_name) > name_len .or. .not. any(hydro_model_names == model_name)) then
-      call put_message("model '"//model_name//"' unknown (one of "//name_list(hydro_model_names)//')', msg, msglen)
-      return
-    end if
-    if (len(rule_name) > name_len .or. .not. any(overlap_names == rule_name)) then
-      call put_message("overlap rule '"//rule_name//"' unknown (one of "//name_list(overlap_names)//')', msg, msglen)
+    model_name = from_c_chars(name, max(name_length, 0))
+    rule_name = from_c_chars(overlap, max(overlap_length, 0))
+    if (len(model_name) > name_len) &
+      call refuse(error, '', 'hydro', 'model', quoted(model_name), 'one of '//name_list(hydro_model_names))
+    if (.not. allocated(error) .and. len(rule_name) > name_len) &
+      call refuse(error, '', 'hydro', 'overlap', quoted(rule_name), 'one of '//name_list(overlap_names))
+    ! a negative eps_lub means "the integration tolerance" in a scene; here there is none
+    if (.not. allocated(error) .and. .not. eps_lub > 0.0_c_double) &
+      call refuse(error, '', 'hydro', 'eps_lub', to_str_exact(real(eps_lub, wp)), 'a number in (0, 0.5)')
+    if (allocated(error)) then
+      call put_message(error%message, msg, msglen)
       return
     end if
     params%model = model_name
     params%order = order
     params%lubrication = lubrication /= 0
-    params%eps_lub = default_eps_lub
-    if (.not. eps_lub < 0.0_c_double) params%eps_lub = eps_lub
+    params%eps_lub = eps_lub
     params%update = update_stage
     params%overlap = rule_name
-    if (.not. overlap_time < 0.0_c_double) params%overlap_time = overlap_time
+    params%overlap_time = overlap_time
     allocate (m)
-    ! the tolerance argument matters only to the adaptive update; as knotflow-mobility: eps_lub
-    call make_hydro_model(params, params%eps_lub, m%model, error)
+    call make_hydro_model(params, standalone_eps_lub, m%model, error)
     if (.not. allocated(error)) &
       call make_overlap_rule(params%overlap, params%eps_lub, params%overlap_time, m%overlap, error)
     if (allocated(error)) then

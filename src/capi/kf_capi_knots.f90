@@ -1,4 +1,4 @@
-!> The C interface of the knot analysis (kf_knot_closure, docs/python.md): the knotted fraction
+!> The C interface of the knot analysis (kf_knot_closure, docs/python-api.md): the knotted fraction
 !> k_f, the spectrum and the dominant type of an open chain from stochastic closures, as
 !> knotflow-analyze computes them for a coordinate file (the same call, stream 0).
 module kf_capi_knots
@@ -41,9 +41,8 @@ contains
     per_closure = 0
     seconds = 0.0_c_double
     status = kf_invalid_argument
-    call check_positions('knotflow_knots', n, 2, r, error)
-    if (.not. allocated(error) .and. closures < 1) &
-      call fatal_error(error, 'knotflow_knots: closures = '//to_str(int(closures))//' (must be >= 1)')
+    ! the numbers of beads and closures are checked by analyse_closures (its limits, its message)
+    call check_positions('knotflow_knots', n, 0, r, error)
     if (.not. allocated(error) .and. stream < 0) &
       call fatal_error(error, 'knotflow_knots: stream = '//to_str(int(stream, i8))//' (must be >= 0)')
     if (allocated(error)) then

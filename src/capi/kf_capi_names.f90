@@ -5,8 +5,8 @@ module kf_capi_names
   use, intrinsic :: iso_c_binding, only: c_int, c_char, c_double, c_int64_t
   use kf_capi_status, only: kf_ok, kf_invalid_argument, put_message
   use kf_strings, only: to_str
-  use kf_hydro_factory, only: hydro_model_names
-  use kf_scene_hydro, only: overlap_names
+  use kf_hydro_factory, only: hydro_model_names, standalone_eps_lub
+  use kf_scene_hydro, only: hydro_params_t, overlap_names
   use kf_knot_invariants, only: n_knot_types, knot_type_names
   use kf_knot_closure, only: default_closures, default_knot_seed
   implicit none
@@ -14,9 +14,6 @@ module kf_capi_names
 
   !> The list kinds of knotflow_names.
   integer(c_int), parameter :: list_models = 1, list_overlap_rules = 2, list_knot_types = 3
-
-  !> eps_lub of a model created without one: knotflow-mobility's default (docs/multipole.md).
-  real(c_double), parameter, public :: default_eps_lub = 1.0e-4_c_double
 
   public :: knotflow_names, knotflow_defaults
 
@@ -53,15 +50,18 @@ contains
   end function knotflow_names
 
   !> The defaults: closures and seed of knotflow-analyze's knot analysis, eps_lub of
-  !> knotflow-mobility, and the number of knot types (the length of a spectrum).
-  subroutine knotflow_defaults(closures, seed, eps_lub, knot_types) bind(c, name='knotflow_defaults')
+  !> knotflow-mobility, the &hydro group's overlap_time and the number of knot types (the
+  !> length of a spectrum).
+  subroutine knotflow_defaults(closures, seed, eps_lub, overlap_time, knot_types) bind(c, name='knotflow_defaults')
     integer(c_int), intent(out) :: closures
     integer(c_int64_t), intent(out) :: seed
-    real(c_double), intent(out) :: eps_lub
+    real(c_double), intent(out) :: eps_lub, overlap_time
     integer(c_int), intent(out) :: knot_types
+    type(hydro_params_t) :: hydro
     closures = default_closures
     seed = default_knot_seed
-    eps_lub = default_eps_lub
+    eps_lub = standalone_eps_lub
+    overlap_time = hydro%overlap_time
     knot_types = n_knot_types
   end subroutine knotflow_defaults
 

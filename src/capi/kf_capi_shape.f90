@@ -1,4 +1,4 @@
-!> The C interface of the shape observables (kf_shape, PHYSICS.md section 6, docs/python.md):
+!> The C interface of the shape observables (kf_shape, PHYSICS.md section 6, docs/python-api.md):
 !> what knotflow records for every frame (/frames/observables).
 module kf_capi_shape
   use, intrinsic :: iso_c_binding, only: c_int, c_char, c_double

@@ -1,4 +1,4 @@
-!> The status codes and messages of the C interface (src/capi, docs/python.md). Every bind(c)
+!> The status codes and messages of the C interface (src/capi, docs/python-api.md). Every bind(c)
 !> function returns one of the codes; when it is not `kf_ok` it writes a one-line message (the
 !> library's error message, or what was refused) into the caller's buffer `msg` of `msglen`
 !> characters, NUL-terminated and truncated to fit. Nothing is kept between calls.

@@ -1,4 +1,4 @@
-"""knotflow: the knotflow Fortran library from Python (docs/python.md).
+"""knotflow: the knotflow Fortran library from Python (docs/python-api.md).
 
 Hydrodynamic mobilities (none, RPY, multipole with lubrication), bead velocities, chain forces,
 knots (k_f and spectrum by stochastic closure) and shape of bead configurations given as numpy

@@ -1,15 +1,20 @@
 """Loading the shared library ``libknotflow_capi`` (src/capi) and calling it safely.
 
-The library is found, in this order, at the path in the environment variable
-``KNOTFLOW_LIBRARY``; in the build tree of the repository this package lives in
-(``build/lib``); next to this package (a wheel). Every call goes through :func:`check`, which turns a
-non-zero status into a :class:`KnotflowError` carrying the library's message.
+The library is looked for, in this order: at the path in the environment variable
+``KNOTFLOW_LIBRARY``; next to this package (a wheel carries it there); in
+``<sys.prefix>/lib/knotflow`` (scripts/build.sh links the build's library into its virtual
+environment); in the build tree of the source checkout this package lives in (``build/lib``).
+Every call goes through :func:`check`, which turns a non-zero status into a
+:class:`KnotflowError` carrying the library's message. Arguments are converted here (arrays of
+the right shape and type, integers that fit a C int); what their values may be is the
+library's to decide, so its messages reach the caller.
 """
 
 from __future__ import annotations
 
 import ctypes
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -25,9 +30,19 @@ STATUS_OK = 0
 STATUS_INVALID_ARGUMENT = 1
 STATUS_FAILED = 2
 
+_C_INT_MIN, _C_INT_MAX = -(2**31), 2**31 - 1
+
 
 class KnotflowError(Exception):
-    """An error of the knotflow library or an argument it refuses; the message says which."""
+    """An error of the knotflow library or an argument it refuses; the message says which.
+
+    ``status`` is the library's status code (1: an argument refused before any work, 2: a
+    failure of the library), or 1 for an argument refused before the call (wrong shape or type).
+    """
+
+    def __init__(self, message: str, status: int = STATUS_INVALID_ARGUMENT) -> None:
+        super().__init__(message)
+        self.status = status
 
 
 def candidate_paths() -> list[Path]:
@@ -37,9 +52,10 @@ def candidate_paths() -> list[Path]:
     if env:
         paths.append(Path(env))
     here = Path(__file__).resolve().parent
-    # tools/src/knotflow -> the repository's build tree
-    paths.append(here.parents[2] / "build" / "lib" / LIBRARY_FILE)
     paths.append(here / LIBRARY_FILE)
+    paths.append(Path(sys.prefix) / "lib" / "knotflow" / LIBRARY_FILE)
+    # tools/src/knotflow -> the source checkout's default build tree
+    paths.append(here.parents[2] / "build" / "lib" / LIBRARY_FILE)
     return paths
 
 
@@ -52,7 +68,8 @@ _STR = ctypes.c_char_p
 #: argtypes of every function of the C interface (restype int unless listed in _VOID).
 _SIGNATURES: dict[str, list[object]] = {
     "knotflow_names": [_I, _STR, _I],
-    "knotflow_defaults": [ctypes.POINTER(_I), ctypes.POINTER(_I64), ctypes.POINTER(_D), ctypes.POINTER(_I)],
+    "knotflow_defaults": [ctypes.POINTER(_I), ctypes.POINTER(_I64), ctypes.POINTER(_D), ctypes.POINTER(_D),
+                          ctypes.POINTER(_I)],
     "knotflow_model_create": [_STR, _I, _I, _I, _D, _STR, _I, _D, ctypes.POINTER(_P), _STR, _I],
     "knotflow_model_free": [ctypes.POINTER(_P)],
     "knotflow_model_label": [_P, _STR, _I],
@@ -105,8 +122,7 @@ def message_buffer() -> ctypes.Array[ctypes.c_char]:
 def check(status: int, buf: ctypes.Array[ctypes.c_char]) -> None:
     """Raise KnotflowError with the library's message when status is not 0."""
     if status != STATUS_OK:
-        kind = "refused" if status == STATUS_INVALID_ARGUMENT else "failed"
-        raise KnotflowError(f"knotflow {kind}: {buf.value.decode(errors='replace')}")
+        raise KnotflowError(buf.value.decode(errors="replace"), status)
 
 
 def names(kind: int) -> tuple[str, ...]:
@@ -116,46 +132,65 @@ def names(kind: int) -> tuple[str, ...]:
     return tuple(buf.value.decode().split())
 
 
-def defaults() -> tuple[int, int, float, int]:
-    """(closures, seed, eps_lub, number of knot types): the library's defaults."""
-    closures, seed, eps, ntypes = _I(), _I64(), _D(), _I()
+def defaults() -> tuple[int, int, float, float, int]:
+    """(closures, seed, eps_lub, overlap_time, number of knot types): the library's defaults."""
+    closures, seed, eps, otime, ntypes = _I(), _I64(), _D(), _D(), _I()
     library().knotflow_defaults(ctypes.byref(closures), ctypes.byref(seed), ctypes.byref(eps),
-                                ctypes.byref(ntypes))
-    return closures.value, seed.value, eps.value, ntypes.value
+                                ctypes.byref(otime), ctypes.byref(ntypes))
+    return closures.value, seed.value, eps.value, otime.value, ntypes.value
 
 
-def positions_array(positions: npt.ArrayLike, min_beads: int, what: str = "positions") -> np.ndarray:
-    """`positions` as a C-contiguous float64 (N, 3) array, checked: shape, N >= min_beads, finite."""
+def c_int_value(value: object, what: str) -> int:
+    """`value` as a Python int that fits a C int (bool and non-integers refused)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise KnotflowError(f"{what} = {value!r}: expected an integer")
+    if not _C_INT_MIN <= int(value) <= _C_INT_MAX:
+        raise KnotflowError(f"{what} = {value!r}: out of the range of a C int")
+    return int(value)
+
+
+def int64_value(value: object, what: str) -> int:
+    """`value` as a Python int that fits a 64-bit signed integer (bool and non-integers refused)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not -(2**63) <= value < 2**63:
+        raise KnotflowError(f"{what} = {value!r}: expected a 64-bit integer")
+    return int(value)
+
+
+def c_double_value(value: object, what: str) -> float:
+    """`value` as a Python float (a real number; its range is the library's to check)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise KnotflowError(f"{what} = {value!r}: expected a number")
+    return float(value)
+
+
+def positions_array(positions: npt.ArrayLike, what: str = "positions") -> np.ndarray:
+    """`positions` as a C-contiguous float64 (N, 3) array (a copy); only the shape is checked
+    here, the number of beads and the values by the library."""
     try:
         r = np.array(positions, dtype=np.float64, order="C", copy=True)
     except (TypeError, ValueError) as exc:
         raise KnotflowError(f"{what}: not an array of numbers ({exc})") from None
     if r.ndim != 2 or r.shape[1] != 3:
         raise KnotflowError(f"{what}: expected an (N, 3) array, got shape {r.shape}")
-    if r.shape[0] < min_beads:
-        raise KnotflowError(f"{what}: {r.shape[0]} bead(s), at least {min_beads} needed")
-    if not np.all(np.isfinite(r)):
-        bad = int(np.argwhere(~np.isfinite(r))[0, 0])
-        raise KnotflowError(f"{what}: bead {bad} (0-based) has a non-finite coordinate")
+    if r.shape[0] > _C_INT_MAX // 3:
+        raise KnotflowError(f"{what}: {r.shape[0]} beads, more than a C int can count")
     return r
 
 
 def like_positions(values: npt.ArrayLike, n: int, what: str) -> np.ndarray:
-    """`values` (forces) as a finite C-contiguous float64 (n, 3) array."""
-    v = positions_array(values, 0, what)
+    """`values` (forces) as a C-contiguous float64 (n, 3) array."""
+    v = positions_array(values, what)
     if v.shape[0] != n:
         raise KnotflowError(f"{what}: expected shape ({n}, 3) like the positions, got {v.shape}")
     return v
 
 
 def tensor_array(values: npt.ArrayLike, what: str) -> np.ndarray:
-    """A finite 3 x 3 tensor as a Fortran-ordered float64 array (element [i, j] is T_ij)."""
+    """A 3 x 3 tensor as a Fortran-ordered float64 array (element [i, j] is T_ij)."""
     try:
         t = np.array(values, dtype=np.float64, order="F", copy=True)
     except (TypeError, ValueError) as exc:
         raise KnotflowError(f"{what}: not an array of numbers ({exc})") from None
     if t.shape != (3, 3):
         raise KnotflowError(f"{what}: expected a 3 x 3 array, got shape {t.shape}")
-    if not np.all(np.isfinite(t)):
-        raise KnotflowError(f"{what}: holds non-finite values")
     return t

@@ -11,9 +11,10 @@ import numpy.typing as npt
 
 from knotflow._library import (
     MESSAGE_LENGTH,
-    KnotflowError,
+    c_int_value,
     check,
     defaults,
+    int64_value,
     library,
     message_buffer,
     names,
@@ -59,12 +60,6 @@ class Knots:
     seconds: float
 
 
-def _count(value: object, what: str, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise KnotflowError(f"{what} {value!r}: expected an integer >= {minimum}")
-    return int(value)
-
-
 def knots(positions: npt.ArrayLike, closures: int | None = None, seed: int | None = None,
           stream: int = 0) -> Knots:
     """Knot analysis of the open chain at ``positions`` (N x 3, N >= 2) by stochastic closure.
@@ -74,23 +69,22 @@ def knots(positions: npt.ArrayLike, closures: int | None = None, seed: int | Non
     to both ends and the closed polygon classified. ``stream`` 0 is what knotflow-analyze uses
     for a coordinate file (``--closures C --seed S``); frame k of a case file uses stream k.
     """
-    r = positions_array(positions, 2)
-    nc = default_closures() if closures is None else _count(closures, "closures", 1)
-    sd = default_seed() if seed is None else seed
-    if isinstance(sd, bool) or not isinstance(sd, (int, np.integer)) or not -2**63 <= sd < 2**63:
-        raise KnotflowError(f"seed {seed!r}: expected a 64-bit integer")
-    st = _count(stream, "stream", 0)
+    r = positions_array(positions)
+    nc = default_closures() if closures is None else c_int_value(closures, "closures")
+    sd = int64_value(default_seed() if seed is None else seed, "seed")
+    st = int64_value(stream, "stream")
     types = knot_types()
     kf, dominant, seconds = ctypes.c_double(), ctypes.c_int(), ctypes.c_double()
     spectrum = np.zeros(len(types))
-    per_closure = np.zeros(nc, dtype=np.int32)
+    per_closure = np.zeros(max(nc, 1), dtype=np.int32)
     buf = message_buffer()
-    check(library().knotflow_knots(len(r), r, nc, int(sd), st, ctypes.byref(kf), spectrum,
+    check(library().knotflow_knots(len(r), r, nc, sd, st, ctypes.byref(kf), spectrum,
                                    ctypes.byref(dominant), per_closure, ctypes.byref(seconds), buf,
                                    MESSAGE_LENGTH), buf)
     return Knots(kf=kf.value, spectrum=dict(zip(types, spectrum.tolist(), strict=True)),
-                 dominant=types[dominant.value - 1], per_closure=tuple(types[k - 1] for k in per_closure),
-                 closures=nc, seed=int(sd), stream=st, seconds=seconds.value)
+                 dominant=types[dominant.value - 1],
+                 per_closure=tuple(types[k - 1] for k in per_closure[:nc]),
+                 closures=nc, seed=sd, stream=st, seconds=seconds.value)
 
 
 def knotted_fraction(positions: npt.ArrayLike, closures: int | None = None, seed: int | None = None,
@@ -131,7 +125,7 @@ class Shape:
 
 def shape(positions: npt.ArrayLike) -> Shape:
     """Shape observables of the chain at ``positions`` (N x 3, N >= 2), as knotflow records them."""
-    r = positions_array(positions, 2)
+    r = positions_array(positions)
     values = np.zeros(6)
     close = ctypes.c_int()
     buf = message_buffer()

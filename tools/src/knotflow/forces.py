@@ -3,12 +3,19 @@
 from __future__ import annotations
 
 import ctypes
-import math
 
 import numpy as np
 import numpy.typing as npt
 
-from knotflow._library import MESSAGE_LENGTH, KnotflowError, check, library, message_buffer, positions_array
+from knotflow._library import (
+    MESSAGE_LENGTH,
+    KnotflowError,
+    c_double_value,
+    check,
+    library,
+    message_buffer,
+    positions_array,
+)
 
 
 def chain_forces(positions: npt.ArrayLike, bond_length: float = 1.0, springs: bool = True,
@@ -23,20 +30,18 @@ def chain_forces(positions: npt.ArrayLike, bond_length: float = 1.0, springs: bo
     external force on every bead (not in the energy). The library validates the values as the
     scene does.
     """
-    r = positions_array(positions, 1)
+    r = positions_array(positions)
     ext = np.array(external_force, dtype=np.float64).reshape(-1)
-    if ext.shape != (3,) or not np.all(np.isfinite(ext)):
-        raise KnotflowError(f"external_force {external_force!r}: expected 3 finite numbers")
-    values = {"bond_length": bond_length, "spring_k": spring_k, "bending_a": bending_a,
-              "ev_strength": ev_strength, "ev_range": ev_range}
-    for name, v in values.items():
-        if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)) or not math.isfinite(v):
-            raise KnotflowError(f"{name} {v!r}: expected a finite number")
+    if ext.shape != (3,):
+        raise KnotflowError(f"external_force = {external_force!r}: expected 3 numbers")
+    values = {name: c_double_value(v, name) for name, v in
+              {"bond_length": bond_length, "spring_k": spring_k, "bending_a": bending_a,
+               "ev_strength": ev_strength, "ev_range": ev_range}.items()}
     f = np.empty_like(r)
     energy = ctypes.c_double()
     buf = message_buffer()
-    check(library().knotflow_chain_forces(len(r), r, float(bond_length), int(bool(springs)), float(spring_k),
-                                          int(bool(bending)), float(bending_a), int(bool(excluded_volume)),
-                                          float(ev_strength), float(ev_range), np.ascontiguousarray(ext), f,
-                                          ctypes.byref(energy), buf, MESSAGE_LENGTH), buf)
+    check(library().knotflow_chain_forces(
+        len(r), r, values["bond_length"], int(bool(springs)), values["spring_k"], int(bool(bending)),
+        values["bending_a"], int(bool(excluded_volume)), values["ev_strength"], values["ev_range"],
+        np.ascontiguousarray(ext), f, ctypes.byref(energy), buf, MESSAGE_LENGTH), buf)
     return f, energy.value

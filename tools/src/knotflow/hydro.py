@@ -7,7 +7,6 @@ pi eta d^2 gamma_dot, time unit 1/gamma_dot).
 from __future__ import annotations
 
 import ctypes
-import math
 from types import TracebackType
 
 import numpy as np
@@ -16,6 +15,8 @@ import numpy.typing as npt
 from knotflow._library import (
     MESSAGE_LENGTH,
     KnotflowError,
+    c_double_value,
+    c_int_value,
     check,
     defaults,
     library,
@@ -49,13 +50,15 @@ class Model:
         order: multipole order L (1..8; at most 6 with lubrication).
         lubrication: the two-sphere lubrication corrections (multipole).
         eps_lub: the BWE shift of overlapping pairs, 0 < eps_lub < 0.5; None: knotflow-mobility's
-            default 1e-4.
+            default (:func:`default_eps_lub`).
         overlap: the overlap rule (one of :func:`overlap_rules`; only ``'pair'`` for none/rpy).
-        overlap_time: the ``'relax'`` rule's time; None: its default.
+        overlap_time: the ``'relax'`` rule's time; None: the &hydro default.
 
-    The model holds a factorisation: one Model must not be used by two threads at once;
-    different Models may. Free it with :meth:`close` (or a ``with`` block); it is also freed
-    when garbage-collected. ``last_seconds`` is the library's own wall time of the last
+    The values are checked by the library (the &hydro group's validation); a refused one raises
+    :class:`KnotflowError` with its message. The model holds a factorisation: one Model must not
+    be used by two threads at once; different Models may (the library keeps no global state
+    and the calls release the GIL). Free it with :meth:`close` (or a ``with`` block); it is also
+    freed when garbage-collected. ``last_seconds`` is the library's own wall time of the last
     :meth:`mobility` call.
     """
 
@@ -64,24 +67,19 @@ class Model:
                  overlap_time: float | None = None) -> None:
         self._handle = ctypes.c_void_p()
         self.last_seconds = 0.0
-        if not isinstance(model, str) or model not in model_names():
-            raise KnotflowError(f"model {model!r} unknown (one of {', '.join(model_names())})")
-        if not isinstance(overlap, str) or overlap not in overlap_rules():
-            raise KnotflowError(f"overlap rule {overlap!r} unknown (one of {', '.join(overlap_rules())})")
-        if isinstance(order, bool) or not isinstance(order, (int, np.integer)):
-            raise KnotflowError(f"order {order!r}: expected an integer")
-        if eps_lub is not None and not (isinstance(eps_lub, (int, float)) and 0.0 < eps_lub < 0.5):
-            raise KnotflowError(f"eps_lub {eps_lub!r}: expected a number in (0, 0.5)")
-        if overlap_time is not None and not (isinstance(overlap_time, (int, float))
-                                             and math.isfinite(overlap_time) and overlap_time > 0.0):
-            raise KnotflowError(f"overlap_time {overlap_time!r}: expected a number > 0")
+        if not isinstance(model, str):
+            raise KnotflowError(f"model = {model!r}: expected a name (one of {', '.join(model_names())})")
+        if not isinstance(overlap, str):
+            raise KnotflowError(f"overlap = {overlap!r}: expected a name "
+                                f"(one of {', '.join(overlap_rules())})")
+        lmax = c_int_value(order, "order")
+        eps = defaults()[2] if eps_lub is None else c_double_value(eps_lub, "eps_lub")
+        otime = defaults()[3] if overlap_time is None else c_double_value(overlap_time, "overlap_time")
         name_b, rule_b = model.encode(), overlap.encode()
         buf = message_buffer()
         status = library().knotflow_model_create(
-            name_b, len(name_b), int(order), int(bool(lubrication)),
-            -1.0 if eps_lub is None else float(eps_lub), rule_b, len(rule_b),
-            -1.0 if overlap_time is None else float(overlap_time), ctypes.byref(self._handle), buf,
-            MESSAGE_LENGTH)
+            name_b, len(name_b), lmax, int(bool(lubrication)), eps, rule_b, len(rule_b), otime,
+            ctypes.byref(self._handle), buf, MESSAGE_LENGTH)
         check(status, buf)
 
     def close(self) -> None:
@@ -117,7 +115,7 @@ class Model:
         Element [3i + a, 3j + b] is velocity component a of bead i per force component b on
         bead j (0-based); equal to ``knotflow-mobility --output mobility``.
         """
-        r = positions_array(positions, 1)
+        r = positions_array(positions)
         n = len(r)
         mu = np.empty((3 * n, 3 * n), order="F")
         seconds = ctypes.c_double()
@@ -135,7 +133,7 @@ class Model:
         simple shear v0 = (z, 0, 0)); E is its symmetric part. These are knotflow's equations
         of motion for the given forces, with the model's overlap rule.
         """
-        r = positions_array(positions, 1)
+        r = positions_array(positions)
         f = like_positions(forces, len(r), "forces")
         g = tensor_array(gradient, "gradient")
         u = np.empty_like(r)
@@ -149,7 +147,7 @@ class Model:
         ``strain``: the symmetric traceless rate of strain E (default: that of the simple shear,
         as ``knotflow-mobility --output shear``).
         """
-        r = positions_array(positions, 1)
+        r = positions_array(positions)
         e = tensor_array(strain, "strain")
         u = np.empty_like(r)
         buf = message_buffer()
@@ -163,7 +161,7 @@ class Model:
         Beads at ``positions`` carrying ``forces`` in the rate of strain ``strain``; an isolated
         force-free bead gives (5/6) E.
         """
-        r = positions_array(positions, 1)
+        r = positions_array(positions)
         f = like_positions(forces, len(r), "forces")
         e = tensor_array(strain, "strain")
         s = np.empty((3, 3), order="F")
@@ -178,25 +176,27 @@ def default_eps_lub() -> float:
 
 
 def mobility(positions: npt.ArrayLike, model: str = "multipole", order: int = 2, lubrication: bool = True,
-             eps_lub: float | None = None, overlap: str = "pair") -> np.ndarray:
+             eps_lub: float | None = None, overlap: str = "pair",
+             overlap_time: float | None = None) -> np.ndarray:
     """The 3N x 3N translational mobility of beads at ``positions`` (an N x 3 array).
 
     Equal, bit for bit, to ``knotflow-mobility FILE --model M --order L --lubrication on|off
     --eps-lub X --output mobility``. The model arguments are those of :class:`Model`; for many
     configurations build one :class:`Model` and call its ``mobility``.
     """
-    with Model(model, order, lubrication, eps_lub, overlap) as m:
+    with Model(model, order, lubrication, eps_lub, overlap, overlap_time) as m:
         return m.mobility(positions)
 
 
 def velocities(positions: npt.ArrayLike, forces: npt.ArrayLike, gradient: npt.ArrayLike = SHEAR_GRADIENT,
                model: str = "multipole", order: int = 2, lubrication: bool = True,
-               eps_lub: float | None = None, overlap: str = "pair") -> np.ndarray:
+               eps_lub: float | None = None, overlap: str = "pair",
+               overlap_time: float | None = None) -> np.ndarray:
     """Bead velocities G r + mu F + C:E (N x 3) for ``forces`` in the flow of ``gradient``.
 
     See :meth:`Model.velocities`; the model arguments are those of :class:`Model`.
     """
-    with Model(model, order, lubrication, eps_lub, overlap) as m:
+    with Model(model, order, lubrication, eps_lub, overlap, overlap_time) as m:
         return m.velocities(positions, forces, gradient)
 
 
