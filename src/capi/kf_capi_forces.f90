@@ -2,15 +2,14 @@
 !> volume and a constant external force, with the &forces group's parameters and validation.
 module kf_capi_forces
   use, intrinsic :: iso_c_binding, only: c_int, c_char, c_double
-  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
-  use kf_error, only: error_t, fatal_error
+  use kf_error, only: error_t
   use kf_capi_status, only: kf_ok, kf_invalid_argument, put_message, check_positions
   use kf_scene_forces, only: forces_params_t
   use kf_forces, only: forces_t
   implicit none
   private
 
-  public :: knotflow_chain_forces
+  public :: knotflow_chain_forces, knotflow_forces_defaults
 
 contains
 
@@ -37,9 +36,8 @@ contains
     f = 0.0_c_double
     energy = 0.0_c_double
     status = kf_invalid_argument
-    call check_positions('knotflow_chain_forces', n, 1, r, error)
-    if (.not. allocated(error) .and. .not. all(ieee_is_finite(external))) &
-      call fatal_error(error, 'knotflow_chain_forces: the external force is not finite')
+    ! the number of beads and the parameters are checked by forces%init (the &forces validation)
+    call check_positions('knotflow_chain_forces', n, 0, r, error)
     if (.not. allocated(error)) then
       params%springs = springs /= 0
       params%spring_k = spring_k
@@ -59,5 +57,21 @@ contains
     energy = forces%energy(r)
     status = kf_ok
   end function knotflow_chain_forces
+
+  !> The &forces group's defaults: springs, bending and excluded_volume as 1/0, spring_k,
+  !> bending_a, ev_strength and ev_range.
+  subroutine knotflow_forces_defaults(springs, spring_k, bending, bending_a, excluded_volume, ev_strength, &
+    ev_range) bind(c, name='knotflow_forces_defaults')
+    integer(c_int), intent(out) :: springs, bending, excluded_volume
+    real(c_double), intent(out) :: spring_k, bending_a, ev_strength, ev_range
+    type(forces_params_t) :: p
+    springs = merge(1, 0, p%springs)
+    spring_k = p%spring_k
+    bending = merge(1, 0, p%bending)
+    bending_a = p%bending_a
+    excluded_volume = merge(1, 0, p%excluded_volume)
+    ev_strength = p%ev_strength
+    ev_range = p%ev_range
+  end subroutine knotflow_forces_defaults
 
 end module kf_capi_forces

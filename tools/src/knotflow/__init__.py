@@ -3,9 +3,8 @@
 Hydrodynamic mobilities (none, RPY, multipole with lubrication), bead velocities, chain forces,
 knots (k_f and spectrum by stochastic closure) and shape of bead configurations given as numpy
 (N, 3) arrays; the same library code as the knotflow programs, loaded from the shared library
-``libknotflow_capi`` (``KNOTFLOW_LIBRARY``, else the repository's ``build/lib``, else next to
-this package). Errors and refused arguments raise :class:`KnotflowError` with the library's
-message.
+``libknotflow_capi`` (where from: :mod:`knotflow._library`). Errors and refused arguments raise
+:class:`KnotflowError` with the library's message.
 """
 
 from knotflow._library import KnotflowError
@@ -20,7 +19,7 @@ from knotflow.analysis import (
     knotted_fraction,
     shape,
 )
-from knotflow.forces import chain_forces
+from knotflow.forces import chain_forces, forces_defaults
 from knotflow.hydro import (
     Model,
     default_eps_lub,
@@ -43,6 +42,7 @@ __all__ = [
     "overlap_rules",
     "default_eps_lub",
     "chain_forces",
+    "forces_defaults",
     "knots",
     "knotted_fraction",
     "knot_spectrum",

@@ -79,18 +79,22 @@ _SIGNATURES: dict[str, list[object]] = {
     "knotflow_model_stresslet": [_P, _I, _DOUBLES_C, _DOUBLES_C, _DOUBLES_F, _DOUBLES_F, _STR, _I],
     "knotflow_chain_forces": [_I, _DOUBLES_C, _D, _I, _D, _I, _D, _I, _D, _D, _DOUBLES_C, _DOUBLES_C,
                               ctypes.POINTER(_D), _STR, _I],
+    "knotflow_forces_defaults": [ctypes.POINTER(_I), ctypes.POINTER(_D), ctypes.POINTER(_I),
+                                 ctypes.POINTER(_D), ctypes.POINTER(_I), ctypes.POINTER(_D),
+                                 ctypes.POINTER(_D)],
     "knotflow_knots": [_I, _DOUBLES_C, _I, _I64, _I64, ctypes.POINTER(_D), _DOUBLES_C, ctypes.POINTER(_I),
                        _INTS, ctypes.POINTER(_D), _STR, _I],
     "knotflow_shape": [_I, _DOUBLES_C, _DOUBLES_C, ctypes.POINTER(_I), _STR, _I],
 }
-_VOID = {"knotflow_defaults", "knotflow_model_free"}
+_VOID = {"knotflow_defaults", "knotflow_forces_defaults", "knotflow_model_free"}
 
 _loaded: ctypes.CDLL | None = None
+_loaded_path: Path | None = None
 
 
 def library() -> ctypes.CDLL:
     """The loaded library (loaded on first use, with every function's signature declared)."""
-    global _loaded
+    global _loaded, _loaded_path
     if _loaded is not None:
         return _loaded
     tried = []
@@ -107,11 +111,18 @@ def library() -> ctypes.CDLL:
             fn = getattr(lib, name)
             fn.argtypes = args
             fn.restype = None if name in _VOID else ctypes.c_int
-        _loaded = lib
+        _loaded, _loaded_path = lib, path
         return lib
     raise KnotflowError(
         "the knotflow shared library was not found; build it (bash scripts/build.sh, target knotflow_capi) "
         f"or set {LIBRARY_ENV}. Tried: " + "; ".join(tried))
+
+
+def loaded_path() -> Path:
+    """The path the library was loaded from (loading it first)."""
+    library()
+    assert _loaded_path is not None
+    return _loaded_path
 
 
 def message_buffer() -> ctypes.Array[ctypes.c_char]:
