@@ -33,7 +33,7 @@ STATUS_FAILED = 2
 _C_INT_MIN, _C_INT_MAX = -(2**31), 2**31 - 1
 
 
-class KnotflowError(Exception):
+class KnotflowError(ValueError):
     """An error of the knotflow library or an argument it refuses; the message says which.
 
     ``status`` is the library's status code (1: an argument refused before any work, 2: a

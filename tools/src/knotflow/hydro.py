@@ -88,7 +88,11 @@ class Model:
             library().knotflow_model_free(ctypes.byref(self._handle))
 
     def __del__(self) -> None:
-        self.close()
+        # at interpreter exit the module's globals may be gone already: the process frees all
+        try:
+            self.close()
+        except Exception:
+            pass
 
     def __enter__(self) -> Model:
         return self
