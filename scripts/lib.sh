@@ -261,6 +261,24 @@ kf_build() {
   for t in "$@"; do target_args+=(--target "$t"); done
   kf_log "building $type (-j$KF_JOBS) ${*:-all}"
   cmake --build "$dir" -j "$KF_JOBS" "${target_args[@]}" || kf_die "$type build failed"
+  [ "$type" = Release ] && kf_link_python_library "$dir"
+  return 0
+}
+
+# kf_link_python_library <build dir>: make the build's C interface (lib/libknotflow_capi.so,
+# src/capi) the one the Python package `knotflow` of KF_PY's environment loads: a symbolic link
+# <sys.prefix>/lib/knotflow/libknotflow_capi.so (tools/src/knotflow/_library.py looks there),
+# so that `import knotflow` works without LD_LIBRARY_PATH or KNOTFLOW_LIBRARY. Release builds
+# only (a Debug library traps floating-point exceptions, which would end the interpreter).
+kf_link_python_library() {
+  local lib="$1/lib/libknotflow_capi.so" prefix
+  [ -e "$lib" ] && [ -n "${KF_PY:-}" ] || return 0
+  prefix="$("$KF_PY" -c 'import sys; print(sys.prefix)')" || return 0
+  if mkdir -p "$prefix/lib/knotflow" && ln -sfn "$lib" "$prefix/lib/knotflow/libknotflow_capi.so"; then
+    kf_log "python: knotflow loads $lib (link in $prefix/lib/knotflow)"
+  else
+    kf_log "WARNING: cannot link $lib into $prefix/lib/knotflow (set KNOTFLOW_LIBRARY instead)"
+  fi
 }
 
 # The number of MPI ranks of the run scripts: KNOTFLOW_NP (default 2), checked; printed.

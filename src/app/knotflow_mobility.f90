@@ -31,7 +31,7 @@ program knotflow_mobility
   use kf_hydro_model, only: hydro_model_t
   use kf_hydro_multipole, only: multipole_model_t
   use kf_multipole_system, only: max_multipole_order
-  use kf_hydro_factory, only: make_hydro_model, hydro_model_names
+  use kf_hydro_factory, only: make_hydro_model, hydro_model_names, standalone_eps_lub
   use kf_scene_check, only: name_list
   use kf_scene, only: hydro_params_t
   use kf_scene_hydro, only: overlap_names, overlap_bwe, overlap_pair
@@ -51,7 +51,7 @@ program knotflow_mobility
   model_name = 'multipole'
   order = 2
   lubrication = .true.
-  eps_lub = 1.0e-4_wp
+  eps_lub = standalone_eps_lub
   output = 'mobility'
   overlap = overlap_pair
   file = ''

@@ -16,6 +16,10 @@ module kf_hydro_factory
 
   public :: make_hydro_model, hydro_model_names
 
+  !> eps_lub of a model made outside a scene when none is given (knotflow-mobility's --eps-lub
+  !> default, the C interface's default); also the tolerance such a model is made with.
+  real(wp), parameter, public :: standalone_eps_lub = 1.0e-4_wp
+
 contains
 
   !> Allocate the model named by params%model (none | rpy | multipole) after checking the

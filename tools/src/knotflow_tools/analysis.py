@@ -10,6 +10,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+import knotflow
+
 from . import knots, shape, transitions
 from .io import Case
 
@@ -66,10 +68,12 @@ def kf_label(kf, t, sub="<sub>f</sub>") -> str:
 
 
 def knot_series(positions, frames, closures=200, seed=1):
-    """k_f, spectrum rows and dominant types for the given frame indices."""
+    """k_f, spectrum rows and dominant types for the given frame indices: the library's knot
+    analysis (knotflow.knots), frame k with the closure stream k as knotflow-analyze draws it,
+    so that the results equal knotflow-analyze's for the same closures and seed."""
     kf, spec, dom = [], [], []
-    for k, fi in enumerate(frames):
-        res = knots.analyze_chain(positions[fi], closures=closures, seed=seed + k)
+    for fi in frames:
+        res = knotflow.knots(positions[fi], closures=closures, seed=seed, stream=int(fi))
         kf.append(res.kf)
         spec.append([res.spectrum[t] for t in knots.KNOT_TYPES])
         dom.append(res.dominant)

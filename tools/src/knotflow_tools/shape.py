@@ -1,5 +1,9 @@
 """Shape observables and spectra (PHYSICS.md section 6).
 
+The observables of a configuration are the library's (knotflow.shape, the code knotflow records
+every frame with); `compute_shape` is an independent numpy implementation kept as the oracle of
+the tests (tools/tests/test_shape.py, tools/tests_knotflow/test_functions.py).
+
 The modes I and II are classified by the Fortran tool only (kf_modes, the rule in
 docs/analysis.md) and read from /analysis/shape; this module computes no mode.
 """
@@ -10,6 +14,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
+import knotflow
 
 CLOSE_PAIR_DISTANCE = 1.05
 
@@ -46,7 +52,8 @@ def count_close_pairs(r: np.ndarray, cutoff: float = CLOSE_PAIR_DISTANCE) -> int
 
 
 def compute_shape(r: np.ndarray) -> Shape:
-    """R_g, semi-axes, orientation (theta, phi) of the principal axis and close pairs.
+    """R_g, semi-axes, orientation (theta, phi) of the principal axis and close pairs (numpy;
+    the tests' oracle of the library's knotflow.shape).
 
     The principal axis e1 is signed so that the end-to-end vector projects non-negatively;
     theta = acos(e1_y) in [0, pi], phi = atan2(e1_x, e1_z).
@@ -64,8 +71,10 @@ def compute_shape(r: np.ndarray) -> Shape:
 
 
 def shape_series(positions: np.ndarray) -> dict:
-    """Observables for every frame of positions (nframes, N, 3) as arrays."""
-    shapes = [compute_shape(p) for p in positions]
+    """Observables for every frame of positions (nframes, N, 3) as arrays: the library's
+    (knotflow.shape), as knotflow records them; a frame it refuses (fewer than 2 beads, a
+    non-finite coordinate) raises knotflow.KnotflowError, a ValueError."""
+    shapes = [knotflow.shape(p) for p in positions]
     out = {k: np.array([getattr(s, k) for s in shapes]) for k in
            ("rg", "a", "b", "c", "theta", "phi")}
     out["close_pairs"] = np.array([s.close_pairs for s in shapes], dtype=np.int32)
