@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The layering of knotflow's sources: no module cycle, no folder cycle.
 
-Usage: check_layers.py SRC_DIR PY_PACKAGE_DIR [--report]
+Usage: check_layers.py SRC_DIR PY_PACKAGE_DIR... [--report]
        check_layers.py --self-test
 
 Fortran (SRC_DIR, e.g. src/): every module (`module`, `submodule`) and program is read with
@@ -14,8 +14,8 @@ holds build alternatives of its parent's modules and counts as its parent. The r
 2. the folders form layers: the graph "folder F uses folder G" (some module of F uses some
    module of G) has no cycle, in particular no folder pair depends both ways.
 
-The Python package (PY_PACKAGE_DIR, e.g. tools/src/knotflow_tools): every import of a module of
-the package, at module level and inside functions, is an edge; rule 1 holds for it too.
+Each Python package (PY_PACKAGE_DIR, e.g. tools/src/knotflow_tools, tools/src/knotflow): every
+import of a module of the package, at module level and inside functions, is an edge; rule 1 holds for it too.
 
 A failure prints the offending chain of modules (for a folder cycle: each folder edge with one
 module edge that makes it). The only exceptions are the folder edges listed in
@@ -286,10 +286,10 @@ def main(argv: list[str]) -> int:
     if argv == ["--self-test"]:
         return self_test()
     args = [a for a in argv if not a.startswith("--")]
-    if len(args) != 2:
+    if len(args) < 2:
         print(__doc__.split("\n\n")[1], file=sys.stderr)
         return 2
-    src, pkg = Path(args[0]), Path(args[1])
+    src, packages = Path(args[0]), [Path(a) for a in args[1:]]
     report = "--report" in argv
     failed = False
 
@@ -342,14 +342,15 @@ def main(argv: list[str]) -> int:
             u, v = witness[(fu, fv)]
             print(f"  {fu} -> {fv}   (e.g. {u} uses {v})")
 
-    pyuses = read_python(pkg)
-    pcycles = find_cycles(pyuses)
-    for pcycle in pcycles:
-        failed = True
-        print(f"FAIL: Python import cycle in {pkg.name}: " + " -> ".join(pcycle))
-    if not pcycles:
-        pchain = longest_chain(pyuses, set(pyuses))
-        print(f"Python package depth: {len(pchain)} modules: " + " -> ".join(pchain))
+    for pkg in packages:
+        pyuses = read_python(pkg)
+        pcycles = find_cycles(pyuses)
+        for pcycle in pcycles:
+            failed = True
+            print(f"FAIL: Python import cycle in {pkg.name}: " + " -> ".join(pcycle))
+        if not pcycles:
+            pchain = longest_chain(pyuses, set(pyuses))
+            print(f"Python package {pkg.name} depth: {len(pchain)} modules: " + " -> ".join(pchain))
 
     print("architecture layers: " + ("FAILED" if failed else "ok"))
     return 1 if failed else 0

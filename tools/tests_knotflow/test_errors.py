@@ -61,7 +61,7 @@ def test_too_few_beads():
     ({"eps_lub": 0.5}, "&hydro: eps_lub = 0.5 is not allowed"),
     ({"eps_lub": 0.0}, "&hydro: eps_lub = 0.0 is not allowed \\(a number in \\(0, 0.5\\)\\)"),
     ({"eps_lub": float("nan")}, "eps_lub"),
-    ({"overlap": "glue"}, "&hydro: overlap = 'glue' is not allowed \\(one of pair, separate, relax\\)"),
+    ({"overlap": "glue"}, "&hydro: overlap = 'glue' is not allowed \\(one of pair, separate, relax, bwe\\)"),
     ({"overlap_time": 1.0}, "overlap_time = 1.0 is not allowed \\(only with overlap = 'relax'"),
     ({"model": "rpy", "lubrication": False, "overlap": "separate"}, "the rule is for the multipole model"),
 ])
