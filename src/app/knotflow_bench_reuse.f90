@@ -34,6 +34,7 @@ program knotflow_bench_reuse
   use kf_scene, only: scene_t
   use kf_scene_hydro, only: overlap_names, overlap_pair, overlap_relax, update_names
   use kf_scene_check, only: name_list
+  use kf_hydro_limits, only: eps_lub_in_range, eps_lub_range_text
   use kf_chain_shapes, only: build_initial_chain
   use kf_dynamics, only: dynamics_t
   use kf_stepper, only: stepper_t
@@ -107,8 +108,8 @@ contains
         if (ios /= 0 .or. .not. t_end > 0.0_wp) call die(program_name, '--t-end '//trim(val)//': expected a number > 0', 2)
       case ('--eps-lub')
         read (val, *, iostat=ios) eps_lub
-        if (ios /= 0 .or. .not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) &
-          call die(program_name, '--eps-lub '//trim(val)//': expected a number in (0, 0.5)', 2)
+        if (ios /= 0 .or. .not. eps_lub_in_range(eps_lub)) &
+          call die(program_name, '--eps-lub '//trim(val)//': expected a number in '//eps_lub_range_text(), 2)
       case ('--overlap')
         overlap = trim(val)
         if (.not. any(overlap_names == overlap)) &

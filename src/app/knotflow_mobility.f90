@@ -36,6 +36,7 @@ program knotflow_mobility
   use kf_scene, only: hydro_params_t
   use kf_scene_hydro, only: overlap_names, overlap_bwe, overlap_pair
   use kf_lapack, only: symmetric_eigenvalues, cholesky_factor
+  use kf_hydro_limits, only: eps_lub_in_range, eps_lub_range_text
   implicit none
 
   character(len=*), parameter :: program_name = 'knotflow-mobility'
@@ -85,9 +86,9 @@ program knotflow_mobility
         lubrication = (val == 'on')
       case ('--eps-lub')
         read (val, *, iostat=ios) eps_lub
-        if (ios /= 0) call die(program_name, '--eps-lub '//val//': expected a number in (0, 0.5)', 2)
-        if (.not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) &
-          call die(program_name, '--eps-lub '//val//': expected a number in (0, 0.5)', 2)
+        if (ios /= 0) call die(program_name, '--eps-lub '//val//': expected a number in '//eps_lub_range_text(), 2)
+        if (.not. eps_lub_in_range(eps_lub)) &
+          call die(program_name, '--eps-lub '//val//': expected a number in '//eps_lub_range_text(), 2)
       case ('--output')
         if (val /= 'mobility' .and. val /= 'shear' .and. val /= 'spectrum') &
           call die(program_name, '--output '//val//': allowed values are mobility, shear, spectrum', 2)

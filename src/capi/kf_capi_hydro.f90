@@ -28,6 +28,7 @@ module kf_capi_hydro
   use kf_hydro_factory, only: make_hydro_model, hydro_model_names, standalone_eps_lub
   use kf_overlap_rule, only: overlap_rule_t, make_overlap_rule
   use kf_pair_geometry, only: pair_geometry_t
+  use kf_hydro_limits, only: eps_lub_range_text
   implicit none
   private
 
@@ -75,7 +76,8 @@ contains
       call refuse(error, '', 'hydro', 'overlap', quoted(rule_name), 'one of '//name_list(overlap_names))
     ! a negative eps_lub means "the integration tolerance" in a scene; here there is none
     if (.not. allocated(error) .and. .not. eps_lub > 0.0_c_double) &
-      call refuse(error, '', 'hydro', 'eps_lub', to_str_exact(real(eps_lub, wp)), 'a number in (0, 0.5)')
+      call refuse(error, '', 'hydro', 'eps_lub', to_str_exact(real(eps_lub, wp)), &
+        'a number in '//eps_lub_range_text())
     if (allocated(error)) then
       call put_message(error%message, msg, msglen)
       return

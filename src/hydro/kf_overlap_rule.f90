@@ -46,6 +46,7 @@ module kf_overlap_rule
   use kf_pair_geometry, only: pair_geometry_t
   use kf_scene_hydro, only: overlap_pair, overlap_separate, overlap_relax, overlap_bwe, overlap_names
   use kf_scene_check, only: name_list
+  use kf_hydro_limits, only: eps_lub_in_range, eps_lub_range_text
   implicit none
   private
 
@@ -123,9 +124,9 @@ contains
     case (overlap_bwe)
       allocate (overlap_bwe_t :: rule)
     case (overlap_separate, overlap_relax)
-      if (.not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) then
+      if (.not. eps_lub_in_range(eps_lub)) then
         call fatal_error(error, 'overlap rule '//trim(name)//': eps_lub = '//to_str(eps_lub, '(es12.4)')// &
-          ' out of range (0 < eps_lub < 0.5)')
+          ' out of range '//eps_lub_range_text())
         return
       end if
       if (trim(name) == overlap_relax) then

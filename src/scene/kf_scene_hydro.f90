@@ -8,6 +8,8 @@ module kf_scene_hydro
   use kf_error, only: error_t
   use kf_scene_item, only: scene_item_t, add_s, add_i, add_l, add_r, name_len
   use kf_scene_check, only: refuse, name_list, quoted, check_finite
+  use kf_hydro_limits, only: eps_lub_max, order_max, lubrication_order_max, eps_lub_range_text, &
+    order_range_text
   implicit none
   private
 
@@ -28,13 +30,8 @@ module kf_scene_hydro
   !> The default of &hydro overlap_time (in units of 1/shear rate; kf_overlap_rule says why).
   real(wp), parameter :: overlap_time_default = 0.1_wp
 
-  real(wp), parameter :: eps_lub_max = 0.5_wp    !< the lubrication model's range: 0 < eps_lub < 0.5
-
-  ! The allowed values, in the words of the refusals and of the scene reference.
-  character(len=*), parameter :: order_allowed = 'an integer from 1 to 8'
-  character(len=*), parameter :: order_lubrication_allowed = &
-    'at most 6 with lubrication = .true. (tables exist for L = 1..6)'
-  character(len=*), parameter :: eps_lub_allowed = 'a number in (0, 0.5), or negative for the integration tolerance'
+  ! The allowed values, in the words of the refusals and of the scene reference (the ranges
+  ! from kf_hydro_limits: order_allowed, order_lubrication_allowed, eps_lub_allowed below).
   character(len=*), parameter :: overlap_time_allowed = 'a number > 0'
   character(len=*), parameter :: overlap_time_relax_allowed = "only with overlap = '"//overlap_relax//"'"
 
@@ -88,10 +85,10 @@ contains
     call add_s(items, 'hydro.model', p%model, 'one of '//name_list(model_names), &
       'the hydrodynamic model: none (free draining), rpy (Rotne-Prager-Yamakawa), multipole (the multipole '// &
       'method, with lubrication corrections; docs/multipole.md)')
-    call add_i(items, 'hydro.order', int(p%order, i8), order_allowed//'; '//order_lubrication_allowed, &
+    call add_i(items, 'hydro.order', int(p%order, i8), order_allowed()//'; '//order_lubrication_allowed(), &
       'multipole order L')
     call add_l(items, 'hydro.lubrication', p%lubrication, '.true. or .false.', 'multipole: lubrication corrections')
-    call add_r(items, 'hydro.eps_lub', p%eps_lub, eps_lub_allowed, &
+    call add_r(items, 'hydro.eps_lub', p%eps_lub, eps_lub_allowed(), &
       'multipole: overlapping pairs are evaluated at 1 + eps_lub (as the overlap rule says); -1 (not given): '// &
       'the &integrator tolerance')
     call add_s(items, 'hydro.update', p%update, 'one of '//name_list(update_names), &
@@ -125,15 +122,15 @@ contains
       call refuse(error, file, 'hydro', 'model', quoted(p%model), 'one of '//name_list(model_names)); return
     end if
     if (p%model == model_multipole) then
-      if (p%order < 1 .or. p%order > 8) then
-        call refuse(error, file, 'hydro', 'order', to_str(p%order), order_allowed); return
+      if (p%order < 1 .or. p%order > order_max) then
+        call refuse(error, file, 'hydro', 'order', to_str(p%order), order_allowed()); return
       end if
-      if (p%lubrication .and. p%order > 6) then
-        call refuse(error, file, 'hydro', 'order', to_str(p%order), order_lubrication_allowed); return
+      if (p%lubrication .and. p%order > lubrication_order_max) then
+        call refuse(error, file, 'hydro', 'order', to_str(p%order), order_lubrication_allowed()); return
       end if
     end if
     if (.not. (p%eps_lub < eps_lub_max .and. p%eps_lub /= 0.0_wp)) then
-      call refuse(error, file, 'hydro', 'eps_lub', to_str_exact(p%eps_lub), eps_lub_allowed); return
+      call refuse(error, file, 'hydro', 'eps_lub', to_str_exact(p%eps_lub), eps_lub_allowed()); return
     end if
     if (.not. any(update_names == p%update)) then
       call refuse(error, file, 'hydro', 'update', quoted(p%update), 'one of '//name_list(update_names)); return
@@ -173,9 +170,28 @@ contains
     if (p%eps_lub >= 0.0_wp) return
     if (.not. (tolerance > 0.0_wp .and. tolerance < eps_lub_max)) then
       call refuse(error, file, 'hydro', 'eps_lub', 'the &integrator tolerance = '//to_str_exact(tolerance), &
-        'a number in (0, 0.5): give eps_lub, or a smaller tolerance'); return
+        'a number in '//eps_lub_range_text()//': give eps_lub, or a smaller tolerance'); return
     end if
     p%eps_lub = effective_eps_lub(p, tolerance)
   end subroutine resolve_hydro
+
+  !> 'an integer from 1 to 8' (the allowed orders).
+  function order_allowed() result(text)
+    character(len=:), allocatable :: text
+    text = 'an integer from '//order_range_text(.false.)
+  end function order_allowed
+
+  !> 'at most 6 with lubrication = .true. (tables exist for L = 1..6)'.
+  function order_lubrication_allowed() result(text)
+    character(len=:), allocatable :: text
+    text = 'at most '//to_str(lubrication_order_max)//' with lubrication = .true. (tables exist for L = 1..'// &
+      to_str(lubrication_order_max)//')'
+  end function order_lubrication_allowed
+
+  !> 'a number in (0, 0.5), or negative for the integration tolerance'.
+  function eps_lub_allowed() result(text)
+    character(len=:), allocatable :: text
+    text = 'a number in '//eps_lub_range_text()//', or negative for the integration tolerance'
+  end function eps_lub_allowed
 
 end module kf_scene_hydro

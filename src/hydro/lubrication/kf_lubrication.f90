@@ -26,6 +26,7 @@ module kf_lubrication
   use kf_strain_basis, only: strain_basis
   use kf_lubrication_data, only: lub_max_order, lub_cutoff, lub_n_grid, lubrication_table
   use kf_pair_blocks, only: pair_blocks_t
+  use kf_hydro_limits, only: eps_lub_in_range, eps_lub_range_text
   implicit none
   private
 
@@ -69,12 +70,12 @@ contains
 
     if (order < 1 .or. order > lub_max_order) then
       call fatal_error(error, 'lubrication: truncation order '//to_str(order)// &
-        ' not tabulated (allowed 1..6)')
+        ' not tabulated (allowed 1..'//to_str(lub_max_order)//')')
       return
     end if
-    if (.not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) then
+    if (.not. eps_lub_in_range(eps_lub)) then
       call fatal_error(error, 'lubrication: eps_lub = '//to_str(eps_lub, '(es12.4)')// &
-        ' out of range (0 < eps_lub < 0.5)')
+        ' out of range '//eps_lub_range_text())
       return
     end if
     this%order = order

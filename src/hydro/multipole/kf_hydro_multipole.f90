@@ -65,6 +65,7 @@ module kf_hydro_multipole
   use kf_rigid_fit, only: best_rotation, centroid
   use kf_scene_hydro, only: update_stage, update_adaptive, update_names
   use kf_scene_check, only: name_list
+  use kf_hydro_limits, only: eps_lub_in_range, eps_lub_range_text
   implicit none
   private
 
@@ -141,7 +142,7 @@ module kf_hydro_multipole
 
 contains
 
-  !> Order L (1..max_multipole_order), lubrication on/off, overlap shift eps_lub (0 < eps_lub < 0.5), update mode
+  !> Order L (1..max_multipole_order), lubrication on/off, overlap shift eps_lub (kf_hydro_limits), update mode
   !> ('stage', the default, or 'adaptive') and the integration tolerance (> 0, default 1e-4)
   !> that sets the reuse budget; `literal_bwe` (default .false.): the literal BWE rule (module
   !> header) instead of the clamp.
@@ -157,9 +158,9 @@ contains
     character(len=:), allocatable :: mode
     real(wp) :: tol
 
-    if (.not. (eps_lub > 0.0_wp .and. eps_lub < 0.5_wp)) then
+    if (.not. eps_lub_in_range(eps_lub)) then
       call fatal_error(error, 'multipole: eps_lub = '//to_str(eps_lub, '(es12.4)')// &
-                       ' not allowed (0 < eps_lub < 0.5)')
+                       ' not allowed (outside '//eps_lub_range_text()//')')
       return
     end if
     mode = update_stage
