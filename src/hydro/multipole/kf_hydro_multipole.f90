@@ -59,14 +59,12 @@ module kf_hydro_multipole
   use kf_pair_blocks, only: pair_blocks_t
   use kf_pair_geometry, only: pair_geometry_t
   use kf_rigid_fit, only: best_rotation, centroid
-  use kf_scene_hydro, only: update_stage, update_adaptive, update_names
-  use kf_scene_check, only: name_list
+  use kf_scene_hydro, only: update_stage, update_adaptive
   implicit none
   private
 
   public :: extrapolation_weights
 
-  !> Names of the update modes (`&hydro update`), in the order of their codes.
   !> Velocity error budget of a reused many-body part, as a fraction of tolerance / step size.
   real(wp), parameter :: budget_fraction = 0.25_wp
   !> Conjugate-gradient stopping error, as a fraction of the budget.
@@ -167,7 +165,8 @@ contains
     case (update_adaptive)
       this%adaptive = .true.
     case default
-      call fatal_error(error, "multipole: update = '"//mode//"' is unknown (allowed: "//name_list(update_names)//')')
+      call fatal_error(error, "multipole: update = '"//mode//"' is not a mode of this type (allowed: '"// &
+                       update_stage//"', '"//update_adaptive//"'; 'iterative' is kf_hydro_multipole_iterative)")
       return
     end select
     if (lubrication) then
