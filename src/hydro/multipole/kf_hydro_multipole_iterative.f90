@@ -15,8 +15,9 @@
 !> flow is covariant), with the lubrication blocks of the rotated pairs, forces and strain
 !> rotated with it and the velocities back. It is solved by GMRES, left-preconditioned with
 !> the exact inverse of the same system at the reference (the Cholesky factor of K_ref and of
-!> zeta_L(ref) + dzeta(ref)): two triangular-solve pairs with K_ref and one with the 6N factor
-!> per iteration. GMRES, not CG: the system is symmetric but indefinite after scaling (its
+!> zeta_L(ref) + dzeta, the lubrication blocks of the call): one triangular-solve pair with K_ref
+!> and one with the 6N factor per iteration (the 6N factor is refactorised at every call with
+!> lubrication: the blocks change fast near contact, the many-body part slowly). GMRES, not CG: the system is symmetric but indefinite after scaling (its
 !> Schur complement onto U is negative definite); the nested alternative (CG on the 6N friction,
 !> each product an inner solve with K) needs an inner solve per outer iteration.
 !>
@@ -34,7 +35,8 @@ module kf_hydro_multipole_iterative
   use kf_kinds, only: wp, i8
   use kf_strings, only: to_str
   use kf_constants, only: pi
-  use kf_lapack, only: cholesky_factor, cholesky_solve
+  use kf_lapack, only: cholesky_factor
+  use kf_blas, only: dtrsv
   use kf_error, only: error_t, fatal_error
   use kf_hydro_model, only: hydro_stats_t
   use kf_hydro_multipole, only: multipole_model_t
@@ -170,8 +172,7 @@ contains
       if (allocated(error)) return
     end if
     call right_hand_side(this, this%frot, matmul(qt, matmul(ez, q)))
-    call gmres(this, its, converged, error)
-    if (allocated(error)) return
+    call gmres(this, its, converged)
     this%istats%cg_iterations = this%istats%cg_iterations + its
     if (.not. converged) then
       call refresh(this, r, f, ez, u, error, pairs)
@@ -216,8 +217,7 @@ contains
     this%pos_ref = r
     this%cen_ref = centroid(r)
     call right_hand_side(this, f, e)
-    call precondition(this, this%rhs, this%wk, error)
-    if (allocated(error)) return
+    call precondition(this, this%rhs, this%wk)
     do i = 1, nb
       u(:, i) = this%wk(this%nr + 6*i - 5:this%nr + 6*i - 3)
     end do
@@ -241,7 +241,7 @@ contains
     allocate (this%pos_ref(3, nb), this%rp(3, nb), this%frot(3, nb), this%pre(6*nb, 6*nb), &
               this%zref(6*nb, 6*nb))
     allocate (this%v(nt, max_iterations + 1), this%hm(max_iterations + 1, max_iterations + 2))
-    allocate (this%rhs(nt), this%wk(nt), this%m0(this%nr), this%s6(6*nb), this%uk(6*nb), this%uprev(6*nb))
+    allocate (this%rhs(nt), this%wk(nt), this%m0(6*nb), this%s6(6*nb), this%uk(6*nb), this%uprev(6*nb))
   end subroutine ensure_work
 
   !> b = [rhs_Q(e); 0; f, torques 0, + dx : e] (lubrication blocks of the current call).
@@ -279,48 +279,49 @@ contains
     if (this%lubrication) call this%blocks%apply(x(nr + 1:), y(nr + 1:))
   end subroutine operator_apply
 
-  !> z = P^-1 g, the exact inverse of the system at the reference: m0 = K_ref^-1 g_m,
-  !> U = (zeta_L(ref) + dzeta(ref))^-1 (g_U - S^-1 m0_P / pi), m = m0 + K_ref^-1 E S^-1 U.
-  subroutine precondition(this, g, z, error)
+  !> z = P^-1 g, the exact inverse of the system at the reference, with one forward and one
+  !> backward solve of K_ref = L L^T (P last, so L^-1 E v = [0; L_PP^-1 v] and
+  !> (K_ref^-1 g)_P = L_PP^-T (L^-1 g)_P):
+  !>   y = L^-1 g_m, U = (zeta_L(ref) + dzeta)^-1 (g_U - S^-1 L_PP^-T y_P / pi),
+  !>   m = L^-T (y + [0; L_PP^-1 S^-1 U]) = K_ref^-1 (g_m + E S^-1 U).
+  subroutine precondition(this, g, z)
     class(multipole_iterative_t), intent(inout) :: this
     real(wp), intent(in) :: g(:)
-    real(wp), intent(out) :: z(:)
-    type(error_t), allocatable, intent(out) :: error
-    integer :: nr, i, c, k, j
-    real(wp) :: s
+    real(wp), intent(out), contiguous :: z(:)
+    integer :: nr, nq, i, c, j, n6
     nr = this%nr
-    this%m0 = g(1:nr)
-    call this%ref%solve(this%m0, error)
-    if (allocated(error)) return
+    nq = nr - size(this%s6)
+    z(1:nr) = g(1:nr)
+    call this%ref%forward(z(1:nr))
+    this%m0 = z(nq + 1:nr)
+    call this%ref%backward_p(this%m0)
     do i = 1, size(this%rp, 2)
       do c = 1, 6
         j = 6*(i - 1) + c
-        this%s6(j) = g(nr + j) - this%m0(this%ref%p_row(i, c))/(pi*this%ref%moment_scale(c))
+        this%s6(j) = g(nr + j) - this%m0(this%ref%p_row(i, c) - nq)/(pi*this%ref%moment_scale(c))
       end do
     end do
-    call cholesky_solve(this%pre, this%s6)
-    z(1:nr) = 0.0_wp
+    n6 = size(this%s6)
+    call dtrsv('L', 'N', 'N', n6, this%pre, n6, this%s6, 1)
+    call dtrsv('L', 'T', 'N', n6, this%pre, n6, this%s6, 1)
     do i = 1, size(this%rp, 2)
       do c = 1, 6
-        k = this%ref%p_row(i, c)
-        s = this%ref%moment_scale(c)
-        z(k) = this%s6(6*(i - 1) + c)/s
+        this%m0(this%ref%p_row(i, c) - nq) = this%s6(6*(i - 1) + c)/this%ref%moment_scale(c)
       end do
     end do
-    call this%ref%solve(z(1:nr), error)
-    if (allocated(error)) return
-    z(1:nr) = z(1:nr) + this%m0
+    call this%ref%forward_p(this%m0)
+    z(nq + 1:nr) = z(nq + 1:nr) + this%m0
+    call this%ref%backward(z(1:nr))
     z(nr + 1:) = this%s6
   end subroutine precondition
 
   !> Left-preconditioned GMRES from zero on A x = b (no restart, at most max_iterations);
   !> uk = the velocity part of the last iterate, `its` the iterations done, `converged` by the
   !> stopping rule of the module header.
-  subroutine gmres(this, its, converged, error)
+  subroutine gmres(this, its, converged)
     class(multipole_iterative_t), intent(inout) :: this
     integer, intent(out) :: its
     logical, intent(out) :: converged
-    type(error_t), allocatable, intent(out) :: error
     real(wp) :: beta, cs(max_iterations), sn(max_iterations), gv(max_iterations + 1), y(max_iterations)
     real(wp) :: tmp, den, change, scale
     integer :: k, j, nr, nt, nb
@@ -330,8 +331,7 @@ contains
     nb = size(this%rp, 2)
     converged = .false.
     its = 0
-    call precondition(this, this%rhs, this%v(:, 1), error)
-    if (allocated(error)) return
+    call precondition(this, this%rhs, this%v(:, 1))
     beta = norm2(this%v(:, 1))
     this%uk = 0.0_wp
     if (beta == 0.0_wp) then
@@ -344,8 +344,7 @@ contains
     do k = 1, max_iterations
       its = k
       call operator_apply(this, this%v(:, k), this%wk)
-      call precondition(this, this%wk, this%v(:, k + 1), error)
-      if (allocated(error)) return
+      call precondition(this, this%wk, this%v(:, k + 1))
       ! modified Gram-Schmidt
       do j = 1, k
         this%hm(j, k) = dot_product(this%v(:, j), this%v(:, k + 1))

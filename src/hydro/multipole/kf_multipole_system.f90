@@ -20,7 +20,7 @@
 module kf_multipole_system
   use kf_kinds, only: wp
   use kf_strings, only: to_str
-  use kf_blas, only: dpotrf, dpotrs, dpotri, dtrsm, dgemm, dsyrk, dgemv, dsymv
+  use kf_blas, only: dpotrf, dpotri, dtrsm, dtrsv, dgemm, dsyrk, dgemv, dsymv
   use kf_constants, only: pi
   use kf_error, only: error_t, fatal_error
   use kf_multipole_blocks, only: multipole_layout_t, pair_block_grouped, fam_phi, fam_p
@@ -45,7 +45,6 @@ module kf_multipole_system
     integer :: nqt = 0      !< unknowns of K outside P (they come first)
     integer :: n6 = 0       !< 6N
     integer, public :: n_clamped = 0 !< pairs closer than min_distance at the last factorise
-    logical :: factorised = .false.  !< k holds the Cholesky factor (else the assembled K0 and B)
     real(wp) :: scal(6) = 0.0_wp !< moment_hat = scal(c) * Cartesian force/torque component c
     real(wp), allocatable :: k(:, :)     !< K, then its Cholesky factor (lower triangle)
     real(wp), allocatable :: bp(:, :)    !< phi <- p couplings (rows phi, columns p)
@@ -62,7 +61,10 @@ module kf_multipole_system
     procedure :: assemble => system_assemble
     procedure :: factorise => system_factorise
     procedure :: apply => system_apply
-    procedure :: solve => system_solve
+    procedure :: forward => system_forward
+    procedure :: backward => system_backward
+    procedure :: forward_p => system_forward_p
+    procedure :: backward_p => system_backward_p
     procedure :: unknowns => system_unknowns
     procedure :: p_row => system_p_row
     procedure :: moment_scale => system_moment_scale
@@ -136,7 +138,6 @@ contains
       return
     end if
     call system_clock(c0, crate)
-    this%factorised = .false.
     h = this%lay%h
     if (nsph /= this%n .or. .not. allocated(this%k)) then
       this%n = nsph
@@ -266,7 +267,6 @@ contains
     call dpotrf('L', this%nr, this%k, this%nr, info)
     call system_clock(c2)
     this%t_factor = real(c2 - c1, wp)/real(crate, wp)
-    this%factorised = info == 0
     if (info /= 0) then
       if (info > 0) then
         call fatal_error(error, 'Cholesky factorisation of the multipole system failed: matrix not '// &
@@ -301,19 +301,34 @@ contains
     if (na > 0) call dgemv('N', na, np, -1.0_wp, this%bp, nphi, t, 1, 1.0_wp, y, 1)
   end subroutine system_apply
 
-  !> x = K^-1 x with the Cholesky factor of the last `factorise` (an error without one).
-  subroutine system_solve(this, x, error)
-    class(multipole_system_t), intent(inout) :: this
-    real(wp), intent(inout) :: x(:)
-    type(error_t), allocatable, intent(out) :: error
-    integer :: info
-    if (.not. this%factorised) then
-      call fatal_error(error, 'multipole system: solve without a factorisation')
-      return
-    end if
-    call dpotrs('L', this%nr, 1, this%k, this%nr, x, this%nr, info)
-    if (info /= 0) call fatal_error(error, 'dpotrs: illegal argument '//to_str(info)//' for the multipole system')
-  end subroutine system_solve
+  !> x = L^-1 x with the Cholesky factor K = L L^T of the last `factorise` (nr unknowns).
+  subroutine system_forward(this, x)
+    class(multipole_system_t), intent(in) :: this
+    real(wp), intent(inout), contiguous :: x(:)
+    call dtrsv('L', 'N', 'N', this%nr, this%k, this%nr, x, 1)
+  end subroutine system_forward
+
+  !> x = L^-T x (nr unknowns); `forward` then `backward` is `solve`.
+  subroutine system_backward(this, x)
+    class(multipole_system_t), intent(in) :: this
+    real(wp), intent(inout), contiguous :: x(:)
+    call dtrsv('L', 'T', 'N', this%nr, this%k, this%nr, x, 1)
+  end subroutine system_backward
+
+  !> v = L_PP^-1 v for the 6N unknowns of P (rows p_row - (nr - 6N) of the trailing block):
+  !> P comes last, so L^-1 [0; v] = [0; L_PP^-1 v].
+  subroutine system_forward_p(this, v)
+    class(multipole_system_t), intent(in) :: this
+    real(wp), intent(inout), contiguous :: v(:)
+    call dtrsv('L', 'N', 'N', this%n6, this%k(this%nqt + 1, this%nqt + 1), this%nr, v, 1)
+  end subroutine system_forward_p
+
+  !> v = L_PP^-T v: the P part of L^-T x is L_PP^-T x_P, so (K^-1 g)_P = L_PP^-T (L^-1 g)_P.
+  subroutine system_backward_p(this, v)
+    class(multipole_system_t), intent(in) :: this
+    real(wp), intent(inout), contiguous :: v(:)
+    call dtrsv('L', 'T', 'N', this%n6, this%k(this%nqt + 1, this%nqt + 1), this%nr, v, 1)
+  end subroutine system_backward_p
 
   !> The number nr of (phi, chi) unknowns of K (2 N L(L+2)) at the last assembly.
   pure integer function system_unknowns(this) result(nr)
