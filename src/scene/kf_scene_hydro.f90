@@ -51,8 +51,8 @@ module kf_scene_hydro
     logical :: lubrication = .true.                 !< multipole: lubrication corrections
     !> BWE overlap shift; < 0 (the default): not given, resolve_hydro sets the integration tolerance
     real(wp) :: eps_lub = -1.0_wp
-    !> multipole: adaptive (reuse, the default) | stage (exact every stage) | iterative (exact
-    !> every stage to a solver tolerance, by preconditioned GMRES)
+    !> The multipole update: adaptive (reuse, the default) | stage (exact every stage) |
+    !> iterative (exact every stage to a solver tolerance, by preconditioned GMRES)
     character(len=name_len) :: update = update_adaptive
     !> Overlap rule of the multipole model: pair (BWE per pair, the default), separate (the
     !> configuration without overlaps) or relax (separate, and overlaps undone over overlap_time)
@@ -101,7 +101,7 @@ contains
       'multipole: adaptive (the many-body part reused between refreshes within an error budget from the '// &
       'tolerance, lubrication exact at every stage), stage (recomputed exactly at every Runge-Kutta stage: '// &
       'the reference) or iterative (the exact system at every stage, solved by GMRES preconditioned with an '// &
-      'earlier factorisation, to a relative velocity tolerance of '//to_str_exact(solver_tolerance_default)// &
+      'earlier factorisation, to a relative velocity tolerance of '//to_str(solver_tolerance_default, '(es7.1)')// &
       '); ignored by none and rpy')
     call add_s(items, 'hydro.overlap', p%overlap, 'one of '//name_list(overlap_names)//'; '// &
       quoted(overlap_pair)//' unless model = '//quoted(model_multipole), &

@@ -17,9 +17,11 @@
 !> the exact inverse of the same system at the reference (the Cholesky factor of K_ref and of
 !> zeta_L(ref) + dzeta, the lubrication blocks of the call): one triangular-solve pair with K_ref
 !> and one with the 6N factor per iteration (the 6N factor is refactorised at every call with
-!> lubrication: the blocks change fast near contact, the many-body part slowly). GMRES, not CG: the system is symmetric but indefinite after scaling (its
-!> Schur complement onto U is negative definite); the nested alternative (CG on the 6N friction,
-!> each product an inner solve with K) needs an inner solve per outer iteration.
+!> lubrication: the blocks change fast near contact, the many-body part slowly).
+!> GMRES, not CG: the system is symmetric but indefinite (its Schur complement onto U is
+!> negative definite). One system, not nested solves (CG on the 6N friction, each product an
+!> inner solve with K preconditioned by K_ref): an inner solve alone needs as many iterations,
+!> each of the same cost, as the whole one-system solve (docs/multipole.md).
 !>
 !> Stopping rule: the largest change of a bead's velocity between two iterations is at most
 !> solver_tolerance times the largest bead velocity (at least two iterations). Refactorisation
@@ -117,7 +119,7 @@ contains
     this%istats = hydro_stats_t()
   end subroutine iterative_setup
 
-  !> Counters: evaluations, refreshes (factorisations), reused (iterative solves),
+  !> The work counters, evaluations, refreshes (factorisations), reused (iterative solves),
   !> cg_iterations (their GMRES iterations) and the wall time of both kinds.
   function iterative_statistics(this) result(s)
     class(multipole_iterative_t), intent(in) :: this
@@ -235,8 +237,8 @@ contains
     nt = this%nr + 6*nb
     if (allocated(this%rhs)) then
       if (size(this%rhs) == nt .and. size(this%rp, 2) == nb) return
-      deallocate (this%pos_ref, this%rp, this%frot, this%pre, this%zref, this%v, this%hm, this%rhs, this%wk, this%m0, this%s6, &
-                  this%uk, this%uprev)
+      deallocate (this%pos_ref, this%rp, this%frot, this%pre, this%zref, this%v, this%hm, this%rhs, this%wk, &
+                  this%m0, this%s6, this%uk, this%uprev)
     end if
     allocate (this%pos_ref(3, nb), this%rp(3, nb), this%frot(3, nb), this%pre(6*nb, 6*nb), &
               this%zref(6*nb, 6*nb))
