@@ -7,7 +7,8 @@
 !> corrections as a list of 12 x 12 pair blocks (kf_pair_blocks), and the corrected friction
 !> route zeta = zeta_L + sum dzeta, x = x_L + sum dx, U - U_inf = zeta^-1 (F + x:E).
 !>
-!> Two ways to get velocities, chosen once at set-up (`&hydro update`):
+!> Two ways to get velocities, chosen once at set-up (`&hydro update`; the third, 'iterative',
+!> is its own type extending this one, kf_hydro_multipole_iterative):
 !> * 'stage': `prepare(r)` at every call does all of the above and caches the 3N x 3N mobility
 !>   and the strain disturbances (also what `prepare`/`apply_mobility`/`mobility_matrix` do in
 !>   either mode). The reference.
@@ -59,7 +60,7 @@ module kf_hydro_multipole
   use kf_pair_blocks, only: pair_blocks_t
   use kf_pair_geometry, only: pair_geometry_t
   use kf_rigid_fit, only: best_rotation, centroid
-  use kf_scene_hydro, only: update_stage, update_adaptive
+  use kf_scene_hydro, only: update_stage, update_adaptive, update_iterative
   implicit none
   private
 
@@ -166,7 +167,7 @@ contains
       this%adaptive = .true.
     case default
       call fatal_error(error, "multipole: update = '"//mode//"' is not a mode of this type (allowed: '"// &
-                       update_stage//"', '"//update_adaptive//"'; 'iterative' is kf_hydro_multipole_iterative)")
+                       update_stage//"', '"//update_adaptive//"'; '"//update_iterative//"' is kf_hydro_multipole_iterative)")
       return
     end select
     if (lubrication) then
