@@ -7,11 +7,14 @@
 # A science command (about 1.5 h of one core), not a test.
 #
 #   bash scripts/bench_reuse.sh [part ...]     parts: velocity trajectory speed overlaps
-#                                              scaling profile stiffness case (default: all
-#                                              but stiffness and case)
+#                                              scaling profile stiffness compare case (default:
+#                                              all but stiffness, compare and case)
 #   stiffness: which limit sets dopri45's step (|lambda_max| h of mu dF/dr at every trial step)
 #   along the trefoil (t = 0-50) and a candy-cane window (t = 800 of the campaign run, 20 units),
 #   into $out/stiffness and the stiffness section of docs/accuracy.md (about 45 min of one core)
+#   compare: 'stage', 'adaptive' and 'iterative' in one run (t = 0-10) on the trefoil and on a
+#   random self-avoiding chain (N = 60, A = 1.3): docs/accuracy.md, "Exact at every stage by
+#   iteration" (about 25 min of one core)
 #   case: the whole reference trefoil case (N = 99, t_end = 1000) with the adaptive path
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
@@ -43,6 +46,9 @@ for part in "${parts[@]}"; do
       bench velocity_collapse velocity --config inputs/configs/candycane_A1_t250.xyz --t-end 30 --every 4 ;;
     trajectory) bench trajectory_trefoil trajectory --config trefoil --t-end 10 ;;
     speed) bench speed_trefoil speed --config trefoil --t-end 50 ;;
+    compare)
+      bench compare_trefoil compare --config trefoil --t-end 10
+      bench compare_random60 compare --config random60 --t-end 10 ;;
     overlaps)
       bench overlaps_coil_eps1e-2 overlaps --config coil --t-end 4 --eps-lub 1e-2
       bench overlaps_coil_eps1e-4 overlaps --config coil --t-end 4 --eps-lub 1e-4 ;;
@@ -90,13 +96,17 @@ NML
         echo "loadavg_start = $load0"; echo "wall_s = $(( $(date +%s) - start ))";
         echo "loadavg_end = $(cat /proc/loadavg)";
         echo "status = $status (see $dir/log.txt)"; } > "$out/case_trefoil.txt" ;;
-    *) kf_die "unknown part '$part' (velocity trajectory speed overlaps scaling profile stiffness case)" ;;
+    *) kf_die "unknown part '$part' (velocity trajectory speed overlaps scaling profile stiffness compare case)" ;;
   esac
 done
 
 reuse=0; stiffness=0
 for part in "${parts[@]}"; do
-  if [ "$part" = stiffness ]; then stiffness=1; else reuse=1; fi
+  case "$part" in
+    stiffness) stiffness=1 ;;
+    compare) ;;   # its section of docs/accuracy.md is written by hand from $out/compare_*.txt
+    *) reuse=1 ;;
+  esac
 done
 if [ "$reuse" = 1 ]; then
   kf_log "knotflow-accuracy-report --reuse $out --markdown docs/accuracy.md"

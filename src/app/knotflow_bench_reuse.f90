@@ -9,6 +9,9 @@
 !>   trajectory [--config C] [--t-end T]: largest bead deviation at T between the two paths at
 !>              tolerance 1e-4, and of the exact path between tolerances 1e-4 and 1e-6
 !>   speed      [--config C] [--t-end T]: wall time of both paths to T and their ratio
+!>   compare    [--config C] [--t-end T]: 'stage', 'adaptive' and 'iterative' in one run at
+!>              tolerance 1e-4: wall times, ratios to 'stage', largest bead deviation from
+!>              'stage' at T, iterations per iterative solve, factorisations
 !>   scaling    [--t-end T]: adaptive wall time per unit time for random chains N = 50..400
 !>   overlaps   [--config C] [--t-end T] [--eps-lub E]: overlap statistics (run
 !>              diagnostics) of both paths
@@ -20,7 +23,8 @@
 !>   rigid      [--config C]: the reused part at rigidly moved and at deformed configurations
 !>              (overlap rule pair only: the model's reused part against its exact one, both
 !>              without the dynamics' configuration rules separate and relax)
-!> C: trefoil (N = 99, orientation c, A = 2.2; default), coil (inputs/configs/
+!> C: trefoil (N = 99, orientation c, A = 2.2; default), random60 (a self-avoiding random chain,
+!> N = 60, the &chain default seed, A = 1.3), coil (inputs/configs/
 !> coil_candycane_A1.xyz, A = 1) or a coordinate file path (A = 1). --overlap RULE: the &hydro
 !> overlap rule, one of kf_scene_hydro's overlap_names (default relax, as inputs/*_multipole.nml;
 !> rigid: pair). Output:
@@ -62,6 +66,8 @@ program knotflow_bench_reuse
     call run_trajectory()
   case ('speed')
     call run_speed()
+  case ('compare')
+    call run_compare()
   case ('scaling')
     call run_scaling()
   case ('rigid')
@@ -71,7 +77,8 @@ program knotflow_bench_reuse
   case ('stiffness')
     call run_stiffness()
   case default
-    call die(program_name, "unknown part '"//part//"' (allowed: velocity, trajectory, speed, scaling, overlaps, rigid, stiffness)", 2)
+    call die(program_name, "unknown part '"//part//"' (allowed: velocity, trajectory, speed, compare, scaling, "// &
+             "overlaps, rigid, stiffness)", 2)
   end select
 
 contains
@@ -81,9 +88,9 @@ contains
     integer :: k, ios
     if (command_argument_count() < 1) call die(program_name, 'usage: knotflow-bench-reuse velocity|trajectory|speed|scaling [options]', 2)
     part = argument(1)
-    call standard_option(program_name, part, 'usage: knotflow-bench-reuse velocity|trajectory|speed|overlaps|'// &
-      'scaling|rigid|stiffness [--config trefoil|coil|FILE] [--t-end T] [--every K] [--eps-lub E]'// &
-      ' [--overlap RULE (one of '//name_list(overlap_names)//')] [--update U] [--tolerance TOL]'// &
+    call standard_option(program_name, part, 'usage: knotflow-bench-reuse velocity|trajectory|speed|compare|'// &
+      'overlaps|scaling|rigid|stiffness [--config trefoil|random60|coil|FILE] [--t-end T] [--every K]'// &
+      ' [--eps-lub E] [--overlap RULE (one of '//name_list(overlap_names)//')] [--update U] [--tolerance TOL]'// &
       ' [--table FILE]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
       'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).')
@@ -162,6 +169,10 @@ contains
       scene%chain%shape = 'trefoil'
       scene%chain%orientation = 'c'
       scene%forces%bending_a = 2.2_wp
+    case ('random60')
+      scene%chain%shape = 'random'
+      scene%chain%n_beads = 60
+      scene%forces%bending_a = 1.3_wp
     case ('coil')
       scene%chain%shape = 'file'
       scene%chain%coordinate_file = 'inputs/configs/coil_candycane_A1.xyz'
@@ -176,20 +187,28 @@ contains
   end subroutine study_scene
 
   !> The part, configuration, t_end, the load average and the BLAS threads (environment).
-  subroutine header()
+  !> The first line of /proc/loadavg ('unknown' where there is none).
+  function loadavg() result(line)
+    character(len=:), allocatable :: line
     character(len=128) :: text
-    integer :: unit, ios, status
-    write (output_unit, '(a)') 'part = '//part
-    write (output_unit, '(a)') 'config = '//config
-    write (output_unit, '(a)') 't_end = '//to_str(t_end, '(g0.6)')
-    write (output_unit, '(a)') 'overlap = '//overlap
+    integer :: unit, ios
     text = 'unknown'
     open (newunit=unit, file='/proc/loadavg', action='read', status='old', iostat=ios)
     if (ios == 0) then
       read (unit, '(a)', iostat=ios) text
       close (unit)
     end if
-    write (output_unit, '(a)') 'loadavg_start = '//trim(text)
+    line = trim(text)
+  end function loadavg
+
+  subroutine header()
+    character(len=128) :: text
+    integer :: status
+    write (output_unit, '(a)') 'part = '//part
+    write (output_unit, '(a)') 'config = '//config
+    write (output_unit, '(a)') 't_end = '//to_str(t_end, '(g0.6)')
+    write (output_unit, '(a)') 'overlap = '//overlap
+    write (output_unit, '(a)') 'loadavg_start = '//loadavg()
     call get_environment_variable('OPENBLAS_NUM_THREADS', text, status=status)
     if (status /= 0) text = 'unset'
     write (output_unit, '(a)') 'openblas_num_threads = '//trim(text)
@@ -276,7 +295,7 @@ contains
     call integrate(scene, r, wall, steps, stats)
     write (output_unit, '(a)') label//'.wall_s = '//to_str(wall, '(f10.2)')
     write (output_unit, '(a)') label//'.steps = '//to_str(steps)
-    if (update == 'adaptive') call print_stats(label//'.', stats)
+    if (update /= 'stage') call print_stats(label//'.', stats)
   end subroutine run_path
 
   subroutine run_trajectory()
@@ -300,6 +319,24 @@ contains
     call run_path('stage', 'stage', 1.0e-4_wp, r, wall_stage)
     write (output_unit, '(a)') 'ratio_stage_over_adaptive = '//to_str(wall_stage/wall_adapt, '(f8.2)')
   end subroutine run_speed
+
+  !> The three update modes in one run (tolerance 1e-4): 'stage' first (the reference), then
+  !> 'adaptive' and 'iterative'.
+  subroutine run_compare()
+    character(len=*), parameter :: modes(2) = [character(len=9) :: 'adaptive', 'iterative']
+    real(wp), allocatable :: r_stage(:, :), r(:, :)
+    real(wp) :: wall_stage, wall
+    integer :: k
+    call header()
+    call run_path('stage', 'stage', 1.0e-4_wp, r_stage, wall_stage)
+    do k = 1, size(modes)
+      call run_path(trim(modes(k)), trim(modes(k)), 1.0e-4_wp, r, wall)
+      write (output_unit, '(a)') 'ratio_stage_over_'//trim(modes(k))//' = '//to_str(wall_stage/wall, '(f8.2)')
+      write (output_unit, '(a)') 'deviation_'//trim(modes(k))//'_vs_stage = '// &
+        to_str(max_bead_deviation(r, r_stage), '(es10.3)')
+    end do
+    write (output_unit, '(a)') 'loadavg_end = '//loadavg()
+  end subroutine run_compare
 
   subroutine run_rigid()
     type(scene_t) :: scene

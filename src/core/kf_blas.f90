@@ -5,7 +5,7 @@ module kf_blas
   implicit none
   private
 
-  public :: dpotrf, dpotrs, dpotri, dsyev, dtrsm, dgemm, dsyrk, dgemv, dsymv
+  public :: dpotrf, dpotrs, dpotri, dsyev, dtrsm, dtrsv, dgemm, dsyrk, dgemv, dsymv
 
   interface
     subroutine dpotrf(uplo, n, a, lda, info)
@@ -47,6 +47,13 @@ module kf_blas
       real(wp), intent(in) :: a(lda, *)
       real(wp), intent(inout) :: b(ldb, *)
     end subroutine dtrsm
+    subroutine dtrsv(uplo, trans, diag, n, a, lda, x, incx)
+      import :: wp
+      character(len=1), intent(in) :: uplo, trans, diag
+      integer, intent(in) :: n, lda, incx
+      real(wp), intent(in) :: a(lda, *)
+      real(wp), intent(inout) :: x(*)
+    end subroutine dtrsv
     subroutine dgemm(transa, transb, m, n, k, alpha, a, lda, b, ldb, beta, c, ldc)
       import :: wp
       character(len=1), intent(in) :: transa, transb

@@ -6,11 +6,12 @@ module kf_hydro_factory
   use kf_kinds, only: wp
   use kf_error, only: error_t, fatal_error
   use kf_scene_hydro, only: hydro_params_t, hydro_model_names => model_names, model_none, model_rpy, &
-                            model_multipole, check_hydro, effective_eps_lub, overlap_bwe
+                            model_multipole, check_hydro, effective_eps_lub, overlap_bwe, update_iterative
   use kf_hydro_model, only: hydro_model_t
   use kf_hydro_none, only: none_model_t
   use kf_hydro_rpy, only: rpy_model_t
   use kf_hydro_multipole, only: multipole_model_t
+  use kf_hydro_multipole_iterative, only: multipole_iterative_t
   implicit none
   private
 
@@ -42,6 +43,17 @@ contains
     case (model_rpy)
       allocate (rpy_model_t :: model)
     case (model_multipole)
+      if (trim(params%update) == update_iterative) then
+        block
+          type(multipole_iterative_t), allocatable :: mi
+          allocate (mi)
+          call mi%setup(params%order, params%lubrication, effective_eps_lub(params, tolerance), error, &
+                        literal_bwe=(params%overlap == overlap_bwe))
+          if (allocated(error)) return
+          call move_alloc(mi, model)
+        end block
+        return
+      end if
       block
         type(multipole_model_t), allocatable :: mp
         allocate (mp)

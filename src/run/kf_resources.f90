@@ -10,6 +10,8 @@
 !> - hydrodynamic model: 'rpy' keeps 7 float64 pair tables (kf_hydro_rpy: 56 P); 'multipole'
 !>   the dense 3N x 3N mobility and 6N x 6N friction (360 N^2), four more 6N x 6N matrices
 !>   with update = 'adaptive' (1152 N^2: the reference, two differences, the preconditioner),
+!>   one more with update = 'iterative' (288 N^2: the preconditioner; its two many-body systems,
+!>   the reference factor and the assembled one, come on top as the model's own),
 !>   one more (288 N^2) for the stresslet with lubrication (`&output stresslet`): a lower bound (the many-body system comes on top); 'none' nothing.
 !> The estimate is compared with the machine's physical memory (/proc/meminfo MemTotal; no
 !> check where that cannot be read).
@@ -19,6 +21,7 @@ module kf_resources
   use kf_strings, only: to_str, to_str_exact
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: scene_t
+  use kf_scene_hydro, only: update_adaptive, update_iterative
   use kf_run_diagnostics, only: diagnostics_memory
   use kf_pairs, only: pair_count
   implicit none
@@ -63,7 +66,8 @@ contains
       res%hydro_bytes = 56_i8*res%pairs + 72_i8*n
     case ('multipole')
       res%hydro_bytes = 360_i8*n*n
-      if (sc%hydro%update == 'adaptive') res%hydro_bytes = res%hydro_bytes + 1152_i8*n*n
+      if (sc%hydro%update == update_adaptive) res%hydro_bytes = res%hydro_bytes + 1152_i8*n*n
+      if (sc%hydro%update == update_iterative) res%hydro_bytes = res%hydro_bytes + 288_i8*n*n
       ! the stresslet's own grand friction with lubrication (kf_hydro_multipole `stresslet`)
       if (sc%output%stresslet .and. sc%hydro%lubrication) res%hydro_bytes = res%hydro_bytes + 288_i8*n*n
     case default

@@ -17,9 +17,16 @@ module kf_scene_hydro
   !> The valid values of &hydro model.
   character(len=*), parameter, public :: model_names(3) = [character(len=9) :: model_none, model_rpy, &
     model_multipole]
-  character(len=*), parameter, public :: update_stage = 'stage', update_adaptive = 'adaptive'
+  character(len=*), parameter, public :: update_stage = 'stage', update_adaptive = 'adaptive', &
+    update_iterative = 'iterative'
+  !> update = 'iterative': the default of the relative solver tolerance (largest change of a bead
+  !> velocity per iteration over the largest bead velocity) and its allowed range
+  !> (kf_hydro_multipole_iterative).
+  real(wp), parameter, public :: solver_tolerance_default = 1.0e-6_wp
+  real(wp), parameter, public :: solver_tolerance_min = 1.0e-12_wp, solver_tolerance_max = 1.0e-2_wp
   !> The valid values of &hydro update (multipole).
-  character(len=*), parameter, public :: update_names(2) = [character(len=8) :: update_stage, update_adaptive]
+  character(len=*), parameter, public :: update_names(3) = [character(len=9) :: update_stage, update_adaptive, &
+    update_iterative]
 
   character(len=*), parameter, public :: overlap_pair = 'pair', overlap_separate = 'separate', &
     overlap_relax = 'relax', overlap_bwe = 'bwe'
@@ -43,7 +50,8 @@ module kf_scene_hydro
     !> overlap shift (pairs evaluated at 1 + eps_lub); < 0 (the default): not given, resolve_hydro
     !> sets the integration tolerance
     real(wp) :: eps_lub = -1.0_wp
-    !> multipole: adaptive (reuse, the default) | stage (exact every stage)
+    !> The multipole update: adaptive (reuse, the default) | stage (exact every stage) |
+    !> iterative (exact every stage to a solver tolerance, by preconditioned GMRES)
     character(len=name_len) :: update = update_adaptive
     !> Overlap rule of the multipole model: pair (lubrication and multipole blocks of a pair
     !> clamped at 1 + eps_lub, the default), separate (the configuration without overlaps), relax
@@ -93,8 +101,10 @@ contains
       'the &integrator tolerance')
     call add_s(items, 'hydro.update', p%update, 'one of '//name_list(update_names), &
       'multipole: adaptive (the many-body part reused between refreshes within an error budget from the '// &
-      'tolerance, lubrication exact at every stage) or stage (recomputed exactly at every Runge-Kutta stage: '// &
-      'the reference); ignored by none and rpy')
+      'tolerance, lubrication exact at every stage), stage (recomputed exactly at every Runge-Kutta stage: '// &
+      'the reference) or iterative (the exact system at every stage, solved by GMRES preconditioned with an '// &
+      'earlier factorisation, to a relative velocity tolerance of '//to_str(solver_tolerance_default, '(es7.1)')// &
+      '); ignored by none and rpy')
     call add_s(items, 'hydro.overlap', p%overlap, 'one of '//name_list(overlap_names)//'; '// &
       quoted(overlap_pair)//' unless model = '//quoted(model_multipole), &
       'multipole: how overlapping beads are treated. bwe: the study''s BWE rule, only the lubrication '// &

@@ -183,7 +183,7 @@ CORPUS = [
      '&hydro: eps_lub = 0.5 is not allowed (a number in (0, 0.5), or negative for the integration tolerance)'),
     ('update',
      "&hydro update = 'sometimes' /",
-     "&hydro: update = 'sometimes' is not allowed (one of stage, adaptive)"),
+     "&hydro: update = 'sometimes' is not allowed (one of stage, adaptive, iterative)"),
     ('method',
      "&integrator method = 'euler' /",
      "&integrator: method = 'euler' is not allowed (one of dopri45, rk4)"),

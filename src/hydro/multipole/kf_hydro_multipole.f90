@@ -11,7 +11,8 @@
 !> corrections as a list of 12 x 12 pair blocks (kf_pair_blocks), and the corrected friction
 !> route zeta = zeta_L + sum dzeta, x = x_L + sum dx, U - U_inf = zeta^-1 (F + x:E).
 !>
-!> Two ways to get velocities, chosen once at set-up (`&hydro update`):
+!> Two ways to get velocities, chosen once at set-up (`&hydro update`; the third, 'iterative',
+!> is its own type extending this one, kf_hydro_multipole_iterative):
 !> * 'stage': `prepare(r)` at every call does all of the above and caches the 3N x 3N mobility
 !>   and the strain disturbances (also what `prepare`/`apply_mobility`/`mobility_matrix` do in
 !>   either mode). The reference.
@@ -63,15 +64,13 @@ module kf_hydro_multipole
   use kf_pair_blocks, only: pair_blocks_t
   use kf_pair_geometry, only: pair_geometry_t
   use kf_rigid_fit, only: best_rotation, centroid
-  use kf_scene_hydro, only: update_stage, update_adaptive, update_names
-  use kf_scene_check, only: name_list
+  use kf_scene_hydro, only: update_stage, update_adaptive, update_iterative
   use kf_hydro_limits, only: eps_lub_in_range, eps_lub_range_text
   implicit none
   private
 
   public :: extrapolation_weights
 
-  !> Names of the update modes (`&hydro update`), in the order of their codes.
   !> Velocity error budget of a reused many-body part, as a fraction of tolerance / step size.
   real(wp), parameter :: budget_fraction = 0.25_wp
   !> Conjugate-gradient stopping error, as a fraction of the budget.
@@ -177,7 +176,8 @@ contains
     case (update_adaptive)
       this%adaptive = .true.
     case default
-      call fatal_error(error, "multipole: update = '"//mode//"' is unknown (allowed: "//name_list(update_names)//')')
+      call fatal_error(error, "multipole: update = '"//mode//"' is not a mode of this type (allowed: '"// &
+                       update_stage//"', '"//update_adaptive//"'; '"//update_iterative//"' is kf_hydro_multipole_iterative)")
       return
     end select
     this%literal_bwe = .false.

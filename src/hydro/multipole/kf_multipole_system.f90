@@ -22,7 +22,7 @@
 module kf_multipole_system
   use kf_kinds, only: wp
   use kf_strings, only: to_str
-  use kf_blas, only: dpotrf, dpotri, dtrsm, dgemm, dsyrk
+  use kf_blas, only: dpotrf, dpotri, dtrsm, dtrsv, dgemm, dsyrk, dgemv, dsymv
   use kf_lapack, only: symmetric_eigenvalues
   use kf_constants, only: pi
   use kf_error, only: error_t, fatal_error
@@ -62,8 +62,18 @@ module kf_multipole_system
     real(wp) :: t_assembly = 0.0_wp, t_factor = 0.0_wp
   contains
     procedure :: init => system_init
+    procedure :: assemble => system_assemble
     procedure :: factorise => system_factorise
     procedure :: spectrum => system_spectrum
+    procedure :: apply => system_apply
+    procedure :: forward => system_forward
+    procedure :: backward => system_backward
+    procedure :: forward_p => system_forward_p
+    procedure :: backward_p => system_backward_p
+    procedure :: unknowns => system_unknowns
+    procedure :: p_row => system_p_row
+    procedure :: moment_scale => system_moment_scale
+    procedure :: add_strain_rhs => system_add_strain_rhs
     procedure :: grand_mobility => system_grand_mobility
     procedure :: translational_mobility => system_translational_mobility
     procedure :: grand_friction => system_grand_friction
@@ -123,16 +133,15 @@ contains
     call system_factorise(this, r, error, w)
   end subroutine system_spectrum
 
-  !> Assemble the scaled real system for centres r(3, N), eliminate the p-moments and
-  !> factorise (Cholesky); with `spectrum`: its eigenvalues instead of the factorisation.
-  subroutine system_factorise(this, r, error, spectrum)
+  !> Assemble the scaled real system for centres r(3, N) without factorising: the (phi, chi)
+  !> block K0 (lower triangle) and the phi <- p couplings B, so that K = K0 - B B^T (`apply`).
+  subroutine system_assemble(this, r, error)
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
-    real(wp), allocatable, intent(out), optional :: spectrum(:)
-    integer :: nsph, h, i, j, x, yr, n, q, info, na, nc, nphi, np, cs, t, pc
+    integer :: nsph, h, i, j, x, yr, n, q, t, pc
     integer :: lo(5), hi(5), ks(4, 2), bs(4, 2), ps(2)
-    integer(8) :: c0, c1, c2, crate
+    integer(8) :: c0, c1, crate
     real(wp) :: d(3), dist
 
     nsph = size(r, 2)
@@ -157,10 +166,6 @@ contains
       allocate (this%bq(max(1, this%nqt), 5), this%d6(this%n6, 5))
     end if
     associate (idx => this%idx)
-      na = (h - 3)*nsph      ! rows of B in run 1
-      nc = 3*nsph            ! rows of B in run 3
-      nphi = h*nsph
-      np = h*nsph
       lo = idx%lo
       hi = idx%hi
 
@@ -230,8 +235,45 @@ contains
         end do
       end do
     end associate
-
     call system_clock(c1)
+    this%t_assembly = real(c1 - c0, wp)/real(crate, wp)
+
+  contains
+
+    !> Starts of the runs of sphere s in K (ksv), in the rows of B (bsv) and its p column (psv).
+    pure subroutine starts(s, ksv, bsv, psv)
+      integer, intent(in) :: s
+      integer, intent(out) :: ksv(4), bsv(4), psv
+      integer :: rr
+      do rr = 1, 4
+        ksv(rr) = this%idx%k_start(rr, s)
+      end do
+      bsv = 0
+      bsv(1) = this%idx%b_start(1, s)
+      bsv(3) = this%idx%b_start(3, s)
+      psv = this%idx%p_start(s)
+    end subroutine starts
+
+  end subroutine system_assemble
+
+  !> Assemble the scaled real system for centres r(3, N), eliminate the p-moments and
+  !> factorise (Cholesky); with `spectrum`: its eigenvalues instead of the factorisation.
+  subroutine system_factorise(this, r, error, spectrum)
+    class(multipole_system_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable, intent(out), optional :: spectrum(:)
+    integer :: h, info, na, nc, nphi, np, cs
+    integer(8) :: c1, c2, crate
+
+    call this%assemble(r, error)
+    if (allocated(error)) return
+    call system_clock(c1, crate)
+    h = this%lay%h
+    na = (h - 3)*this%n      ! rows of B in run 1
+    nc = 3*this%n            ! rows of B in run 3
+    nphi = h*this%n
+    np = h*this%n
     ! Exact elimination of the p-moments (their block is the identity): K_phiphi -= B B^T.
     cs = 2*na + 1
     if (na > 0) then
@@ -249,7 +291,6 @@ contains
     end if
     call dpotrf('L', this%nr, this%k, this%nr, info)
     call system_clock(c2)
-    this%t_assembly = real(c1 - c0, wp)/real(crate, wp)
     this%t_factor = real(c2 - c1, wp)/real(crate, wp)
     if (info /= 0) then
       if (info > 0) then
@@ -269,24 +310,112 @@ contains
       end if
       this%n = 0
     end if
-
-  contains
-
-    !> Starts of the runs of sphere s in K (ksv), in the rows of B (bsv) and its p column (psv).
-    pure subroutine starts(s, ksv, bsv, psv)
-      integer, intent(in) :: s
-      integer, intent(out) :: ksv(4), bsv(4), psv
-      integer :: rr
-      do rr = 1, 4
-        ksv(rr) = this%idx%k_start(rr, s)
-      end do
-      bsv = 0
-      bsv(1) = this%idx%b_start(1, s)
-      bsv(3) = this%idx%b_start(3, s)
-      psv = this%idx%p_start(s)
-    end subroutine starts
-
   end subroutine system_factorise
+
+  !> y = K x for the assembled, not factorised system (after `assemble`): K0 x - B (B^T x),
+  !> the p-moments eliminated by products instead of the dense update of `factorise`.
+  !> x, y: the nr unknowns of K (`unknowns`), in its global order.
+  subroutine system_apply(this, x, y)
+    class(multipole_system_t), intent(inout) :: this
+    real(wp), intent(in), contiguous :: x(:)
+    real(wp), intent(out), contiguous :: y(:)
+    integer :: na, nc, nphi, np, cs
+    real(wp) :: t(this%lay%h*this%n)
+    na = (this%lay%h - 3)*this%n
+    nc = 3*this%n
+    nphi = this%lay%h*this%n
+    np = nphi
+    cs = 2*na + 1
+    call dsymv('L', this%nr, 1.0_wp, this%k, this%nr, x, 1, 0.0_wp, y, 1)
+    ! t = B^T x_phi; y_phi -= B t (rows of B: run 1 of K, then run 3 from cs)
+    call dgemv('T', nc, np, 1.0_wp, this%bp(na + 1, 1), nphi, x(cs:), 1, 0.0_wp, t, 1)
+    if (na > 0) call dgemv('T', na, np, 1.0_wp, this%bp, nphi, x, 1, 1.0_wp, t, 1)
+    call dgemv('N', nc, np, -1.0_wp, this%bp(na + 1, 1), nphi, t, 1, 1.0_wp, y(cs:), 1)
+    if (na > 0) call dgemv('N', na, np, -1.0_wp, this%bp, nphi, t, 1, 1.0_wp, y, 1)
+  end subroutine system_apply
+
+  !> x = L^-1 x with the Cholesky factor K = L L^T of the last `factorise` (nr unknowns).
+  subroutine system_forward(this, x)
+    class(multipole_system_t), intent(in) :: this
+    real(wp), intent(inout), contiguous :: x(:)
+    call dtrsv('L', 'N', 'N', this%nr, this%k, this%nr, x, 1)
+  end subroutine system_forward
+
+  !> x = L^-T x (nr unknowns); `forward` then `backward` is `solve`.
+  subroutine system_backward(this, x)
+    class(multipole_system_t), intent(in) :: this
+    real(wp), intent(inout), contiguous :: x(:)
+    call dtrsv('L', 'T', 'N', this%nr, this%k, this%nr, x, 1)
+  end subroutine system_backward
+
+  !> v = L_PP^-1 v for the 6N unknowns of P (rows p_row - (nr - 6N) of the trailing block):
+  !> P comes last, so L^-1 [0; v] = [0; L_PP^-1 v].
+  subroutine system_forward_p(this, v)
+    class(multipole_system_t), intent(in) :: this
+    real(wp), intent(inout), contiguous :: v(:)
+    call dtrsv('L', 'N', 'N', this%n6, this%k(this%nqt + 1, this%nqt + 1), this%nr, v, 1)
+  end subroutine system_forward_p
+
+  !> v = L_PP^-T v: the P part of L^-T x is L_PP^-T x_P, so (K^-1 g)_P = L_PP^-T (L^-1 g)_P.
+  subroutine system_backward_p(this, v)
+    class(multipole_system_t), intent(in) :: this
+    real(wp), intent(inout), contiguous :: v(:)
+    call dtrsv('L', 'T', 'N', this%n6, this%k(this%nqt + 1, this%nqt + 1), this%nr, v, 1)
+  end subroutine system_backward_p
+
+  !> The number nr of (phi, chi) unknowns of K (2 N L(L+2)) at the last assembly.
+  pure integer function system_unknowns(this) result(nr)
+    class(multipole_system_t), intent(in) :: this
+    nr = this%nr
+  end function system_unknowns
+
+  !> Row of K (1..nr) of Cartesian component c (1..3 force, 4..6 torque) of sphere i: the P
+  !> unknowns come last.
+  pure integer function system_p_row(this, i, c) result(k)
+    class(multipole_system_t), intent(in) :: this
+    integer, intent(in) :: i, c
+    k = this%nqt + this%idx%p_index(i, c)
+  end function system_p_row
+
+  !> The scale s of Cartesian component c (1..6): a force or torque moment of K is
+  !> pi s F_c and the matching velocity unknown U_c / s (project units), so that the grand
+  !> mobility is pi s_c s_c' (Schur complement onto P) and the friction its inverse.
+  pure real(wp) function system_moment_scale(this, c) result(s)
+    class(multipole_system_t), intent(in) :: this
+    integer, intent(in) :: c
+    s = this%scal(c)
+  end function system_moment_scale
+
+  !> v = v + the right-hand side of K on the rows outside P for the ambient strain with the
+  !> basis coefficients c(5) (kf_strain_basis): K [m_Q; m_P] = [rhs_Q; U_P / s] gives free
+  !> spheres (m_P = 0) the disturbance velocities of `strain_disturbance`.
+  subroutine system_add_strain_rhs(this, c, v)
+    class(multipole_system_t), intent(in) :: this
+    real(wp), intent(in) :: c(5)
+    real(wp), intent(inout) :: v(:)
+    real(wp) :: y(5, 5)
+    integer :: i, q, t, row
+    if (this%lay%order < 2) return
+    y = strain_coefficients_real()
+    do i = 1, this%n
+      do q = 0, 4
+        t = this%lay%index(2, fam_phi, q)
+        row = this%idx%strain_row(i, q)
+        v(row) = v(row) - this%lay%sigma_real(t)*dot_product(y(q + 1, :), c)
+      end do
+    end do
+  end subroutine system_add_strain_rhs
+
+  !> Real-form strain coefficients y(q, k) (MULTIPOLE.md section 7) of basis strain k.
+  pure function strain_coefficients_real() result(y)
+    real(wp) :: y(5, 5), rt2
+    rt2 = sqrt(2.0_wp)
+    y(:, 1) = [-1.0_wp, 0.0_wp, 0.0_wp, rt2, 0.0_wp]
+    y(:, 2) = [-1.0_wp, 0.0_wp, 0.0_wp, -rt2, 0.0_wp]
+    y(:, 3) = [0.0_wp, 0.0_wp, 0.0_wp, 0.0_wp, -2.0_wp*rt2]
+    y(:, 4) = [0.0_wp, -rt2, 0.0_wp, 0.0_wp, 0.0_wp]
+    y(:, 5) = [0.0_wp, 0.0_wp, rt2, 0.0_wp, 0.0_wp]
+  end function strain_coefficients_real
 
   !> Copy L_PP (lower, upper part zeroed) into w6.
   subroutine copy_lpp(this)
@@ -395,19 +524,13 @@ contains
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(out) :: dist(:, :)
     real(wp), intent(out), optional :: gram(5, 5)
-    real(wp) :: y(5, 5), rt2
+    real(wp) :: y(5, 5)
     integer :: i, k, q, t, c
 
     dist(1:this%n6, 1:5) = 0.0_wp
     if (present(gram)) gram = 0.0_wp
     if (this%lay%order < 2) return
-    rt2 = sqrt(2.0_wp)
-    ! Real-form strain coefficients y(q, k) (section 7) of basis strain k.
-    y(:, 1) = [-1.0_wp, 0.0_wp, 0.0_wp, rt2, 0.0_wp]
-    y(:, 2) = [-1.0_wp, 0.0_wp, 0.0_wp, -rt2, 0.0_wp]
-    y(:, 3) = [0.0_wp, 0.0_wp, 0.0_wp, 0.0_wp, -2.0_wp*rt2]
-    y(:, 4) = [0.0_wp, -rt2, 0.0_wp, 0.0_wp, 0.0_wp]
-    y(:, 5) = [0.0_wp, 0.0_wp, rt2, 0.0_wp, 0.0_wp]
+    y = strain_coefficients_real()
     this%bq = 0.0_wp
     do i = 1, this%n
       do q = 0, 4

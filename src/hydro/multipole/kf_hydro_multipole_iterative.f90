@@ -1,0 +1,408 @@
+!> The multipole model with `&hydro update = 'iterative'` (docs/multipole.md): the exact
+!> lubrication-corrected velocities at every call, by an iterative solve of the assembled
+!> many-body system preconditioned with an earlier factorisation.
+!>
+!> The corrected friction route of kf_hydro_multipole, (zeta_L + dzeta) U = F + (x_L + dx) : E
+!> with zeta_L = the inverse of the Schur complement of K onto the force/torque moments P, is
+!> one linear system in the moments m (the nr unknowns of K, p-moments eliminated) and the
+!> Cartesian velocities U (6N, [U_1, Omega_1, U_2, ...]):
+!>   K m - E S^-1 U = [rhs_Q(E); 0]            (the multipole system, K = K0 - B B^T)
+!>   S^-1 m_P / pi + dzeta U = F + dx : E       (force balance with the lubrication blocks)
+!> with E the injection of the P rows, S = diag(s_c) the moment scales of kf_multipole_system
+!> and rhs_Q the ambient strain's coefficients. Eliminating m gives the friction route exactly.
+!> At every call the system is assembled (K0 and B, no p-moment update, no factorisation) at
+!> the configuration rotated onto the reference (best rigid rotation Q, kf_rigid_fit; Stokes
+!> flow is covariant), with the lubrication blocks of the rotated pairs, forces and strain
+!> rotated with it and the velocities back. It is solved by GMRES, left-preconditioned with
+!> the exact inverse of the same system at the reference (the Cholesky factor of K_ref and of
+!> zeta_L(ref) + dzeta, the lubrication blocks of the call): one triangular-solve pair with K_ref
+!> and one with the 6N factor per iteration (the 6N factor is refactorised at every call with
+!> lubrication: the blocks change fast near contact, the many-body part slowly).
+!> GMRES, not CG: the system is symmetric but indefinite (its Schur complement onto U is
+!> negative definite). One system, not nested solves (CG on the 6N friction, each product an
+!> inner solve with K preconditioned by K_ref): an inner solve alone needs as many iterations,
+!> each of the same cost, as the whole one-system solve (docs/multipole.md).
+!>
+!> Stopping rule: the largest change of a bead's velocity between two iterations is at most
+!> solver_tolerance times the largest bead velocity (at least two iterations). Refactorisation
+!> rule: a call that needs more than refactor_iterations iterations makes the next call
+!> factorise at its configuration (the new reference); a call that does not converge in
+!> max_iterations factorises at once. The first call and a change of bead number factorise.
+!> A factorising call solves directly (the preconditioner is the exact inverse there).
+!>
+!> Checkpoint: the reference is not in the checkpoint; it is rebuilt at the first call after a
+!> resume, so a resumed run agrees with an uninterrupted one to the solver tolerance (not bit
+!> for bit). Frames, the stresslet and `prepare` use the exact model's routes (the parent type).
+module kf_hydro_multipole_iterative
+  use kf_kinds, only: wp, i8
+  use kf_strings, only: to_str
+  use kf_constants, only: pi
+  use kf_lapack, only: cholesky_factor
+  use kf_blas, only: dtrsv
+  use kf_error, only: error_t, fatal_error
+  use kf_hydro_model, only: hydro_stats_t
+  use kf_hydro_multipole, only: multipole_model_t
+  use kf_multipole_system, only: multipole_system_t
+  use kf_strain_basis, only: strain_coefficients
+  use kf_pair_blocks, only: pair_blocks_t
+  use kf_pair_geometry, only: pair_geometry_t
+  use kf_rigid_fit, only: best_rotation, centroid
+  use kf_scene_hydro, only: solver_tolerance_default, solver_tolerance_min, solver_tolerance_max
+  implicit none
+  private
+
+  !> The default number of iterations above which the next call refactorises.
+  integer, parameter, public :: refactor_iterations_default = 6
+  !> GMRES iterations before a call gives up and factorises (no restart).
+  integer, parameter, public :: max_iterations = 30
+
+  !> Multipole model, exact at every call by preconditioned GMRES on the assembled system.
+  type, extends(multipole_model_t), public :: multipole_iterative_t
+    real(wp) :: solver_tolerance = solver_tolerance_default
+    integer :: refactor_iterations = refactor_iterations_default
+    type(multipole_system_t), private :: cur   !< assembled at the current (rotated) configuration
+    type(multipole_system_t), private :: ref   !< factorised at the reference
+    type(pair_blocks_t), private :: blocks     !< lubrication blocks of the current call
+    logical, private :: ready = .false.
+    logical, private :: refactor_next = .false.
+    integer, private :: nr = 0                 !< unknowns of K
+    real(wp), private :: cen_ref(3) = 0.0_wp
+    real(wp), allocatable, private :: pos_ref(:, :), rp(:, :), frot(:, :)
+    real(wp), allocatable, private :: zref(:, :)    !< zeta_L(ref), full storage
+    real(wp), allocatable, private :: pre(:, :)     !< Cholesky factor of zeta_L(ref) + dzeta
+    real(wp), allocatable, private :: v(:, :)      !< Krylov basis
+    real(wp), allocatable, private :: hm(:, :)     !< Hessenberg matrix (Givens-rotated)
+    real(wp), allocatable, private :: rhs(:), wk(:), m0(:), s6(:), uk(:), uprev(:)
+    type(hydro_stats_t), private :: istats
+  contains
+    procedure :: setup => iterative_setup
+    procedure :: velocities => iterative_velocities
+    procedure :: statistics => iterative_statistics
+  end type multipole_iterative_t
+
+contains
+
+  !> Order L, lubrication, overlap shift eps_lub and `literal_bwe` (as the exact model), the
+  !> relative solver tolerance (solver_tolerance_min..solver_tolerance_max, default
+  !> solver_tolerance_default) and the refactorisation threshold (>= 1 iterations, default
+  !> refactor_iterations_default).
+  subroutine iterative_setup(this, order, lubrication, eps_lub, error, solver_tolerance, refactor_iterations, &
+                             literal_bwe)
+    class(multipole_iterative_t), intent(inout) :: this
+    integer, intent(in) :: order
+    logical, intent(in) :: lubrication
+    real(wp), intent(in) :: eps_lub
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), intent(in), optional :: solver_tolerance
+    integer, intent(in), optional :: refactor_iterations
+    logical, intent(in), optional :: literal_bwe
+    real(wp) :: min_distance
+    this%solver_tolerance = solver_tolerance_default
+    if (present(solver_tolerance)) this%solver_tolerance = solver_tolerance
+    if (.not. (this%solver_tolerance >= solver_tolerance_min .and. this%solver_tolerance <= solver_tolerance_max)) then
+      call fatal_error(error, 'multipole iterative: solver tolerance = '//to_str(this%solver_tolerance, '(es12.4)')// &
+                       ' not allowed ('//to_str(solver_tolerance_min, '(es8.1)')//' to '// &
+                       to_str(solver_tolerance_max, '(es8.1)')//')')
+      return
+    end if
+    this%refactor_iterations = refactor_iterations_default
+    if (present(refactor_iterations)) this%refactor_iterations = refactor_iterations
+    if (this%refactor_iterations < 1) then
+      call fatal_error(error, 'multipole iterative: refactor_iterations = '//to_str(this%refactor_iterations)// &
+                       ' not allowed (>= 1)')
+      return
+    end if
+    call this%multipole_model_t%init(order, lubrication, eps_lub, error, literal_bwe=literal_bwe)
+    if (allocated(error)) return
+    ! the systems' overlap treatment as the exact model's (0: the real positions, 'bwe')
+    min_distance = merge(0.0_wp, 1.0_wp + eps_lub, this%literal_bwe)
+    call this%cur%init(order, min_distance, error)
+    if (allocated(error)) return
+    call this%ref%init(order, min_distance, error)
+    if (allocated(error)) return
+    this%ready = .false.
+    this%refactor_next = .false.
+    this%istats = hydro_stats_t()
+  end subroutine iterative_setup
+
+  !> The work counters, evaluations, refreshes (factorisations), reused (iterative solves),
+  !> cg_iterations (their GMRES iterations) and the wall time of both kinds.
+  function iterative_statistics(this) result(s)
+    class(multipole_iterative_t), intent(in) :: this
+    type(hydro_stats_t) :: s
+    s = this%istats
+  end function iterative_statistics
+
+  !> u = mu(r) f + C(r):e, exact to the solver tolerance (t and pairs as for the exact model).
+  subroutine iterative_velocities(this, r, f, u, error, e, t, pairs)
+    class(multipole_iterative_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :), f(:, :)
+    real(wp), intent(out) :: u(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), intent(in), optional :: e(3, 3), t
+    type(pair_geometry_t), intent(in), optional :: pairs
+    real(wp) :: ez(3, 3), q(3, 3), qt(3, 3), c(3)
+    integer(i8) :: c0, c1, crate
+    integer :: nb, i, its
+    logical :: converged
+
+    this%istats%evaluations = this%istats%evaluations + 1
+    nb = size(r, 2)
+    ez = 0.0_wp
+    if (present(e)) ez = e
+    call system_clock(c0, crate)
+    if (allocated(this%pos_ref)) then
+      if (size(this%pos_ref, 2) /= nb) this%ready = .false.
+    end if
+    if (.not. this%ready .or. this%refactor_next) then
+      call refresh(this, r, f, ez, u, error, pairs)
+      call system_clock(c1)
+      this%istats%refresh_seconds = this%istats%refresh_seconds + real(c1 - c0, wp)/real(crate, wp)
+      return
+    end if
+    call best_rotation(this%pos_ref, r, q, error)
+    if (allocated(error)) return
+    qt = transpose(q)
+    c = centroid(r)
+    do i = 1, nb
+      this%rp(:, i) = matmul(qt, r(:, i) - c) + this%cen_ref
+      this%frot(:, i) = matmul(qt, f(:, i))
+    end do
+    call this%cur%assemble(this%rp, error)
+    if (allocated(error)) return
+    this%n_overlaps = this%cur%n_clamped
+    if (this%lubrication) then
+      call this%lub%pair_blocks(r, this%blocks, pairs, qt)
+      this%n_lub_pairs = this%blocks%n_pairs()
+      this%pre = this%zref
+      call this%blocks%add_friction(this%pre)
+      call cholesky_factor(this%pre, error, 'lubrication-corrected friction')
+      if (allocated(error)) return
+    end if
+    call right_hand_side(this, this%frot, matmul(qt, matmul(ez, q)))
+    call gmres(this, its, converged)
+    this%istats%cg_iterations = this%istats%cg_iterations + its
+    if (.not. converged) then
+      call refresh(this, r, f, ez, u, error, pairs)
+      call system_clock(c1)
+      this%istats%refresh_seconds = this%istats%refresh_seconds + real(c1 - c0, wp)/real(crate, wp)
+      return
+    end if
+    do i = 1, nb
+      u(:, i) = matmul(q, this%uk(6*i - 5:6*i - 3))
+    end do
+    this%refactor_next = its > this%refactor_iterations
+    this%istats%reused = this%istats%reused + 1
+    call system_clock(c1)
+    this%istats%reused_seconds = this%istats%reused_seconds + real(c1 - c0, wp)/real(crate, wp)
+  end subroutine iterative_velocities
+
+  !> Factorise at r (the new reference: K_ref and zeta_L(ref) + dzeta(ref)) and solve there
+  !> directly.
+  subroutine refresh(this, r, f, e, u, error, pairs)
+    class(multipole_iterative_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :), f(:, :), e(3, 3)
+    real(wp), intent(out) :: u(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    type(pair_geometry_t), intent(in), optional :: pairs
+    integer :: nb, i
+    nb = size(r, 2)
+    this%ready = .false.
+    call this%ref%factorise(r, error)
+    if (allocated(error)) return
+    this%n_overlaps = this%ref%n_clamped
+    call ensure_work(this, nb)
+    call this%ref%grand_friction(this%zref, error)
+    if (allocated(error)) return
+    this%pre = this%zref
+    if (this%lubrication) then
+      call this%lub%pair_blocks(r, this%blocks, pairs)
+      call this%blocks%add_friction(this%pre)
+      this%n_lub_pairs = this%blocks%n_pairs()
+    end if
+    call cholesky_factor(this%pre, error, 'lubrication-corrected friction')
+    if (allocated(error)) return
+    this%pos_ref = r
+    this%cen_ref = centroid(r)
+    call right_hand_side(this, f, e)
+    call precondition(this, this%rhs, this%wk)
+    do i = 1, nb
+      u(:, i) = this%wk(this%nr + 6*i - 5:this%nr + 6*i - 3)
+    end do
+    this%ready = .true.
+    this%refactor_next = .false.
+    this%istats%refreshes = this%istats%refreshes + 1
+  end subroutine refresh
+
+  !> Work arrays for nb beads (after a factorisation, which sizes the system).
+  subroutine ensure_work(this, nb)
+    class(multipole_iterative_t), intent(inout) :: this
+    integer, intent(in) :: nb
+    integer :: nt
+    this%nr = this%ref%unknowns()
+    nt = this%nr + 6*nb
+    if (allocated(this%rhs)) then
+      if (size(this%rhs) == nt .and. size(this%rp, 2) == nb) return
+      deallocate (this%pos_ref, this%rp, this%frot, this%pre, this%zref, this%v, this%hm, this%rhs, this%wk, &
+                  this%m0, this%s6, this%uk, this%uprev)
+    end if
+    allocate (this%pos_ref(3, nb), this%rp(3, nb), this%frot(3, nb), this%pre(6*nb, 6*nb), &
+              this%zref(6*nb, 6*nb))
+    allocate (this%v(nt, max_iterations + 1), this%hm(max_iterations + 1, max_iterations + 2))
+    allocate (this%rhs(nt), this%wk(nt), this%m0(6*nb), this%s6(6*nb), this%uk(6*nb), this%uprev(6*nb))
+  end subroutine ensure_work
+
+  !> b = [rhs_Q(e); 0; f, torques 0, + dx : e] (lubrication blocks of the current call).
+  subroutine right_hand_side(this, f, e)
+    class(multipole_iterative_t), intent(inout) :: this
+    real(wp), intent(in) :: f(:, :), e(3, 3)
+    integer :: i, nr
+    nr = this%nr
+    this%rhs = 0.0_wp
+    call this%ref%add_strain_rhs(strain_coefficients(e), this%rhs(1:nr))
+    do i = 1, size(f, 2)
+      this%rhs(nr + 6*i - 5:nr + 6*i - 3) = f(:, i)
+    end do
+    if (this%lubrication) call this%blocks%add_strain(e, this%rhs(nr + 1:))
+  end subroutine right_hand_side
+
+  !> y = A x, the system at the current configuration (module header).
+  subroutine operator_apply(this, x, y)
+    class(multipole_iterative_t), intent(inout) :: this
+    real(wp), intent(in) :: x(:)
+    real(wp), intent(out) :: y(:)
+    integer :: nr, i, c, k, j
+    real(wp) :: s
+    nr = this%nr
+    call this%cur%apply(x(1:nr), y(1:nr))
+    do i = 1, size(this%rp, 2)
+      do c = 1, 6
+        k = this%ref%p_row(i, c)
+        j = nr + 6*(i - 1) + c
+        s = this%ref%moment_scale(c)
+        y(k) = y(k) - x(j)/s
+        y(j) = x(k)/(pi*s)
+      end do
+    end do
+    if (this%lubrication) call this%blocks%apply(x(nr + 1:), y(nr + 1:))
+  end subroutine operator_apply
+
+  !> z = P^-1 g, the exact inverse of the system at the reference, with one forward and one
+  !> backward solve of K_ref = L L^T (P last, so L^-1 E v = [0; L_PP^-1 v] and
+  !> (K_ref^-1 g)_P = L_PP^-T (L^-1 g)_P):
+  !>   y = L^-1 g_m, U = (zeta_L(ref) + dzeta)^-1 (g_U - S^-1 L_PP^-T y_P / pi),
+  !>   m = L^-T (y + [0; L_PP^-1 S^-1 U]) = K_ref^-1 (g_m + E S^-1 U).
+  subroutine precondition(this, g, z)
+    class(multipole_iterative_t), intent(inout) :: this
+    real(wp), intent(in) :: g(:)
+    real(wp), intent(out), contiguous :: z(:)
+    integer :: nr, nq, i, c, j, n6
+    nr = this%nr
+    nq = nr - size(this%s6)
+    z(1:nr) = g(1:nr)
+    call this%ref%forward(z(1:nr))
+    this%m0 = z(nq + 1:nr)
+    call this%ref%backward_p(this%m0)
+    do i = 1, size(this%rp, 2)
+      do c = 1, 6
+        j = 6*(i - 1) + c
+        this%s6(j) = g(nr + j) - this%m0(this%ref%p_row(i, c) - nq)/(pi*this%ref%moment_scale(c))
+      end do
+    end do
+    n6 = size(this%s6)
+    call dtrsv('L', 'N', 'N', n6, this%pre, n6, this%s6, 1)
+    call dtrsv('L', 'T', 'N', n6, this%pre, n6, this%s6, 1)
+    do i = 1, size(this%rp, 2)
+      do c = 1, 6
+        this%m0(this%ref%p_row(i, c) - nq) = this%s6(6*(i - 1) + c)/this%ref%moment_scale(c)
+      end do
+    end do
+    call this%ref%forward_p(this%m0)
+    z(nq + 1:nr) = z(nq + 1:nr) + this%m0
+    call this%ref%backward(z(1:nr))
+    z(nr + 1:) = this%s6
+  end subroutine precondition
+
+  !> Left-preconditioned GMRES from zero on A x = b (no restart, at most max_iterations);
+  !> uk = the velocity part of the last iterate, `its` the iterations done, `converged` by the
+  !> stopping rule of the module header.
+  subroutine gmres(this, its, converged)
+    class(multipole_iterative_t), intent(inout) :: this
+    integer, intent(out) :: its
+    logical, intent(out) :: converged
+    real(wp) :: beta, cs(max_iterations), sn(max_iterations), gv(max_iterations + 1), y(max_iterations)
+    real(wp) :: tmp, den, change, scale
+    integer :: k, j, nr, nt, nb
+
+    nr = this%nr
+    nt = size(this%rhs)
+    nb = size(this%rp, 2)
+    converged = .false.
+    its = 0
+    call precondition(this, this%rhs, this%v(:, 1))
+    beta = norm2(this%v(:, 1))
+    this%uk = 0.0_wp
+    if (beta == 0.0_wp) then
+      converged = .true.
+      return
+    end if
+    this%v(:, 1) = this%v(:, 1)/beta
+    gv = 0.0_wp
+    gv(1) = beta
+    do k = 1, max_iterations
+      its = k
+      call operator_apply(this, this%v(:, k), this%wk)
+      call precondition(this, this%wk, this%v(:, k + 1))
+      ! modified Gram-Schmidt
+      do j = 1, k
+        this%hm(j, k) = dot_product(this%v(:, j), this%v(:, k + 1))
+        this%v(:, k + 1) = this%v(:, k + 1) - this%hm(j, k)*this%v(:, j)
+      end do
+      this%hm(k + 1, k) = norm2(this%v(:, k + 1))
+      if (this%hm(k + 1, k) > 0.0_wp) this%v(:, k + 1) = this%v(:, k + 1)/this%hm(k + 1, k)
+      ! the earlier Givens rotations, then a new one that zeroes hm(k + 1, k)
+      do j = 1, k - 1
+        tmp = cs(j)*this%hm(j, k) + sn(j)*this%hm(j + 1, k)
+        this%hm(j + 1, k) = -sn(j)*this%hm(j, k) + cs(j)*this%hm(j + 1, k)
+        this%hm(j, k) = tmp
+      end do
+      den = hypot(this%hm(k, k), this%hm(k + 1, k))
+      cs(k) = this%hm(k, k)/den
+      sn(k) = this%hm(k + 1, k)/den
+      this%hm(k, k) = den
+      this%hm(k + 1, k) = 0.0_wp
+      gv(k + 1) = -sn(k)*gv(k)
+      gv(k) = cs(k)*gv(k)
+      ! y = R^-1 g, and the velocity part of the iterate
+      do j = k, 1, -1
+        y(j) = (gv(j) - dot_product(this%hm(j, j + 1:k), y(j + 1:k)))/this%hm(j, j)
+      end do
+      this%uprev = this%uk
+      this%uk = matmul(this%v(nr + 1:nt, 1:k), y(1:k))
+      if (gv(k + 1) == 0.0_wp) then
+        converged = .true.
+        return
+      end if
+      if (k >= 2) then
+        change = largest_velocity(this%uk - this%uprev, nb)
+        scale = largest_velocity(this%uk, nb)
+        if (change <= this%solver_tolerance*scale) then
+          converged = .true.
+          return
+        end if
+      end if
+    end do
+  end subroutine gmres
+
+  !> Largest translational velocity norm over beads of a 6N vector.
+  pure real(wp) function largest_velocity(v6, nb) result(m)
+    real(wp), intent(in) :: v6(:)
+    integer, intent(in) :: nb
+    integer :: i
+    m = 0.0_wp
+    do i = 1, nb
+      m = max(m, norm2(v6(6*i - 5:6*i - 3)))
+    end do
+  end function largest_velocity
+
+end module kf_hydro_multipole_iterative
