@@ -29,7 +29,7 @@ module kf_hydro_rpy
   implicit none
   private
 
-  public :: rpy_pair_coefficients
+  public :: rpy_pair_coefficients, rpy_memory_bytes
 
   !> RPY model; holds the bead positions of the last prepare.
   type, extends(hydro_model_t), public :: rpy_model_t
@@ -50,6 +50,13 @@ module kf_hydro_rpy
   real(wp), parameter :: third = 1.0_wp/3.0_wp
 
 contains
+
+  !> The model's arrays for n beads (bytes; kf_resources adds the rest of a case): 7 float64
+  !> pair tables (56 bytes per pair) and 9 float64 per bead.
+  pure integer(i8) function rpy_memory_bytes(n) result(bytes)
+    integer(i8), intent(in) :: n
+    bytes = 56_i8*(n*(n - 1_i8)/2_i8) + 72_i8*n
+  end function rpy_memory_bytes
 
   !> For a separation vector d with |d|^2 = r2 > 0: mu_ij = a I + bb d d^T.
   elemental subroutine rpy_pair_coefficients(r2, a, bb)

@@ -7,12 +7,8 @@
 !> - chain, forces, the stepper's stages and work arrays: `per_bead_bytes`*N (generous);
 !> - run diagnostics (`&output diagnostics`): kf_run_diagnostics' own `diagnostics_memory`
 !>   (O(N): the close pairs of a chain no denser than close packing, about 2.4 KiB per bead);
-!> - hydrodynamic model: 'rpy' keeps 7 float64 pair tables (kf_hydro_rpy: 56 P); 'multipole'
-!>   the dense 3N x 3N mobility and 6N x 6N friction (360 N^2), four more 6N x 6N matrices
-!>   with update = 'adaptive' (1152 N^2: the reference, two differences, the preconditioner),
-!>   one more with update = 'iterative' (288 N^2: the preconditioner; its two many-body systems,
-!>   the reference factor and the assembled one, come on top as the model's own),
-!>   one more (288 N^2) for the stresslet with lubrication (`&output stresslet`): a lower bound (the many-body system comes on top); 'none' nothing.
+!> - hydrodynamic model: what its module states (kf_hydro_factory's `hydro_memory_bytes`: 'rpy'
+!>   56 bytes per pair, 'multipole' 360-1800 N^2 by update and stresslet; 'none' nothing).
 !> The estimate is compared with the machine's physical memory (/proc/meminfo MemTotal; no
 !> check where that cannot be read).
 module kf_resources
@@ -21,7 +17,7 @@ module kf_resources
   use kf_strings, only: to_str, to_str_exact
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: scene_t
-  use kf_scene_hydro, only: update_adaptive, update_iterative
+  use kf_hydro_factory, only: hydro_memory_bytes
   use kf_run_diagnostics, only: diagnostics_memory
   use kf_pairs, only: pair_count
   implicit none
@@ -61,18 +57,7 @@ contains
     n = max(0_i8, int(n_beads, i8))
     res%n_beads = n_beads
     res%pairs = pair_count(n_beads)
-    select case (trim(sc%hydro%model))
-    case ('rpy')
-      res%hydro_bytes = 56_i8*res%pairs + 72_i8*n
-    case ('multipole')
-      res%hydro_bytes = 360_i8*n*n
-      if (sc%hydro%update == update_adaptive) res%hydro_bytes = res%hydro_bytes + 1152_i8*n*n
-      if (sc%hydro%update == update_iterative) res%hydro_bytes = res%hydro_bytes + 288_i8*n*n
-      ! the stresslet's own grand friction with lubrication (kf_hydro_multipole `stresslet`)
-      if (sc%output%stresslet .and. sc%hydro%lubrication) res%hydro_bytes = res%hydro_bytes + 288_i8*n*n
-    case default
-      res%hydro_bytes = 0
-    end select
+    res%hydro_bytes = hydro_memory_bytes(sc%hydro, n_beads, sc%output%stresslet)
     res%diagnostics_bytes = 0
     if (sc%output%diagnostics) res%diagnostics_bytes = diagnostics_memory(n_beads)
     res%memory_bytes = per_bead_bytes*n + res%hydro_bytes + res%diagnostics_bytes
@@ -99,6 +84,11 @@ contains
     type(case_resources_t) :: res
     character(len=:), allocatable :: what, parts
     res = estimate_resources(sc, n_beads)
+    if (res%hydro_bytes < 0) then
+      call fatal_error(error, trim(sc%source_file)//': &hydro: model = '''//trim(sc%hydro%model)// &
+        ''' has no memory estimate (kf_hydro_factory hydro_memory_bytes)')
+      return
+    end if
     if (res%frames > max_frames) then
       call fatal_error(error, trim(sc%source_file)//': &output: frame_interval = '// &
         to_str_exact(sc%output%frame_interval)//' with &integrator: t_end = '// &

@@ -34,12 +34,7 @@ from pathlib import Path
 
 #: Folder edges (user folder, used folder) allowed for now; each is printed on every run.
 #: Nothing else may be excepted: remove an entry when its cause is gone.
-FOLDER_EXCEPTIONS: dict[tuple[str, str], str] = {
-    ("hydro", "hydro/multipole"): (
-        "kf_hydro_factory (hydro/) builds the multipole model, which extends hydro/'s base "
-        "type (issue 38: the base types below both folders, or the factory above them)"
-    ),
-}
+FOLDER_EXCEPTIONS: dict[tuple[str, str], str] = {}
 
 FORTRAN_SUFFIXES = (".f90", ".F90", ".fypp", ".f90.in")
 RE_MODULE = re.compile(r"^\s*module\s+(?!procedure\b|function\b|subroutine\b)(\w+)\s*$", re.I)

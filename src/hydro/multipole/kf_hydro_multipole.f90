@@ -69,7 +69,7 @@ module kf_hydro_multipole
   implicit none
   private
 
-  public :: extrapolation_weights
+  public :: extrapolation_weights, multipole_memory_bytes
 
   !> Velocity error budget of a reused many-body part, as a fraction of tolerance / step size.
   real(wp), parameter :: budget_fraction = 0.25_wp
@@ -140,6 +140,18 @@ module kf_hydro_multipole
   end type multipole_model_t
 
 contains
+
+  !> The model's dense arrays for n beads (bytes; a lower bound: the many-body system comes on
+  !> top): the 3N x 3N mobility and 6N x 6N friction (360 N^2), four more 6N x 6N matrices with
+  !> `adaptive` (1152 N^2: the reference, two differences, the preconditioner), one more
+  !> (288 N^2) for the stresslet's grand friction with lubrication (`stresslet_lubrication`).
+  pure integer(i8) function multipole_memory_bytes(n, adaptive, stresslet_lubrication) result(bytes)
+    integer(i8), intent(in) :: n
+    logical, intent(in) :: adaptive, stresslet_lubrication
+    bytes = 360_i8*n*n
+    if (adaptive) bytes = bytes + 1152_i8*n*n
+    if (stresslet_lubrication) bytes = bytes + 288_i8*n*n
+  end function multipole_memory_bytes
 
   !> Order L (1..max_multipole_order), lubrication on/off, overlap shift eps_lub (kf_hydro_limits), update mode
   !> ('stage', the default, or 'adaptive') and the integration tolerance (> 0, default 1e-4)

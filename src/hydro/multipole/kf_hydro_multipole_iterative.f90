@@ -41,7 +41,7 @@ module kf_hydro_multipole_iterative
   use kf_blas, only: dtrsv
   use kf_error, only: error_t, fatal_error
   use kf_hydro_model, only: hydro_stats_t
-  use kf_hydro_multipole, only: multipole_model_t
+  use kf_hydro_multipole, only: multipole_model_t, multipole_memory_bytes
   use kf_multipole_system, only: multipole_system_t
   use kf_strain_basis, only: strain_coefficients
   use kf_pair_blocks, only: pair_blocks_t
@@ -55,6 +55,8 @@ module kf_hydro_multipole_iterative
   integer, parameter, public :: refactor_iterations_default = 6
   !> GMRES iterations before a call gives up and factorises (no restart).
   integer, parameter, public :: max_iterations = 30
+
+  public :: iterative_memory_bytes
 
   !> Multipole model, exact at every call by preconditioned GMRES on the assembled system.
   type, extends(multipole_model_t), public :: multipole_iterative_t
@@ -81,6 +83,15 @@ module kf_hydro_multipole_iterative
   end type multipole_iterative_t
 
 contains
+
+  !> The model's dense arrays for n beads (bytes; a lower bound): the exact model's (not
+  !> adaptive) and one more 6N x 6N matrix (288 N^2), the preconditioner's friction factor; its
+  !> two many-body systems (the reference factor and the assembled one) come on top.
+  pure integer(i8) function iterative_memory_bytes(n, stresslet_lubrication) result(bytes)
+    integer(i8), intent(in) :: n
+    logical, intent(in) :: stresslet_lubrication
+    bytes = multipole_memory_bytes(n, .false., stresslet_lubrication) + 288_i8*n*n
+  end function iterative_memory_bytes
 
   !> Order L, lubrication, overlap shift eps_lub and `literal_bwe` (as the exact model), the
   !> relative solver tolerance (solver_tolerance_min..solver_tolerance_max, default

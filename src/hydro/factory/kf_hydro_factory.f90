@@ -3,25 +3,53 @@
 !> (kf_scene_hydro, the one source the scene validation uses too); `hydro_model_names` passes
 !> the names on.
 module kf_hydro_factory
-  use kf_kinds, only: wp
+  use kf_kinds, only: wp, i8
   use kf_error, only: error_t, fatal_error
   use kf_scene_hydro, only: hydro_params_t, hydro_model_names => model_names, model_none, model_rpy, &
-                            model_multipole, check_hydro, effective_eps_lub, overlap_bwe, update_iterative
+                            model_multipole, check_hydro, effective_eps_lub, overlap_bwe, update_iterative, &
+                            update_adaptive
   use kf_hydro_model, only: hydro_model_t
   use kf_hydro_none, only: none_model_t
-  use kf_hydro_rpy, only: rpy_model_t
-  use kf_hydro_multipole, only: multipole_model_t
-  use kf_hydro_multipole_iterative, only: multipole_iterative_t
+  use kf_hydro_rpy, only: rpy_model_t, rpy_memory_bytes
+  use kf_hydro_multipole, only: multipole_model_t, multipole_memory_bytes
+  use kf_hydro_multipole_iterative, only: multipole_iterative_t, iterative_memory_bytes
   implicit none
   private
 
-  public :: make_hydro_model, hydro_model_names
+  public :: make_hydro_model, hydro_model_names, hydro_memory_bytes
 
   !> eps_lub of a model made outside a scene when none is given (knotflow-mobility's --eps-lub
   !> default, the C interface's default); also the tolerance such a model is made with.
   real(wp), parameter, public :: standalone_eps_lub = 1.0e-4_wp
 
 contains
+
+  !> The memory the model named by params%model keeps for `n_beads` beads (bytes), as each model
+  !> module states it (`rpy_memory_bytes`, `multipole_memory_bytes`, `iterative_memory_bytes`;
+  !> 'none' keeps nothing); `stresslet`: the case records the stresslet. A model name this
+  !> factory cannot build gives -1 (kf_resources refuses it), never a silent 0.
+  pure integer(i8) function hydro_memory_bytes(params, n_beads, stresslet) result(bytes)
+    type(hydro_params_t), intent(in) :: params
+    integer, intent(in) :: n_beads
+    logical, intent(in) :: stresslet
+    integer(i8) :: n
+    n = max(0_i8, int(n_beads, i8))
+    select case (trim(params%model))
+    case (model_none)
+      bytes = 0
+    case (model_rpy)
+      bytes = rpy_memory_bytes(n)
+    case (model_multipole)
+      if (trim(params%update) == update_iterative) then
+        bytes = iterative_memory_bytes(n, stresslet .and. params%lubrication)
+      else
+        bytes = multipole_memory_bytes(n, trim(params%update) == update_adaptive, &
+                                       stresslet .and. params%lubrication)
+      end if
+    case default
+      bytes = -1
+    end select
+  end function hydro_memory_bytes
 
   !> Allocate the model named by params%model (none | rpy | multipole) after checking the
   !> parameters. `tolerance` is the integration accuracy: the multipole model's reuse budget,
