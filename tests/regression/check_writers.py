@@ -35,6 +35,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 
 import h5py
 import numpy as np
@@ -205,12 +206,13 @@ def interrupted():
     assert (status.decode() if isinstance(status, bytes) else status) == "running", status
 
 
-def not_touched(r, words):
+def not_touched(r, words, file=None, directory=None):
+    file, directory = file or case_file, directory or case_dir
     assert r.returncode == 3, (r.returncode, r.stdout, r.stderr)
-    assert "FAILED c: case file %s not used: %s" % (case_file, words) in r.stdout, r.stdout
+    assert "FAILED c: case file %s not used: %s" % (file, words) in r.stdout, r.stdout
     assert "nothing was changed" in r.stdout, r.stdout
     assert "damaged" not in r.stdout and "computing the case again" not in r.stdout, r.stdout
-    assert sorted(n for n in os.listdir(case_dir) if n.startswith("c.h5")) == ["c.h5"], os.listdir(case_dir)
+    assert sorted(n for n in os.listdir(directory) if n.startswith("c.h5")) == ["c.h5"], os.listdir(directory)
 
 
 def part_c():
@@ -232,14 +234,32 @@ def part_c():
     if os.geteuid() == 0 and shutil.which("setpriv"):
         interrupted()
         nobody = 65534
-        for root, dirs, files in os.walk(case_dir):
-            for n in dirs + files + [""]:
-                os.chown(os.path.join(root, n), nobody, nobody)
-        os.chmod(case_file, 0o444)
-        before = md5(case_file)
-        r = run([exe, scene_c], user=nobody)
-        not_touched(r, "it cannot be written (Permission denied)")
-        assert md5(case_file) == before, "the case file changed"
+        # nobody must reach the program, the scene and the case directory, and the build tree may
+        # sit where nobody cannot (/root is 0700 on a fresh Debian): copies of the three in a
+        # directory every user can enter
+        shared = tempfile.mkdtemp(prefix="kf-writers-nobody-")
+        try:
+            os.chmod(shared, 0o755)
+            exe_n = os.path.join(shared, "knotflow")
+            shutil.copy2(exe, exe_n)
+            dir_n = os.path.join(shared, "busy")
+            shutil.copytree(case_dir, dir_n)
+            with open(scene_c) as f:
+                text = f.read().replace("'%s'" % case_dir, "'%s'" % dir_n)
+            scene_n = os.path.join(shared, "c.nml")
+            with open(scene_n, "w") as f:
+                f.write(text)
+            for root, dirs, files in os.walk(dir_n):
+                for n in dirs + files + [""]:
+                    os.chown(os.path.join(root, n), nobody, nobody)
+            case_n = os.path.join(dir_n, "c.h5")
+            os.chmod(case_n, 0o444)
+            before = md5(case_n)
+            r = run([exe_n, scene_n], user=nobody)
+            not_touched(r, "it cannot be written (Permission denied)", case_n, dir_n)
+            assert md5(case_n) == before, "the case file changed"
+        finally:
+            shutil.rmtree(shared, ignore_errors=True)
         print("C: a case file of mode 0444 (run as nobody): the case fails saying so, the file kept")
     else:
         print("C: the read-only file is checked only as root (run as the user nobody): skipped")
