@@ -104,7 +104,15 @@ contains
 
     inquire (file=path, exist=exists)
     if (.not. exists) then
-      call fatal_error(error, trim(path)//': file not found')
+      ! not found, or not reachable (a directory on the way without search permission): the
+      ! system's reason tells which
+      open (newunit=unit, file=path, status='old', action='read', iostat=ios, iomsg=msg)
+      if (ios == 0) close (unit)
+      if (ios == 0 .or. index(msg, 'No such file') > 0) then
+        call fatal_error(error, trim(path)//': file not found')
+      else
+        call fatal_error(error, trim(path)//': cannot be opened: '//trim(msg))
+      end if
       return
     end if
     inquire (file=trim(path)//'/.', exist=exists)

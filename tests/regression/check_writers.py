@@ -258,9 +258,18 @@ def part_c():
             r = run([exe_n, scene_n], user=nobody)
             not_touched(r, "it cannot be written (Permission denied)", case_n, dir_n)
             assert md5(case_n) == before, "the case file changed"
+            # a scene nobody cannot reach is refused with the system's reason, not "not found"
+            hidden = os.path.join(shared, "hidden")
+            os.mkdir(hidden, 0o700)
+            scene_h = os.path.join(hidden, "c.nml")
+            shutil.copy(scene_n, scene_h)
+            r = run([exe_n, scene_h], user=nobody)
+            assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
+            assert "%s: cannot be opened: " % scene_h in r.stderr and "Permission denied" in r.stderr, r.stderr
         finally:
             shutil.rmtree(shared, ignore_errors=True)
-        print("C: a case file of mode 0444 (run as nobody): the case fails saying so, the file kept")
+        print("C: a case file of mode 0444 (run as nobody): the case fails saying so, the file kept; a scene "
+              "it cannot reach: refused with the reason")
     else:
         print("C: the read-only file is checked only as root (run as the user nobody): skipped")
 
