@@ -69,7 +69,7 @@ module kf_hydro_multipole
   implicit none
   private
 
-  public :: extrapolation_weights, multipole_memory_bytes
+  public :: extrapolation_weights, multipole_memory_bytes, largest_velocity
 
   !> Velocity error budget of a reused many-body part, as a fraction of tolerance / step size.
   real(wp), parameter :: budget_fraction = 0.25_wp

@@ -41,7 +41,7 @@ module kf_hydro_multipole_iterative
   use kf_blas, only: dtrsv
   use kf_error, only: error_t, fatal_error
   use kf_hydro_model, only: hydro_stats_t
-  use kf_hydro_multipole, only: multipole_model_t, multipole_memory_bytes
+  use kf_hydro_multipole, only: multipole_model_t, multipole_memory_bytes, largest_velocity
   use kf_multipole_system, only: multipole_system_t
   use kf_strain_basis, only: strain_coefficients
   use kf_pair_blocks, only: pair_blocks_t
@@ -404,16 +404,5 @@ contains
       end if
     end do
   end subroutine gmres
-
-  !> Largest translational velocity norm over beads of a 6N vector.
-  pure real(wp) function largest_velocity(v6, nb) result(m)
-    real(wp), intent(in) :: v6(:)
-    integer, intent(in) :: nb
-    integer :: i
-    m = 0.0_wp
-    do i = 1, nb
-      m = max(m, norm2(v6(6*i - 5:6*i - 3)))
-    end do
-  end function largest_velocity
 
 end module kf_hydro_multipole_iterative

@@ -11,7 +11,6 @@ docs/analysis.md) and read from /analysis/shape; this module computes no mode.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -20,17 +19,8 @@ import knotflow
 CLOSE_PAIR_DISTANCE = 1.05
 
 
-@dataclass
-class Shape:
-    """Shape observables of one configuration."""
-
-    rg: float
-    a: float
-    b: float
-    c: float
-    theta: float
-    phi: float
-    close_pairs: int
+# The record of the observables is the library's (one definition, knotflow.Shape).
+Shape = knotflow.Shape
 
 
 def gyration_tensor(r: np.ndarray) -> np.ndarray:
