@@ -2,6 +2,9 @@
 refusals of digest. The whole cycle with the real programs (a case killed, its machine lost,
 continued from the ledger) is tests/regression/check_campaign.py."""
 
+import json
+import os
+
 import h5py
 import numpy as np
 import pytest
@@ -290,3 +293,45 @@ def test_ledger_case_names_its_overlap_rule(tmp_path):
         campaign.digest(path, str(ledger), "cc", 10)
         case = campaign.ledger_case(str(ledger / "cc" / "A1.00.json"))
         assert study_rows.overlap_rule(case) == rule
+
+
+def test_ledger_keeps_the_elastic_viscosity_and_reads_version_1(tmp_path):
+    """Version 2 rows carry viscosity_elastic (the ledger case then has both parts of the
+    viscosity); a version 1 ledger (no such column) is read with it NaN and no parts."""
+    frames = unknotting_trefoil_frames(5)
+    n = frames.shape[1]
+    path = str(write_case(tmp_path / "A1.00.h5", frames,
+                          attrs={"flow.flow_type": "shear", "flow.shear_rate": 1.0}))
+    k = np.arange(5, dtype=float)
+    hyd, el = np.zeros((5, 3, 3)), np.zeros((5, 3, 3))
+    hyd[:, 0, 2] = hyd[:, 2, 0] = 2.0
+    el[:, 0, 2] = el[:, 2, 0] = 0.5 * k
+    with h5py.File(path, "r+") as f:
+        g = f["frames"].create_group("stresslet")
+        g["hydrodynamic"], g["elastic"] = hyd, el
+        g["viscosity"] = 6.0 * (2.0 + 0.5 * k) / n
+        g["psi1"] = g["psi2"] = np.zeros(5)
+        a = f.create_group("analysis/knots")
+        a.attrs["closures"] = np.int64(10)
+        a["frame_index"] = np.arange(5, dtype=np.int64)
+        a["time"] = np.arange(5.0)
+        a["kf"] = np.zeros(5)
+    ledger = str(tmp_path / "ledger")
+    campaign.digest(path, ledger, "cc", 10)
+    case = campaign.ledger_case(os.path.join(ledger, "cc", "A1.00.json"))
+    assert np.allclose(case.stresslet["viscosity_elastic"], 3.0 * k / n, rtol=1e-6)
+    assert np.allclose(case.stresslet["viscosity_hydrodynamic"], 12.0 / n, rtol=1e-6)
+    csv = tmp_path / "ledger" / "cc" / "A1.00.csv"
+    lines = csv.read_text(encoding="utf-8").splitlines()
+    old = [",".join(campaign.FRAME_COLUMNS_V1)] + [r.rsplit(",", 1)[0] for r in lines[1:]]
+    csv.write_text("\n".join(old) + "\n", encoding="utf-8")
+    jpath = tmp_path / "ledger" / "cc" / "A1.00.json"
+    entry = json.loads(jpath.read_text(encoding="utf-8"))
+    entry["ledger_version"] = 1
+    jpath.write_text(json.dumps(entry), encoding="utf-8")
+    rows = campaign.read_rows(ledger, "cc", "A1.00")
+    assert rows.shape == (5, len(campaign.FRAME_COLUMNS))
+    assert np.all(np.isnan(rows[:, -1]))
+    case = campaign.ledger_case(str(jpath))
+    assert "viscosity_elastic" not in case.stresslet
+    assert np.allclose(case.stresslet["viscosity"], 6.0 * (2.0 + 0.5 * k) / n, rtol=1e-6)

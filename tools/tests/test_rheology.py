@@ -71,3 +71,47 @@ def test_report_shows_rheology(tmp_path):
     assert "<h2>Rheology</h2>" in html and "| old | " not in section
     assert any(f.endswith("new_rheology.png") for f in rows["new"]["figures"])
     assert not any(f.endswith("_rheology.png") for f in rows["old"]["figures"])
+
+
+def test_viscosity_parts_from_the_two_tensors(tmp_path):
+    """viscosity = 6 (S^hyd_xz + S^el_xz) / (N gamma_dot) (kf_rheology): the parts are the two
+    terms, they add up to the file's viscosity, and they exist only in simple shear."""
+    frames = unknotting_trefoil_frames(4)
+    n = frames.shape[1]
+    shear = {"flow.flow_type": "shear", "flow.shear_rate": 2.0}
+    path = write_case(tmp_path / "split.h5", frames, attrs=shear)
+    k = np.arange(4, dtype=float)
+    hyd, el = np.zeros((4, 3, 3)), np.zeros((4, 3, 3))
+    hyd[:, 0, 2] = hyd[:, 2, 0] = 1.0 + k
+    el[:, 0, 2] = el[:, 2, 0] = 0.25 * k
+    with h5py.File(path, "a") as f:
+        g = f["frames"].create_group("stresslet")
+        g["hydrodynamic"], g["elastic"] = hyd, el
+        g["viscosity"] = 6.0 * (1.0 + 1.25 * k) / (n * 2.0)
+        g["psi1"] = g["psi2"] = np.zeros(4)
+    s = io.read_case(path).stresslet
+    assert np.allclose(s["viscosity_hydrodynamic"], 3.0 * (1.0 + k) / n, rtol=1e-15, atol=0)
+    assert np.allclose(s["viscosity_elastic"], 0.75 * k / n, rtol=1e-15, atol=0)
+    assert np.allclose(s["viscosity_hydrodynamic"] + s["viscosity_elastic"], s["viscosity"],
+                       rtol=1e-15, atol=0)
+    with h5py.File(path, "a") as f:
+        f.attrs["flow.flow_type"] = "quiescent"
+    assert not set(io.VISCOSITY_PARTS) & set(io.read_case(path).stresslet)
+    plain = write_case(tmp_path / "plain.h5", frames, attrs=shear)
+    add_stresslet(plain, 4)
+    with h5py.File(plain, "a") as f:
+        del f["frames/stresslet/elastic"]
+    assert not set(io.VISCOSITY_PARTS) & set(io.read_case(plain).stresslet)
+
+
+def test_comparison_reports_the_parts_only_when_every_case_has_them(tmp_path):
+    frames = unknotting_trefoil_frames(6)
+    shear = {"flow.flow_type": "shear", "flow.shear_rate": 1.0}
+    with_parts = write_case(tmp_path / "a.h5", frames, attrs=shear)
+    add_stresslet(with_parts, 6)
+    without = write_case(tmp_path / "b.h5", frames)
+    add_stresslet(without, 6)
+    a, b = io.read_case(with_parts), io.read_case(without)
+    assert rheology.case_series([a]) == rheology.SERIES + io.VISCOSITY_PARTS
+    assert rheology.case_series([a, b]) == rheology.SERIES
+    assert rheology.case_series([]) == rheology.SERIES

@@ -11,7 +11,8 @@ the study needs of each case in small text files that are committed, and what is
                                           totals)
     LEDGER/<sweep>/<case>.csv             one row per frame: FRAME_COLUMNS (time of the whole
                                           case, k_f of knotflow-analyze, shape, mode, overlaps,
-                                          stresslet; 7 significant digits)
+                                          stresslet and its elastic part of the viscosity; 7
+                                          significant digits)
     LEDGER/<sweep>/<case>.positions.tNNNNN.gz
                                           frames every `positions_every` time units (4 decimals;
                                           columns t x y z, a frame's beads in order), one file
@@ -49,10 +50,14 @@ from .atomic import write_text as _write_text
 from .io import RUN_FIELDS, open_case, read_case, read_runs, write_xyz
 from .names import check_case_name
 
-LEDGER_VERSION = 1
+#: Version 2 added the column viscosity_elastic; entries of version 1 are read with it NaN.
+LEDGER_VERSION = 2
+READ_VERSIONS = (1, 2)
 FRAME_COLUMNS = ("t", "kf", "rg", "a", "b", "c", "theta", "phi", "close_pairs", "mode",
                  "overlapping_pairs", "min_distance", "strand_passages",
-                 "viscosity", "psi1", "psi2")
+                 "viscosity", "psi1", "psi2", "viscosity_elastic")
+#: The columns of a version 1 ledger (FRAME_COLUMNS without those added since).
+FRAME_COLUMNS_V1 = FRAME_COLUMNS[:16]
 #: Times of two segments closer than this (in units of 1/shear rate) are the same time.
 TIME_TOLERANCE = 1e-6
 #: Time units of kept positions per file.
@@ -89,9 +94,9 @@ def load(ledger: str, sweep: str, case: str) -> dict | None:
         return None
     with open(path, encoding="utf-8") as fh:
         entry = json.load(fh)
-    if entry.get("ledger_version") != LEDGER_VERSION:
+    if entry.get("ledger_version") not in READ_VERSIONS:
         raise ValueError(f"{path}: ledger_version {entry.get('ledger_version')!r} "
-                         f"(this tool reads {LEDGER_VERSION})")
+                         f"(this tool reads {', '.join(map(str, READ_VERSIONS))})")
     return entry
 
 
@@ -102,9 +107,14 @@ def read_rows(ledger: str, sweep: str, case: str) -> np.ndarray:
         return np.zeros((0, len(FRAME_COLUMNS)))
     with open(path, encoding="utf-8") as fh:
         header = fh.readline().strip().split(",")
-    if tuple(header) != FRAME_COLUMNS:
-        raise ValueError(f"{path}: columns {header}, expected {list(FRAME_COLUMNS)}")
-    return np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    if tuple(header) not in (FRAME_COLUMNS, FRAME_COLUMNS_V1):
+        raise ValueError(f"{path}: columns {header}, expected {list(FRAME_COLUMNS)} "
+                         f"(or, version 1, {list(FRAME_COLUMNS_V1)})")
+    rows = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    if len(header) < len(FRAME_COLUMNS):
+        pad = np.full((len(rows), len(FRAME_COLUMNS) - len(header)), np.nan)
+        rows = np.hstack([rows.reshape(len(rows), len(header)), pad])
+    return rows
 
 
 def read_positions(ledger: str, sweep: str, case: str) -> tuple[np.ndarray, np.ndarray]:
@@ -177,7 +187,7 @@ def frame_rows(case, offset: float) -> np.ndarray:
     cols.append(_column(modes, n))
     cols += [_column(diag.get(k), n) for k in ("overlapping_pairs", "min_distance",
                                                "strand_passages")]
-    cols += [_column(st.get(k), n) for k in ("viscosity", "psi1", "psi2")]
+    cols += [_column(st.get(k), n) for k in ("viscosity", "psi1", "psi2", "viscosity_elastic")]
     return np.column_stack(cols)
 
 
@@ -641,6 +651,10 @@ def ledger_case(path: str, matrices_dir: str | None = None):
     case.diagnostics = {k: rows[:, col[k]] for k in ("overlapping_pairs", "min_distance",
                                                      "strand_passages")}
     case.stresslet = {k: rows[:, col[k]] for k in ("viscosity", "psi1", "psi2")}
+    elastic = rows[:, col["viscosity_elastic"]]
+    if np.any(np.isfinite(elastic)):
+        case.stresslet.update({"viscosity_elastic": elastic,
+                               "viscosity_hydrodynamic": rows[:, col["viscosity"]] - elastic})
     case.diagnostic_totals = combined_totals(entry["segments"])
     case.diagnostic_totals_source = "ledger"
     case.runs = []

@@ -27,6 +27,10 @@ DIAGNOSTICS = ("strand_passages", "overlapping_pairs", "overlap_episodes", "min_
 # The fibre's stresslet (optional, &output stresslet): /frames/stresslet/{hydrodynamic, elastic}
 # (nframes, 3, 3) and {viscosity, psi1, psi2} (nframes,), units and normalisation in docs/case-file.md.
 STRESSLET = ("hydrodynamic", "elastic", "viscosity", "psi1", "psi2")
+# The viscosity's two parts, derived on reading from the two tensors of a case in simple shear
+# (viscosity = 6 (S^hyd_xz + S^el_xz) / (N gamma_dot), kf_rheology): the hydrodynamic part and
+# the elastic (Kramers-Kirkwood) part.
+VISCOSITY_PARTS = ("viscosity_hydrodynamic", "viscosity_elastic")
 DIAGNOSTIC_TOTALS = ("strand_passages", "first_passage_time", "overlap_episodes",
                      "overlap_mean_duration", "overlap_max_duration", "max_overlapping_pairs",
                      "min_distance", "max_bond_strain")
@@ -354,6 +358,18 @@ def _frame_dataset(path, fr, name, ndim):
     return np.asarray(_read(path, ds), dtype=float)
 
 
+def viscosity_parts(stresslet: dict, attrs: dict, n_beads: int) -> dict:
+    """VISCOSITY_PARTS of a stresslet read from a case file: {} unless it holds both tensors
+    and the flow is simple shear of a rate other than 0."""
+    rate = attrs.get("flow.shear_rate")
+    if (attrs.get("flow.flow_type") != "shear" or not rate or n_beads < 1
+            or not {"hydrodynamic", "elastic"} <= stresslet.keys()):
+        return {}
+    scale = 6.0 / (n_beads * float(rate))
+    return {name: scale * np.asarray(stresslet[part])[:, 0, 2]
+            for name, part in zip(VISCOSITY_PARTS, ("hydrodynamic", "elastic"))}
+
+
 def read_case(path) -> Case:
     """Read a case file; missing optional parts are left empty. The frames are read up to those
     the newest checkpoint counts (a frame beyond it was being written when the run stopped).
@@ -401,6 +417,7 @@ def read_case(path) -> Case:
         if "stresslet" in fr:
             g = fr["stresslet"]
             case.stresslet = {k: np.asarray(_read(path, g[k]))[:n] for k in STRESSLET if k in g}
+            case.stresslet.update(viscosity_parts(case.stresslet, attrs, pos.shape[1]))
         totals = {k: attrs["diagnostics." + k] for k in DIAGNOSTIC_TOTALS
                   if "diagnostics." + k in attrs}
         ckpt_totals = checkpoint_diagnostic_totals(f) if case.status != "finished" else None

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from .atomic import save_figure, write_text
+from .io import VISCOSITY_PARTS
 
 SERIES = ("viscosity", "psi1", "psi2")
 
@@ -142,9 +143,20 @@ def case_classes(case, by, t_from=0.0, threshold=KNOT_THRESHOLD, hysteresis=None
     return frames[keep], [c for c, k in zip(classes, keep) if k]
 
 
-def compare_case(case, by, t_from=0.0, threshold=KNOT_THRESHOLD, hysteresis=None) -> dict:
-    """One case: per series the class statistics (class_statistics) and the difference of the
-    frame means, first class minus second (COMPARISONS; nan unless both classes occur)."""
+def case_series(cases) -> tuple:
+    """The series to compare: SERIES, and the viscosity's hydrodynamic and elastic parts
+    (io.VISCOSITY_PARTS) when every case has them (case files with both tensors, ledgers of
+    version 2)."""
+    split = all(c.stresslet and all(k in c.stresslet and np.any(np.isfinite(c.stresslet[k]))
+                                    for k in VISCOSITY_PARTS) for c in cases)
+    return SERIES + VISCOSITY_PARTS if cases and split else SERIES
+
+
+def compare_case(case, by, t_from=0.0, threshold=KNOT_THRESHOLD, hysteresis=None,
+                 series=SERIES) -> dict:
+    """One case: per series (SERIES, or case_series) the class statistics (class_statistics)
+    and the difference of the frame means, first class minus second (COMPARISONS; nan unless
+    both classes occur)."""
     if not case.stresslet:
         raise ValueError(f"{case.path}: no /frames/stresslet (run the scene with "
                          "&output stresslet = .true.)")
@@ -152,10 +164,10 @@ def compare_case(case, by, t_from=0.0, threshold=KNOT_THRESHOLD, hysteresis=None
     frames, classes = case_classes(case, by, t_from, threshold, hysteresis)
     row = {"case": case.name, "A": case.bending_a, "orientation": case.orientation,
            "time": case.time[frames], "classes": classes, "series": {},
-           "values": {name: np.asarray(case.stresslet[name])[frames] for name in SERIES}}
+           "values": {name: np.asarray(case.stresslet[name])[frames] for name in series}}
     if by == "knot":
         row["kf"] = np.asarray(case.knots["kf"])[np.isin(case.knots["frame_index"], frames)]
-    for name in SERIES:
+    for name in series:
         stats = class_statistics(row["values"][name], classes, (first, second))
         stats["difference"] = stats[first]["mean"] - stats[second]["mean"]
         row["series"][name] = stats
@@ -169,7 +181,7 @@ def compare_cases(rows, by, samples=200000, seed=1) -> dict:
     (sign_flip_test: the cases are independent runs, the frames of one case are not)."""
     first, second = COMPARISONS[by]
     out = {}
-    for name in SERIES:
+    for name in (rows[0]["series"] if rows else SERIES):
         pooled: dict[str, Any] = {}
         for cls in (first, second):
             vals = [case_values(r, name, cls) for r in rows]
@@ -218,7 +230,9 @@ def case_values(row, name, cls) -> np.ndarray:
 
 # ------------------------------------------------------------------------- tables, figures, CLI
 
-LABELS = {"viscosity": "viscosity", "psi1": "psi1", "psi2": "psi2"}
+LABELS = {"viscosity": "viscosity", "psi1": "psi1", "psi2": "psi2",
+          "viscosity_hydrodynamic": "viscosity (hydrodynamic part)",
+          "viscosity_elastic": "viscosity (elastic part)"}
 
 
 def _g(v, spec=".3g"):
@@ -228,17 +242,18 @@ def _g(v, spec=".3g"):
 def comparison_tables(rows, summary, by) -> list:
     """Markdown lines: the per-case table and the across-cases table of one comparison."""
     first, second = COMPARISONS[by]
+    names = list(summary)
     out = [f"Per case ({first} − {second}: difference of the frame means; frames / intervals of "
            "each class):", "",
            f"| case | {first} frames / intervals | {second} frames / intervals | "
            + " | ".join(f"{LABELS[s]} {first} | {LABELS[s]} {second} | Δ {LABELS[s]}"
-                        for s in SERIES) + " |",
-           "|---|---|---|" + "---|---|---|" * len(SERIES)]
+                        for s in names) + " |",
+           "|---|---|---|" + "---|---|---|" * len(names)]
     for r in rows:
-        st = r["series"][SERIES[0]]
+        st = r["series"][names[0]]
         cells = [r["case"], f"{st[first]['frames']} / {st[first]['intervals']}",
                  f"{st[second]['frames']} / {st[second]['intervals']}"]
-        for s in SERIES:
+        for s in names:
             x = r["series"][s]
             cells += [f"{_g(x[first]['mean'])} ± {_g(x[first]['std'], '.2g')}",
                       f"{_g(x[second]['mean'])} ± {_g(x[second]['std'], '.2g')}",
@@ -250,7 +265,7 @@ def comparison_tables(rows, summary, by) -> list:
             f"| series | {first}: cases / intervals / frames | {first} mean ± sd | "
             f"{second}: cases / intervals / frames | {second} mean ± sd | cases with both | "
             "Δ mean ± sd | Δ > 0 in | p |", "|---|---|---|---|---|---|---|---|---|"]
-    for s in SERIES:
+    for s in names:
         x = summary[s]
         a, b = x[first], x[second]
         out.append(
@@ -264,7 +279,7 @@ def comparison_tables(rows, summary, by) -> list:
             "the stiffnesses at which both occur; p: sign-flip test over them):", "",
             "| series | stiffnesses with both | Δ_A mean ± sd | Δ_A > 0 in | p |",
             "|---|---|---|---|---|"]
-    for s in SERIES:
+    for s in names:
         x = summary[s]
         out.append(f"| {LABELS[s]} | {x['paired_stiffnesses']} | "
                    f"{_g(x['stiffness_difference_mean'])} ± "
@@ -395,7 +410,8 @@ def write_rheology(knot_dirs, mode_dirs, out, t_from=0.0, threshold=KNOT_THRESHO
             continue
         cases = [load_case(f) for f in files]
         cases = [c for c in cases if c.nframes > 0]
-        rows = [compare_case(c, by, t_from, threshold, hysteresis) for c in cases]
+        names = case_series(cases)
+        rows = [compare_case(c, by, t_from, threshold, hysteresis, names) for c in cases]
         summary = compare_cases(rows, by, samples, seed)
         md += [f"## {title}", "", f"Cases: {', '.join(f'`{d}`' for d in dirs)}.", "",
                f"Models: {models_text(cases)}.", ""]
