@@ -1,12 +1,18 @@
-!> Small vector operations used across the library: the cross product of 3-vectors and
+!> Small vector operations used across the library: the cross product of 3-vectors,
 !> insertion sorts for short lists (a few to a few hundred entries, where they beat anything
-!> more elaborate and keep equal keys in their order).
+!> more elaborate and keep equal keys in their order) and whether the distances of a
+!> configuration can be computed at all.
 module kf_vector_ops
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use kf_kinds, only: wp
   implicit none
   private
 
-  public :: cross, sort_index, sort_small
+  public :: cross, sort_index, sort_small, distances_representable, span_limit
+
+  !> Largest range of one coordinate over a configuration for which every squared distance
+  !> |r_i - r_j|^2 (three squared differences added) is a finite number.
+  real(wp), parameter :: span_limit = sqrt(huge(1.0_wp)/3.0_wp)
 
 contains
 
@@ -41,5 +47,19 @@ contains
     integer, intent(inout) :: v(:)
     v = v(sort_index(real(v, wp)))
   end subroutine sort_small
+
+  !> Whether every squared distance |r_i - r_j|^2 of the configuration r(3, n) is finite: each
+  !> coordinate's range (largest minus smallest) below span_limit; false for a non-finite
+  !> coordinate. Halves are compared, so the range itself cannot overflow.
+  pure logical function distances_representable(r)
+    real(wp), intent(in) :: r(:, :)
+    integer :: k
+    distances_representable = all(ieee_is_finite(r))
+    if (.not. distances_representable .or. size(r, 2) < 1) return
+    do k = 1, size(r, 1)
+      if (.not. (0.5_wp*maxval(r(k, :)) - 0.5_wp*minval(r(k, :)) < 0.5_wp*span_limit)) &
+        distances_representable = .false.
+    end do
+  end function distances_representable
 
 end module kf_vector_ops
