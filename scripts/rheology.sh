@@ -25,7 +25,8 @@ np="$(kf_ranks)"
 cd "$KF_ROOT"
 kf_ensure_system_packages
 kf_ensure_python
-kf_build "$KF_ROOT/build" Release
+kf_build "$KF_BUILD_DIR" Release
+[ -d "$KF_BUILD_DIR/venv/bin" ] && PATH="$KF_BUILD_DIR/venv/bin:$PATH"
 kf_mpirun_flags
 mpi=(mpirun -n "$np" "${KF_MPIRUN_FLAGS[@]}")
 trefoils=results/trefoil_table2_p24_rheology
@@ -34,7 +35,7 @@ if [ "$run" = 1 ]; then
   for sweep in "$trefoils" "$canes"; do
     kf_log "knotflow inputs/$(basename "$sweep").nml on $np rank(s)"
     # A failed case (exit 3) is reported in the summary; the others are still analysed.
-    "${mpi[@]}" build/knotflow "inputs/$(basename "$sweep").nml" || [ $? -eq 3 ]
+    "${mpi[@]}" "$KF_BUILD_DIR/bin/knotflow" "inputs/$(basename "$sweep").nml" || [ $? -eq 3 ]
   done
 fi
 shopt -s nullglob
@@ -42,7 +43,7 @@ for sweep in "$trefoils" "$canes"; do
   files=("$sweep"/*.h5)
   [ "${#files[@]}" -gt 0 ] || kf_die "no case files in $sweep (run without --no-run first)"
   kf_log "knotflow-analyze: ${#files[@]} case(s) of $sweep (k_f of every frame, 200 closures)"
-  "${mpi[@]}" build/src/app/knotflow-analyze "${files[@]}" --closures 200 --stride 1
+  "${mpi[@]}" "$KF_BUILD_DIR/bin/knotflow-analyze" "${files[@]}" --closures 200 --stride 1
 done
 kf_log "knotflow-rheology -> results/rheology/all and results/rheology/late (t >= 100)"
 knotflow-rheology --knots "$trefoils" --modes "$canes" --out results/rheology/all
