@@ -2,7 +2,7 @@
 !> effective scene variable as '<group>.<variable>') collected by the caller and written by
 !> `write_attributes` (kf_case_file's `create`). Logical values are stored as int32 attributes
 !> (1 true, 0 false): HDF5 has no boolean type (h5py's is an enum), and an integer reads
-!> naturally in every tool.
+!> naturally in every tool. The status attribute is written through `status_value`.
 module kf_case_attributes
   use kf_kinds, only: wp, i4, i8
   use kf_error, only: error_t, fatal_error
@@ -10,7 +10,12 @@ module kf_case_attributes
   implicit none
   private
 
-  public :: write_attributes
+  public :: write_attributes, status_value
+
+  !> The status attribute is stored with at least this many bytes (null-padded), so that
+  !> 'running' and 'finished' replace each other in place (a kill while the root object header
+  !> is flushed then leaves one or the other, never no status).
+  integer, parameter :: status_capacity = 64
 
   integer, parameter :: kind_str = 1, kind_i4 = 2, kind_i8 = 3, kind_real = 4, kind_real1 = 5, &
     kind_real2 = 6
@@ -168,5 +173,13 @@ contains
       call fatal_error(error, "case file: attribute '"//item%name//"' has no value")
     end select
   end subroutine write_item
+
+  !> `text` null-padded to `status_capacity` bytes (readers stop at the first null).
+  pure function status_value(text) result(value)
+    character(len=*), intent(in) :: text
+    character(len=max(len(text), status_capacity)) :: value
+    value = repeat(achar(0), len(value))
+    value(1:len(text)) = text
+  end function status_value
 
 end module kf_case_attributes

@@ -39,15 +39,12 @@ module kf_case_file
   use kf_kinds, only: wp, i4, i8
   use kf_error, only: error_t, fatal_error
   use kf_build_info, only: knotflow_version, knotflow_git_hash, knotflow_compiler, knotflow_flags
-  use kf_h5, only: h5_file_t, h5_create_file, h5_open_file, h5_close_file, h5_flush, h5_attr_exists, &
-    h5_write_attr, h5_read_attr
-  use kf_case_attributes, only: attribute_list_t, write_attributes
-  use kf_case_frames, only: frame_t, frame_template, file_frame_template, create_frames, append_frames, &
-    truncate_frames, write_diagnostics_totals
-  use kf_case_checkpoint, only: checkpoint_t, stepper_checkpoint_t, write_slots, upgrade_checkpoint, &
-    remove_legacy_checkpoint, latest_checkpoint, set_aside, pad_columns
-  use kf_case_runs, only: run_record_t, replace_runs, write_run_figures, restored_runs
-  use kf_case_verify, only: verify_case_file
+  use kf_h5, only: h5_file_t, h5_create_file, h5_close_file, h5_flush, h5_attr_exists, h5_write_attr, h5_read_attr
+  use kf_case_attributes, only: attribute_list_t, write_attributes, status_value
+  use kf_case_frames, only: frame_t, frame_template, create_frames, append_frames, write_diagnostics_totals, &
+    frame_refusal
+  use kf_case_checkpoint, only: checkpoint_t, stepper_checkpoint_t, write_slots, pad_columns
+  use kf_case_runs, only: run_record_t, write_run_figures
   implicit none
   private
 
@@ -58,11 +55,6 @@ module kf_case_file
   !> older one refuses to continue such a file); 5: /runs/blas (an older program would leave it
   !> shorter than the rest). Raise it with any change a reader must know.
   integer(i4), parameter, public :: case_schema_version = 5
-
-  !> The status attribute is stored with at least this many bytes (null-padded), so that
-  !> 'running' and 'finished' replace each other in place (a kill while the root object header
-  !> is flushed then leaves one or the other, never no status).
-  integer, parameter :: status_capacity = 64
 
   !> An open case file being written by the simulation.
   type, public :: case_file_t
@@ -104,6 +96,50 @@ module kf_case_file
     procedure, private :: write_attr_str, write_attr_i4, write_attr_i8, write_attr_real, &
       write_attr_logical, write_attr_real1, write_attr_real2
   end type case_file_t
+
+  !> The ends of a run segment: starting it, resuming a file, finishing it (kf_case_segment).
+  interface
+    !> Begin a run segment (after `create`, or after `open_resume`): `run` is appended to /runs
+    !> (a file without /runs gets it, kf_case_runs' `replace_runs`: a kill at any point leaves
+    !> one whole list) and the file marked with this schema version; flushed. Later
+    !> `append_frame` and `finish` calls given the segment's record update its entry.
+    module subroutine start_run(this, run, error)
+      class(case_file_t), intent(inout) :: this
+      type(run_record_t), intent(in) :: run
+      type(error_t), allocatable, intent(out) :: error
+    end subroutine start_run
+
+    !> Open an existing case file to continue it from its newest whole checkpoint (schema 3: the
+    !> newer of the two slots whose digest matches and that equals the frame it counts; older
+    !> schemas: /checkpoint), truncate every /frames dataset to that checkpoint's frame count,
+    !> set status 'running' and return the state. `stepper` returns the checkpoint's stepper
+    !> state and `counters` the run counters passed to `append_frame`, unallocated when the file
+    !> has none (written before they were saved). On error the file is closed again.
+    module subroutine open_resume(this, path, r, t, dt, steps, rejected, nframes, error, stepper, counters)
+      class(case_file_t), intent(inout) :: this
+      character(len=*), intent(in) :: path
+      real(wp), allocatable, intent(out) :: r(:, :)
+      real(wp), intent(out) :: t, dt
+      integer(i8), intent(out) :: steps, rejected, nframes
+      type(error_t), allocatable, intent(out) :: error
+      type(stepper_checkpoint_t), intent(out), optional :: stepper
+      integer(i8), allocatable, intent(out), optional :: counters(:)
+    end subroutine open_resume
+
+    !> End a run that reached `t_end`: flush and close the file (both checked), read it back and
+    !> verify it (`verify_case_file`), and only then write status = 'finished' (written, flushed
+    !> and closed, all checked). On error the file is closed and still says 'running'; `damaged`
+    !> tells that the verification found the file itself bad (then it must not be resumed).
+    !> `run`, the final record of the run segment (after `start_run`), replaces its /runs entry
+    !> before the flush.
+    module subroutine finish(this, t_end, error, damaged, run)
+      class(case_file_t), intent(inout) :: this
+      real(wp), intent(in) :: t_end
+      type(error_t), allocatable, intent(out) :: error
+      logical, intent(out) :: damaged
+      type(run_record_t), intent(in), optional :: run
+    end subroutine finish
+  end interface
 
 contains
 
@@ -260,8 +296,22 @@ contains
     integer(i8), intent(in), optional :: counters(:)
     type(run_record_t), intent(in), optional :: run
     type(checkpoint_t) :: ck
-    call check_frame(this, frame, error, stepper, run)
-    if (allocated(error)) return
+    character(len=:), allocatable :: reason
+    if (.not. this%file%is_open()) then
+      call fatal_error(error, 'case file: append_frame on a file that is not open')
+      return
+    end if
+    reason = frame_refusal(frame, this%n_beads, this%diagnostics, this%stresslet, this%nframes, this%last_time)
+    if (len(reason) == 0 .and. present(run) .and. .not. this%run_started) &
+      reason = 'append_frame got a run record before start_run'
+    if (len(reason) == 0 .and. present(stepper)) then
+      if (.not. (allocated(stepper%name) .and. allocated(stepper%reals) .and. allocated(stepper%ints))) &
+        reason = 'append_frame got an incomplete stepper state'
+    end if
+    if (len(reason) > 0) then
+      call fatal_error(error, "case file '"//this%file%name()//"': "//reason)
+      return
+    end if
     call append_frames(this%file, frame, error)
     if (allocated(error)) return
     ! The frame reaches the disk before the checkpoint is touched: a write that fails here (full
@@ -298,173 +348,6 @@ contains
     if (.not. allocated(error)) this%flushed_time = frame%t
   end subroutine append_frame
 
-  !> A frame `append_frame` refuses (nothing written): the file not open, parts the file has
-  !> missing or parts it has not given, positions not of shape (3, n_beads), a run record
-  !> before `start_run`, a time not after the last frame's, incomplete states.
-  subroutine check_frame(this, frame, error, stepper, run)
-    class(case_file_t), intent(in) :: this
-    type(frame_t), intent(in) :: frame
-    type(error_t), allocatable, intent(out) :: error
-    type(stepper_checkpoint_t), intent(in), optional :: stepper
-    type(run_record_t), intent(in), optional :: run
-    character(len=:), allocatable :: where
-    if (.not. this%file%is_open()) then
-      call fatal_error(error, 'case file: append_frame on a file that is not open')
-      return
-    end if
-    where = "case file '"//this%file%name()//"': append_frame "
-    if (this%diagnostics .and. .not. allocated(frame%diagnostics)) then
-      call fatal_error(error, where//'needs the run diagnostics')
-    else if (allocated(frame%diagnostics) .and. .not. this%diagnostics) then
-      call fatal_error(error, where//'got diagnostics but the file has none (enable_diagnostics)')
-    else if (this%stresslet .and. .not. allocated(frame%stresslet)) then
-      call fatal_error(error, where//'needs the stresslet')
-    else if (allocated(frame%stresslet) .and. .not. this%stresslet) then
-      call fatal_error(error, where//'got a stresslet but the file has none (enable_stresslet)')
-    else if (.not. allocated(frame%r)) then
-      call fatal_error(error, where//'got a frame without positions')
-    else if (size(frame%r, 1) /= 3 .or. size(frame%r, 2) /= this%n_beads) then
-      call fatal_error(error, "case file '"//this%file%name()//"': frame positions do not have shape (3, n_beads)")
-    else if (present(run) .and. .not. this%run_started) then
-      call fatal_error(error, where//'got a run record before start_run')
-    else if (this%nframes > 0 .and. .not. frame%t > this%last_time) then
-      call fatal_error(error, "case file '"//this%file%name()//"': frame time does not increase")
-    end if
-    if (allocated(error)) return
-    if (allocated(frame%diagnostics)) then
-      associate (d => frame%diagnostics)
-        if (.not. (allocated(d%state_counters) .and. allocated(d%state_values) .and. allocated(d%state_ongoing))) &
-          call fatal_error(error, where//'got run diagnostics without their state')
-      end associate
-    end if
-    if (present(stepper) .and. .not. allocated(error)) then
-      if (.not. (allocated(stepper%name) .and. allocated(stepper%reals) .and. allocated(stepper%ints))) &
-        call fatal_error(error, where//'got an incomplete stepper state')
-    end if
-  end subroutine check_frame
-
-  ! ---------------------------------------------------------------- run segments (/runs)
-
-  !> Begin a run segment (after `create`, or after `open_resume`): `run` is appended to /runs
-  !> (a file without /runs gets it, kf_case_runs' `replace_runs`: a kill at any point leaves
-  !> one whole list) and the file marked with this schema version; flushed. Later
-  !> `append_frame` and `finish` calls given the segment's record update its entry.
-  subroutine start_run(this, run, error)
-    class(case_file_t), intent(inout) :: this
-    type(run_record_t), intent(in) :: run
-    type(error_t), allocatable, intent(out) :: error
-    type(run_record_t), allocatable :: longer(:)
-    integer :: n
-    if (.not. this%file%is_open()) then
-      call fatal_error(error, 'case file: start_run on a file that is not open')
-      return
-    end if
-    if (this%run_started) then
-      call fatal_error(error, "case file '"//this%file%name()//"': start_run called twice")
-      return
-    end if
-    if (.not. allocated(this%runs)) allocate (this%runs(0))
-    n = size(this%runs)
-    allocate (longer(n + 1))
-    longer(1:n) = this%runs
-    longer(n + 1) = run
-    call move_alloc(longer, this%runs)
-    call replace_runs(this%file, this%runs, error)
-    if (.not. allocated(error)) call h5_write_attr(this%file, '/', 'schema_version', case_schema_version, error)
-    if (.not. allocated(error)) call h5_flush(this%file, error)
-    if (.not. allocated(error)) this%run_started = .true.
-  end subroutine start_run
-
-  ! ---------------------------------------------------------------- resuming
-
-  !> Open an existing case file to continue it from its newest whole checkpoint (schema 3: the
-  !> newer of the two slots whose digest matches and that equals the frame it counts; older
-  !> schemas: /checkpoint), truncate every /frames dataset to that checkpoint's frame count,
-  !> set status 'running' and return the state. `stepper` returns the checkpoint's stepper
-  !> state and `counters` the run counters passed to `append_frame`, unallocated when the file
-  !> has none (written before they were saved). On error the file is closed again.
-  subroutine open_resume(this, path, r, t, dt, steps, rejected, nframes, error, stepper, counters)
-    class(case_file_t), intent(inout) :: this
-    character(len=*), intent(in) :: path
-    real(wp), allocatable, intent(out) :: r(:, :)
-    real(wp), intent(out) :: t, dt
-    integer(i8), intent(out) :: steps, rejected, nframes
-    type(error_t), allocatable, intent(out) :: error
-    type(stepper_checkpoint_t), intent(out), optional :: stepper
-    integer(i8), allocatable, intent(out), optional :: counters(:)
-    t = 0.0_wp
-    dt = 0.0_wp
-    steps = 0
-    rejected = 0
-    nframes = 0
-    call resume(this, path, error)
-    if (allocated(error)) then
-      call this%close()
-      return
-    end if
-    associate (ck => this%resumed)
-      r = ck%r
-      t = ck%t
-      dt = ck%dt
-      steps = ck%steps
-      rejected = ck%rejected
-      nframes = ck%nframes
-      if (present(stepper)) stepper = ck%stepper
-      if (present(counters) .and. allocated(ck%counters)) counters = ck%counters
-    end associate
-  end subroutine open_resume
-
-  subroutine resume(this, path, error)
-    class(case_file_t), intent(inout) :: this
-    character(len=*), intent(in) :: path
-    type(error_t), allocatable, intent(out) :: error
-    type(frame_t) :: kept
-    integer(i4) :: n_beads
-    character(len=:), allocatable :: damaged_slot
-    logical :: legacy
-    call this%close()
-    this%run_started = .false.
-    call h5_open_file(this%file, path, .true., error)
-    if (allocated(error)) return
-    call h5_read_attr(this%file, '/', 'n_beads', n_beads, error)
-    if (allocated(error)) return
-    call latest_checkpoint(this%file, int(n_beads), this%resumed, error, damaged_slot, legacy)
-    if (allocated(error)) return
-    ! A slot left damaged by a kill while its structure changed is renamed, not deleted
-    ! (freeing objects whose headers are inconsistent could free space still in use), and the
-    ! next checkpoint creates the slot anew.
-    if (len(damaged_slot) > 0) call set_aside(this%file, damaged_slot, error)
-    if (.not. allocated(error) .and. legacy) call upgrade_layout(this%file, this%resumed, error)
-    if (allocated(error)) return
-    kept = file_frame_template(this%file, int(n_beads))
-    this%diagnostics = allocated(kept%diagnostics)
-    this%stresslet = allocated(kept%stresslet)
-    call truncate_frames(this%file, kept, this%resumed%nframes, error)
-    if (allocated(error)) return
-    this%runs = restored_runs(this%file, this%resumed%run_counts, this%resumed%run_figures)
-    call h5_write_attr(this%file, '/', 'status', status_value('running'), error)
-    if (.not. allocated(error)) call h5_flush(this%file, error)
-    if (allocated(error)) return
-    this%n_beads = n_beads
-    this%nframes = this%resumed%nframes
-    this%last_time = this%resumed%t
-    this%flushed_time = this%resumed%t
-  end subroutine resume
-
-  !> Give a file of schema 1 or 2, resumed from its single /checkpoint `ck`, the layout of this
-  !> version: `ck` written to both slots, then schema_version, then the old checkpoint's parts
-  !> removed, each step flushed (a kill in between leaves a file that reads as the old or as
-  !> the new layout).
-  subroutine upgrade_layout(file, ck, error)
-    type(h5_file_t), intent(in) :: file
-    type(checkpoint_t), intent(in) :: ck
-    type(error_t), allocatable, intent(out) :: error
-    call upgrade_checkpoint(file, ck, error)
-    if (.not. allocated(error)) call h5_write_attr(file, '/', 'schema_version', case_schema_version, error)
-    if (.not. allocated(error)) call h5_flush(file, error)
-    if (.not. allocated(error)) call remove_legacy_checkpoint(file, error)
-  end subroutine upgrade_layout
-
   ! ---------------------------------------------------------------- status, finishing
 
   !> Set the status attribute ('running', 'finished', 'failed: <reason>') and flush.
@@ -483,60 +366,6 @@ contains
     type(error_t), allocatable, intent(out), optional :: error
     call h5_close_file(this%file, error)
   end subroutine close_case
-
-  !> End a run that reached `t_end`: flush and close the file (both checked), read it back and
-  !> verify it (`verify_case_file`), and only then write status = 'finished' (written, flushed
-  !> and closed, all checked). On error the file is closed and still says 'running'; `damaged`
-  !> tells that the verification found the file itself bad (then it must not be resumed).
-  !> `run`, the final record of the run segment (after `start_run`), replaces its /runs entry
-  !> before the flush.
-  subroutine finish(this, t_end, error, damaged, run)
-    class(case_file_t), intent(inout) :: this
-    real(wp), intent(in) :: t_end
-    type(error_t), allocatable, intent(out) :: error
-    logical, intent(out) :: damaged
-    type(run_record_t), intent(in), optional :: run
-    character(len=:), allocatable :: path
-    damaged = .false.
-    path = this%file%name()
-    if (present(run) .and. this%run_started) then
-      this%runs(size(this%runs)) = run
-      call write_run_figures(this%file, this%runs, error)
-      if (allocated(error)) then
-        call this%close()
-        return
-      end if
-    end if
-    call h5_flush(this%file, error)
-    if (allocated(error)) then
-      call this%close()
-      return
-    end if
-    call this%close(error)
-    if (allocated(error)) return
-    call verify_case_file(path, t_end, error)
-    if (allocated(error)) then
-      damaged = .true.
-      return
-    end if
-    call h5_open_file(this%file, path, .true., error)
-    if (allocated(error)) return
-    call h5_write_attr(this%file, '/', 'status', status_value('finished'), error)
-    if (.not. allocated(error)) call h5_flush(this%file, error)
-    if (allocated(error)) then
-      call this%close()
-      return
-    end if
-    call this%close(error)
-  end subroutine finish
-
-  !> `text` null-padded to `status_capacity` bytes (readers stop at the first null).
-  pure function status_value(text) result(value)
-    character(len=*), intent(in) :: text
-    character(len=max(len(text), status_capacity)) :: value
-    value = repeat(achar(0), len(value))
-    value(1:len(text)) = text
-  end function status_value
 
   pure logical function case_is_open(this)
     class(case_file_t), intent(in) :: this

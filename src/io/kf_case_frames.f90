@@ -22,7 +22,7 @@ module kf_case_frames
   private
 
   public :: frame_template, file_frame_template, create_frames, append_frames, truncate_frames, check_frames, &
-    write_diagnostics_totals
+    frame_refusal, write_diagnostics_totals
 
   !> The datasets every reader needs (also read on their own: checkpoint, verification, readers).
   character(len=*), parameter, public :: frames_time = '/frames/time', frames_positions = '/frames/positions'
@@ -232,6 +232,38 @@ contains
     call frame_table(v, f)
     if (allocated(v%error)) call move_alloc(v%error, error)
   end subroutine check_frames
+
+  !> Why a file of `n_beads` beads, with the optional parts `diagnostics` and `stresslet` or
+  !> without, holding `nframes` frames (the last at `last_time`), refuses the frame `f` ('' when
+  !> it takes it): a part the file has missing or one it has not given, positions not of shape
+  !> (3, n_beads), a time not after the last frame's, run diagnostics without their state.
+  pure function frame_refusal(f, n_beads, diagnostics, stresslet, nframes, last_time) result(reason)
+    type(frame_t), intent(in) :: f
+    integer, intent(in) :: n_beads
+    logical, intent(in) :: diagnostics, stresslet
+    integer(i8), intent(in) :: nframes
+    real(wp), intent(in) :: last_time
+    character(len=:), allocatable :: reason
+    reason = ''
+    if (diagnostics .and. .not. allocated(f%diagnostics)) then
+      reason = 'append_frame needs the run diagnostics'
+    else if (allocated(f%diagnostics) .and. .not. diagnostics) then
+      reason = 'append_frame got diagnostics but the file has none (enable_diagnostics)'
+    else if (stresslet .and. .not. allocated(f%stresslet)) then
+      reason = 'append_frame needs the stresslet'
+    else if (allocated(f%stresslet) .and. .not. stresslet) then
+      reason = 'append_frame got a stresslet but the file has none (enable_stresslet)'
+    else if (.not. allocated(f%r)) then
+      reason = 'append_frame got a frame without positions'
+    else if (size(f%r, 1) /= 3 .or. size(f%r, 2) /= n_beads) then
+      reason = 'frame positions do not have shape (3, n_beads)'
+    else if (nframes > 0 .and. .not. f%t > last_time) then
+      reason = 'frame time does not increase'
+    else if (allocated(f%diagnostics)) then
+      if (.not. (allocated(f%diagnostics%state_counters) .and. allocated(f%diagnostics%state_values) .and. &
+                 allocated(f%diagnostics%state_ongoing))) reason = 'append_frame got run diagnostics without their state'
+    end if
+  end function frame_refusal
 
   !> Run totals of the run diagnostics (root attributes).
   subroutine write_diagnostics_totals(file, diag, error)
