@@ -9,7 +9,7 @@ module kf_analysis_store
   use kf_error, only: error_t, fatal_error
   use kf_h5, only: h5_file_t, h5_open_file, h5_close_file, h5_flush, h5_create_group, h5_exists, &
     h5_attr_exists, h5_write_attr, h5_read_attr, h5_write, h5_read, h5_delete, h5_move, h5_raise_end
-  use kf_case_file, only: read_open_frames
+  use kf_case_verify, only: read_open_frames
   use kf_fs, only: copy_file_exclusive, replace_file, remove_file, parent_directory
   implicit none
   private

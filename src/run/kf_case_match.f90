@@ -29,7 +29,9 @@ module kf_case_match
   use kf_scene_item, only: scene_item_t, item_value_text, item_string, item_integer, item_real, &
     item_logical, item_real_array
   use kf_h5, only: h5_file_t, h5_open_file, h5_close_file, h5_attr_exists, h5_read_attr
-  use kf_case_file, only: case_schema_version, case_file_status, has_checkpoint
+  use kf_case_file, only: case_schema_version
+  use kf_case_verify, only: case_file_status
+  use kf_case_checkpoint, only: has_checkpoint
   implicit none
   private
 

@@ -15,13 +15,14 @@ module kf_case_runner
   use kf_hydro_model, only: hydro_stats_t
   use kf_stepper, only: stepper_t
   use kf_stepper_factory, only: make_stepper
-  use kf_shape, only: shape_t, compute_shape
-  use kf_case_file, only: case_file_t, case_file_status, stepper_checkpoint_t, verify_case_file, &
-    read_frames, diagnostics_record_t, stresslet_record_t, run_record_t
+  use kf_case_file, only: case_file_t
+  use kf_case_frames, only: frame_t, frame_template
+  use kf_case_checkpoint, only: stepper_checkpoint_t
+  use kf_case_runs, only: run_record_t
+  use kf_case_verify, only: case_file_status, verify_case_file, read_frames
   use kf_run_segment, only: run_segment_t, run_launch_t
-  use kf_frame_records, only: observables_record, diagnostics_record, stresslet_record
+  use kf_frame_records, only: fill_frame
   use kf_run_diagnostics, only: run_diagnostics_t, diag_pair_cutoff
-  use kf_rheology, only: fibre_stresslet_t
   use kf_fs, only: remove_file, move_aside, file_exists, file_in_use, file_not_writable
   use kf_file_type, only: is_symbolic_link
   use kf_case_match, only: check_reusable
@@ -85,11 +86,8 @@ contains
     type(stepper_checkpoint_t) :: saved
     integer(i8) :: hydro_base(4)   !< hydro counters of the run before a resume
     integer(i8), allocatable :: saved_counters(:)
-    type(shape_t) :: obs
     type(run_diagnostics_t), allocatable :: diag   !< allocated only with diagnostics: else absent
-    type(fibre_stresslet_t), allocatable :: st     !< allocated only with the stresslet: else absent
-    type(diagnostics_record_t), allocatable :: diag_rec   !< the frame's records (allocated: as above)
-    type(stresslet_record_t), allocatable :: st_rec
+    type(frame_t) :: frame   !< the record of the frame written last (its parts: those of the file)
     type(run_segment_t) :: segment
     type(run_record_t) :: final   !< the segment's record at the end
     real(wp), allocatable :: r(:, :)
@@ -272,7 +270,7 @@ contains
         call dyn%need_pairs(diag_pair_cutoff)
         call diag%share_pairs(dyn%pairs)
       end if
-      if (with_stresslet) allocate (st)
+      frame = frame_template(size(r, 2), with_diag, with_stresslet)
       if (resumed) then
         if (with_diag) call restore_diagnostics(error)
         if (.not. allocated(error)) call read_hydro_counters(error)
@@ -313,14 +311,11 @@ contains
         end if
         t = 0.0_wp
         nframes = 0
-        call compute_shape(r, obs, error)
-        if (.not. allocated(error) .and. with_stresslet) call dyn%stresslet(r, st, error)
+        if (with_diag) call diag%start(t, r)
+        call record_frame()
         if (.not. allocated(error)) then
-          if (with_diag) call diag%start(t, r)
           call integ%get_state(saved%reals, saved%ints)
-          call frame_records()
-          call file%append_frame(t, r, observables_record(obs), 0_i8, 0_i8, integ%dt(), error, diag_rec, saved, &
-                                 hydro_counts(), st_rec, segment%record(t, 0_i8))
+          call file%append_frame(frame, error, saved, hydro_counts(), segment%record(t, 0_i8))
           if (allocated(error)) then
             call write_failed(error%message)
             return
@@ -348,17 +343,14 @@ contains
           call fail(error%message)
           return
         end if
-        call compute_shape(r, obs, error)
-        if (.not. allocated(error) .and. with_stresslet) call dyn%stresslet(r, st, error)
+        call record_frame()
         if (allocated(error)) then
           call fail(error%message)
           return
         end if
         call integ%get_state(saved%reals, saved%ints)
-        call frame_records()
         call segment%sample_load()
-        call file%append_frame(t, r, observables_record(obs), integ%steps(), integ%rejected(), integ%dt(), error, &
-                               diag_rec, saved, hydro_counts(), st_rec, segment%record(t, integ%steps()))
+        call file%append_frame(frame, error, saved, hydro_counts(), segment%record(t, integ%steps()))
         if (.not. allocated(error)) call write_hydro_counters(error)
         if (allocated(error)) then
           call write_failed(error%message)
@@ -482,12 +474,12 @@ contains
       if (allocated(err)) err%message = "case file '"//path//"': "//err%message
     end subroutine restore_diagnostics
 
-    !> The case file's records of the frame just computed that are not built in place: run
-    !> diagnostics and stresslet (each left unallocated, so absent, when the run has none).
-    subroutine frame_records()
-      if (allocated(diag)) diag_rec = diagnostics_record(diag, r)
-      if (allocated(st)) st_rec = stresslet_record(st)
-    end subroutine frame_records
+    !> The record of the frame just computed (kf_frame_records) with the fibre's stresslet when
+    !> the file holds it; `error` from the shape or the stresslet.
+    subroutine record_frame()
+      call fill_frame(frame, t, r, integ, error, diag)
+      if (.not. allocated(error) .and. allocated(frame%stresslet)) call dyn%stresslet(r, frame%stresslet, error)
+    end subroutine record_frame
 
     !> The stepper's state from the checkpoint: the whole state when the file has it, else
     !> (files written before) the step size and step counts.

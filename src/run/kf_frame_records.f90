@@ -1,25 +1,42 @@
-!> The records a case file takes for one frame, filled from what the run computed: the shape
-!> observables, the run diagnostics (with the configuration diagnostics of the frame, computed
-!> here) and the fibre's stresslet. The case file (kf_case_file) writes them as given.
+!> The record a case file takes for one frame (kf_case_frames' `frame_t`), filled from what the
+!> run computed: time and positions, the stepper's counts and step size, the shape observables
+!> and the run diagnostics (with the configuration diagnostics of the frame, computed here).
+!> The fibre's stresslet goes into the record straight from the dynamics (kf_case_runner), so
+!> that this module stays below kf_dynamics. The case file (kf_case_file) writes it as given.
 module kf_frame_records
   use kf_kinds, only: wp
-  use kf_shape, only: shape_t
-  use kf_rheology, only: fibre_stresslet_t
+  use kf_error, only: error_t
+  use kf_shape, only: compute_shape
+  use kf_stepper, only: stepper_t
   use kf_run_diagnostics, only: run_diagnostics_t, configuration_diagnostics, diag_n_counters, diag_n_values
-  use kf_case_file, only: observables_record_t, diagnostics_record_t, stresslet_record_t
+  use kf_case_frames, only: frame_t, diagnostics_record_t
   implicit none
   private
 
-  public :: observables_record, diagnostics_record, stresslet_record
+  public :: fill_frame, diagnostics_record
 
 contains
 
-  !> The observables record of the shape `s`.
-  pure function observables_record(s) result(rec)
-    type(shape_t), intent(in) :: s
-    type(observables_record_t) :: rec
-    rec = observables_record_t(rg=s%rg, a=s%a, b=s%b, c=s%c, theta=s%theta, phi=s%phi, close_pairs=s%close_pairs)
-  end function observables_record
+  !> The record of the frame at time `t` with positions r(3, N), after the last step of
+  !> `stepper`: its counts and next step size, the shape observables and, when the record has
+  !> room for them (kf_case_frames' `frame_template`), the run diagnostics of `diag`. The
+  !> error comes from the shape.
+  subroutine fill_frame(frame, t, r, stepper, error, diag)
+    type(frame_t), intent(inout) :: frame
+    real(wp), intent(in) :: t
+    real(wp), intent(in) :: r(:, :)
+    class(stepper_t), intent(in) :: stepper
+    type(error_t), allocatable, intent(out) :: error
+    type(run_diagnostics_t), intent(in), optional :: diag
+    frame%t = t
+    frame%r = r
+    frame%steps = stepper%steps()
+    frame%rejected = stepper%rejected()
+    frame%dt = stepper%dt()
+    call compute_shape(r, frame%observables, error)
+    if (allocated(error)) return
+    if (allocated(frame%diagnostics) .and. present(diag)) frame%diagnostics = diagnostics_record(diag, r)
+  end subroutine fill_frame
 
   !> The diagnostics record of the monitor `diag` after the frame with positions r(3, N).
   function diagnostics_record(diag, r) result(rec)
@@ -38,13 +55,5 @@ contains
     allocate (rec%state_counters(diag_n_counters), rec%state_values(diag_n_values))
     call diag%get_state(rec%state_counters, rec%state_values, rec%state_ongoing)
   end function diagnostics_record
-
-  !> The stresslet record of `st`.
-  pure function stresslet_record(st) result(rec)
-    type(fibre_stresslet_t), intent(in) :: st
-    type(stresslet_record_t) :: rec
-    rec = stresslet_record_t(hydrodynamic=st%hydrodynamic, elastic=st%elastic, viscosity=st%viscosity, &
-                             psi1=st%psi1, psi2=st%psi2)
-  end function stresslet_record
 
 end module kf_frame_records

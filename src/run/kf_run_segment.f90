@@ -1,5 +1,5 @@
 !> A run segment of a case (its first start or one resume) as the case file records it in
-!> /runs (kf_case_file's run_record_t): who ran it (commit, host, BLAS library and kernels, MPI
+!> /runs (kf_case_runs' run_record_t): who ran it (commit, host, BLAS library and kernels, MPI
 !> ranks, BLAS threads), when
 !> (start in UTC), how far (model time, steps) and at what cost (wall time; the machine's
 !> 1-minute load average at the start and its mean over the start and every checkpoint).
@@ -11,7 +11,7 @@ module kf_run_segment
   use kf_error, only: error_t
   use kf_build_info, only: knotflow_git_hash
   use kf_platform, only: load_average, host_name, utc_now
-  use kf_case_file, only: run_record_t
+  use kf_case_runs, only: run_record_t
   implicit none
   private
 

@@ -29,7 +29,7 @@ def to_single_checkpoint(h, schema=2):
 
 
 def slot_digest(g):
-    """The digest knotflow stores in the checkpoint slot `g` (kf_case_file checkpoint_digest:
+    """The digest knotflow stores in the checkpoint slot `g` (kf_case_checkpoint checkpoint_digest:
     Adler-style sums modulo a prime over the bytes of its parts, in this order)."""
     parts = [np.array([g["nframes"][()], g["steps"][()], g["rejected"][()]], dtype="<i8"),
              np.array([g["time"][()], g["dt"][()]], dtype="<f8"), g["positions"][()]]
