@@ -18,8 +18,8 @@ module kf_dynamics
   use kf_forces, only: forces_t
   use kf_flow, only: flow_t
   use kf_hydro_model, only: hydro_model_t, hydro_stats_t
-  use kf_hydro_factory, only: make_hydro_model
-  use kf_overlap_rule, only: overlap_rule_t, make_overlap_rule
+  use kf_hydro_factory, only: make_hydro_model, make_overlap_rule
+  use kf_overlap_rule, only: overlap_rule_t
   use kf_scene_hydro, only: effective_eps_lub
   use kf_ode_system, only: ode_system_t
   use kf_pair_geometry, only: pair_geometry_t

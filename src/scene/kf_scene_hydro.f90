@@ -1,7 +1,7 @@
 !> The &hydro group: the hydrodynamic model. Owns the parameter type with its defaults, the
-!> reading of the group, its part of the item catalogue, its validation, the names of the models
-!> and update modes (kf_hydro_factory builds from them; the default mode `update_default`), the overlap rules
-!> (kf_overlap_rule) and the resolution of eps_lub.
+!> reading of the group, its part of the item catalogue, its validation, the names of the models,
+!> the update modes (the default `update_default`) and the overlap rules (kf_hydro_factory builds
+!> the types from them; the rules themselves are kf_overlap_rule) and the resolution of eps_lub.
 module kf_scene_hydro
   use kf_kinds, only: wp, i8
   use kf_strings, only: to_str, to_str_exact

@@ -1,13 +1,18 @@
-!> The hydrodynamic-model factory: the scene's model name is resolved here, once. The names of
-!> the models, their parameters' validation and the eps_lub rule are those of the &hydro group
-!> (kf_scene_hydro, the one source the scene validation uses too); `hydro_model_names` passes
-!> the names on.
+!> The hydrodynamic-model factory: the scene's model name, update mode and overlap rule are
+!> resolved here, once. The names of the models, update modes and overlap rules, their
+!> parameters' validation and the eps_lub rule are those of the &hydro group (kf_scene_hydro, the
+!> one source the scene validation uses too); `hydro_model_names` passes the names on. The
+!> concrete types (kf_hydro_none, kf_hydro_rpy, the multipole types, kf_overlap_rule) take plain
+!> values.
 module kf_hydro_factory
   use kf_kinds, only: wp, i8
   use kf_error, only: error_t, fatal_error
+  use kf_scene_check, only: name_list
   use kf_scene_hydro, only: hydro_params_t, hydro_model_names => model_names, model_none, model_rpy, &
                             model_multipole, check_hydro, effective_eps_lub, overlap_bwe, update_stage, &
-                            update_adaptive, update_iterative
+                            update_adaptive, update_iterative, overlap_pair, overlap_separate, overlap_relax, &
+                            overlap_names
+  use kf_overlap_rule, only: overlap_rule_t, pair_rule, separate_rule, relax_rule
   use kf_hydro_model, only: hydro_model_t
   use kf_hydro_none, only: none_model_t
   use kf_hydro_rpy, only: rpy_model_t, rpy_memory_bytes
@@ -17,7 +22,7 @@ module kf_hydro_factory
   implicit none
   private
 
-  public :: make_hydro_model, hydro_model_names, hydro_memory_bytes
+  public :: make_hydro_model, make_overlap_rule, hydro_model_names, hydro_memory_bytes
 
   !> eps_lub of a model made outside a scene when none is given (knotflow-mobility's --eps-lub
   !> default, the C interface's default); also the tolerance such a model is made with.
@@ -122,5 +127,27 @@ contains
       call fatal_error(error, "hydro: update = '"//trim(params%update)//"' has no multipole type")
     end select
   end subroutine make_multipole
+
+  !> The overlap rule `name` (one of kf_scene_hydro's overlap_names) for the overlap shift
+  !> eps_lub > 0; `overlap_time` (> 0) is used by 'relax' only.
+  subroutine make_overlap_rule(name, eps_lub, overlap_time, rule, error)
+    character(len=*), intent(in) :: name
+    real(wp), intent(in) :: eps_lub, overlap_time
+    class(overlap_rule_t), allocatable, intent(out) :: rule
+    type(error_t), allocatable, intent(out) :: error
+    select case (trim(name))
+    case (overlap_pair)
+      call pair_rule(.false., rule)
+    case (overlap_bwe)
+      call pair_rule(.true., rule)
+    case (overlap_separate)
+      call separate_rule(eps_lub, rule, error)
+    case (overlap_relax)
+      call relax_rule(eps_lub, overlap_time, rule, error)
+    case default
+      call fatal_error(error, 'overlap rule "'//trim(name)//'" unknown (one of '// &
+        name_list(overlap_names)//')')
+    end select
+  end subroutine make_overlap_rule
 
 end module kf_hydro_factory

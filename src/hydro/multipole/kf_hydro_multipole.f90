@@ -47,10 +47,10 @@ module kf_hydro_multipole
 
   !> Multipole model of order L with or without lubrication corrections.
   type, extends(hydro_model_t), public :: multipole_model_t
-    integer :: order = 2
+    integer :: order = 0                 !< multipole order L (init sets it)
     logical :: lubrication = .false.
     logical :: literal_bwe = .false.      !< overlap = 'bwe': no clamp of the many-body system
-    real(wp) :: eps_lub = 1.0e-4_wp      !< overlap shift: overlapping pairs are evaluated at 1 + eps_lub
+    real(wp) :: eps_lub = 0.0_wp         !< overlap shift (init sets it): overlapping pairs are evaluated at 1 + eps_lub
     type(multipole_system_t), private :: sys
     type(lubrication_t) :: lub
     integer :: n_lub_pairs = 0           !< pairs corrected at the last prepare
