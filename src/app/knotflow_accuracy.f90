@@ -20,6 +20,8 @@ program knotflow_accuracy
   use kf_error, only: error_t, fatal_error
   use kf_strings, only: to_str
   use kf_scene, only: scene_t
+  use kf_scene_hydro, only: update_stage
+  use kf_hydro_limits, only: lubrication_order_max
   use kf_fs, only: make_directory
   use kf_chain_shapes, only: build_initial_chain
   use kf_dynamics, only: dynamics_t
@@ -95,9 +97,9 @@ program knotflow_accuracy
         value = argument(i)
         read (value, *, iostat=ios) cfg%ref_order
         if (ios /= 0 .or. verify(value, '0123456789') /= 0) &
-          call die(program_name, '--ref-order '//value//': expected an integer 2..6', 2)
-        if (cfg%ref_order < 2 .or. cfg%ref_order > 6) &
-          call die(program_name, '--ref-order '//value//': expected an integer 2..6', 2)
+          call die(program_name, '--ref-order '//value//': expected an integer 2..'//to_str(lubrication_order_max), 2)
+        if (cfg%ref_order < 2 .or. cfg%ref_order > lubrication_order_max) &
+          call die(program_name, '--ref-order '//value//': expected an integer 2..'//to_str(lubrication_order_max), 2)
       end select
       i = i + 1
     case ('-h', '--help', '--version')
@@ -171,7 +173,7 @@ contains
     scene%hydro%lubrication = m%lubrication
     ! The exact solve at every stage: this report measures the models themselves (the adaptive
     ! reuse of the multipole part is measured by knotflow-bench-reuse).
-    scene%hydro%update = 'stage'
+    scene%hydro%update = update_stage
   end subroutine apply_model
 
   !> The force-driven part mu(r) F(r) of the bead velocities (exact at r).
@@ -180,11 +182,7 @@ contains
     real(wp), intent(in) :: r(:, :)
     real(wp), intent(out) :: uf(:, :)
     type(error_t), allocatable, intent(out) :: error
-    real(wp) :: f(3, size(r, 2))
-    call dyn%forces%compute(r, f)
-    call dyn%model%prepare(r, error)
-    if (allocated(error)) return
-    call dyn%model%apply_mobility(f, uf)
+    call dyn%force_velocity(r, uf, error)
   end subroutine force_part
 
   !> Open DIR/name for writing and write the header line.

@@ -12,6 +12,7 @@ program knotflow_bench_multipole
   use kf_kinds, only: wp
   use kf_error, only: error_t
   use kf_hydro_multipole, only: multipole_model_t
+  use kf_hydro_factory, only: standalone_eps_lub
   use kf_scene, only: chain_params_t
   use kf_chain_shapes, only: build_initial_chain
   use kf_cli, only: standard_option, argument, die
@@ -48,7 +49,7 @@ program knotflow_bench_multipole
     do order = 1, 4
       t_prev = 0.0_wp
       n_prev = 0
-      call model%init(order, lub, 1.0e-4_wp, error)
+      call model%init(order, lub, standalone_eps_lub, error)
       if (allocated(error)) then
         write (output_unit, '(a)') '# skipped: '//error%message
         exit

@@ -36,7 +36,8 @@ program knotflow_bench_reuse
   use kf_strings, only: to_str
   use kf_error, only: error_t
   use kf_scene, only: scene_t
-  use kf_scene_hydro, only: overlap_names, overlap_pair, overlap_relax, update_names
+  use kf_scene_hydro, only: overlap_names, overlap_pair, overlap_relax, update_names, update_default, update_stage, &
+    update_adaptive, update_iterative
   use kf_scene_check, only: name_list
   use kf_hydro_limits, only: eps_lub_in_range, eps_lub_range_text
   use kf_chain_shapes, only: build_initial_chain
@@ -45,7 +46,6 @@ program knotflow_bench_reuse
   use kf_stepper_factory, only: make_stepper
   use kf_hydro_model, only: hydro_stats_t
   use kf_reuse_check, only: checked_dynamics_t
-  use kf_hydro_multipole, only: multipole_model_t
   use kf_run_diagnostics, only: run_diagnostics_t
   use kf_cli, only: standard_option, argument, die
   use kf_accuracy, only: wall_seconds, max_bead_deviation, loglog_slope
@@ -99,7 +99,7 @@ contains
     every = 1
     eps_lub = -1.0_wp
     overlap = ''
-    update = 'adaptive'
+    update = update_default
     table = ''
     tolerance = 1.0e-4_wp
     k = 2
@@ -235,7 +235,7 @@ contains
     real(wp), allocatable :: r(:, :)
     real(wp) :: t, w0
     call header()
-    call study_scene(config, 1.0e-4_wp, 'adaptive', scene, r)
+    call study_scene(config, 1.0e-4_wp, update_adaptive, scene, r)
     call sys%init(scene, size(r, 2), error, every)
     if (allocated(error)) call die(program_name, error%message, 2)
     call make_stepper(scene%integrator, integ, error)
@@ -251,7 +251,7 @@ contains
     write (output_unit, '(a)') 'velocity_rms_max = '//to_str(sys%max_rms, '(es10.3)')
     write (output_unit, '(a)') 'velocity_rms_mean = '//to_str(sys%sum_rms/max(1_i8, sys%checks), '(es10.3)')
     write (output_unit, '(a)') 'velocity_maxnorm_max = '//to_str(sys%max_max, '(es10.3)')
-    call print_stats('adaptive.', sys%fast%model%statistics())
+    call print_stats(update_adaptive//'.', sys%fast%hydro_statistics())
     write (output_unit, '(a)') 'wall_s = '//to_str(wall_seconds() - w0, '(f10.2)')
   end subroutine run_velocity
 
@@ -276,7 +276,7 @@ contains
     if (allocated(error)) call die(program_name, error%message, 2)
     wall = wall_seconds() - w0
     steps = integ%steps()
-    stats = dyn%model%statistics()
+    stats = dyn%hydro_statistics()
   end subroutine integrate
 
   !> Integrate the configuration with one path (update, tolerance) to t_end from its start;
@@ -295,16 +295,16 @@ contains
     call integrate(scene, r, wall, steps, stats)
     write (output_unit, '(a)') label//'.wall_s = '//to_str(wall, '(f10.2)')
     write (output_unit, '(a)') label//'.steps = '//to_str(steps)
-    if (update /= 'stage') call print_stats(label//'.', stats)
+    if (update /= update_stage) call print_stats(label//'.', stats)
   end subroutine run_path
 
   subroutine run_trajectory()
     real(wp), allocatable :: r_stage(:, :), r_adapt(:, :), r_fine(:, :)
     real(wp) :: wall
     call header()
-    call run_path('stage', 'stage', 1.0e-4_wp, r_stage, wall)
-    call run_path('adaptive', 'adaptive', 1.0e-4_wp, r_adapt, wall)
-    call run_path('stage_tol1e-6', 'stage', 1.0e-6_wp, r_fine, wall)
+    call run_path(update_stage, update_stage, 1.0e-4_wp, r_stage, wall)
+    call run_path(update_adaptive, update_adaptive, 1.0e-4_wp, r_adapt, wall)
+    call run_path('stage_tol1e-6', update_stage, 1.0e-6_wp, r_fine, wall)
     write (output_unit, '(a)') 'deviation_adaptive_vs_stage = '// &
       to_str(max_bead_deviation(r_adapt, r_stage), '(es10.3)')
     write (output_unit, '(a)') 'deviation_stage_tol1e-4_vs_1e-6 = '// &
@@ -315,20 +315,20 @@ contains
     real(wp), allocatable :: r(:, :)
     real(wp) :: wall_stage, wall_adapt
     call header()
-    call run_path('adaptive', 'adaptive', 1.0e-4_wp, r, wall_adapt)
-    call run_path('stage', 'stage', 1.0e-4_wp, r, wall_stage)
+    call run_path(update_adaptive, update_adaptive, 1.0e-4_wp, r, wall_adapt)
+    call run_path(update_stage, update_stage, 1.0e-4_wp, r, wall_stage)
     write (output_unit, '(a)') 'ratio_stage_over_adaptive = '//to_str(wall_stage/wall_adapt, '(f8.2)')
   end subroutine run_speed
 
   !> The three update modes in one run (tolerance 1e-4): 'stage' first (the reference), then
   !> 'adaptive' and 'iterative'.
   subroutine run_compare()
-    character(len=*), parameter :: modes(2) = [character(len=9) :: 'adaptive', 'iterative']
+    character(len=*), parameter :: modes(2) = [character(len=9) :: update_adaptive, update_iterative]
     real(wp), allocatable :: r_stage(:, :), r(:, :)
     real(wp) :: wall_stage, wall
     integer :: k
     call header()
-    call run_path('stage', 'stage', 1.0e-4_wp, r_stage, wall_stage)
+    call run_path(update_stage, update_stage, 1.0e-4_wp, r_stage, wall_stage)
     do k = 1, size(modes)
       call run_path(trim(modes(k)), trim(modes(k)), 1.0e-4_wp, r, wall)
       write (output_unit, '(a)') 'ratio_stage_over_'//trim(modes(k))//' = '//to_str(wall_stage/wall, '(f8.2)')
@@ -346,9 +346,9 @@ contains
     real(wp) :: q(3, 3), ang, dr
     integer :: i, k
     call header()
-    call study_scene(config, 1.0e-4_wp, 'adaptive', scene, r)
+    call study_scene(config, 1.0e-4_wp, update_adaptive, scene, r)
     call fast%init(scene, size(r, 2), error)
-    scene%hydro%update = 'stage'
+    scene%hydro%update = update_stage
     call exact%init(scene, size(r, 2), error)
     allocate (v(3, size(r, 2)), vx(3, size(r, 2)), r2(3, size(r, 2)))
     call fast%step_begin(0.0_wp, r, 0.05_wp)
@@ -389,12 +389,12 @@ contains
       write (output_unit, '(a)') 'move'//to_str(k)//'.amplitude = '//to_str(dr, '(es10.3)')
       write (output_unit, '(a)') 'move'//to_str(k)//'.max_error = '//to_str(maxval(norm2(v - vx, dim=1)), '(es10.3)')
     end do
-    call print_stats('adaptive.', fast%model%statistics())
+    call print_stats(update_adaptive//'.', fast%hydro_statistics())
   end subroutine run_rigid
 
   !> Overlap statistics of both paths (the run diagnostics at every accepted step).
   subroutine run_overlaps()
-    character(len=8), parameter :: paths(2) = [character(len=8) :: 'stage', 'adaptive']
+    character(len=8), parameter :: paths(2) = [character(len=8) :: update_stage, update_adaptive]
     type(scene_t) :: scene
     type(dynamics_t) :: dyn
     type(run_diagnostics_t) :: diag
@@ -427,7 +427,7 @@ contains
       write (output_unit, '(a)') p//'.max_overlapping_pairs = '//to_str(diag%max_overlapping_pairs)
       write (output_unit, '(a)') p//'.strand_passages = '//to_str(diag%strand_passages)
       write (output_unit, '(a)') p//'.min_distance = '//to_str(diag%min_distance(), '(f10.5)')
-      if (k == 2) call print_stats('adaptive.', dyn%model%statistics())
+      if (k == 2) call print_stats(update_adaptive//'.', dyn%hydro_statistics())
     end do
   end subroutine run_overlaps
 
@@ -437,16 +437,8 @@ contains
     real(wp), intent(in) :: rr(:, :)
     real(wp), intent(out) :: vv(:, :)
     type(error_t), allocatable :: error
-    real(wp), allocatable :: v0(:, :), f(:, :)
-    allocate (v0(3, size(rr, 2)), f(3, size(rr, 2)))
-    call fast%forces%compute(rr, f)
-    select type (m => fast%model)
-    type is (multipole_model_t)
-      call m%reused_velocities(rr, f, vv, error, fast%flow%e)
-    end select
+    call fast%reused_velocity(rr, vv, error)
     if (allocated(error)) call die(program_name, error%message, 2)
-    call fast%flow%velocity(rr, v0)
-    vv = vv + v0
   end subroutine reused
 
   !> dopri45 along the configuration with the study's model (update from --update), the
@@ -509,7 +501,7 @@ contains
         close (unit)
       end if
     end associate
-    call print_stats(update//'.', sys%dyn%model%statistics())
+    call print_stats(update//'.', sys%dyn%hydro_statistics())
     write (output_unit, '(a)') 'wall_s = '//to_str(wall_seconds() - w0, '(f10.2)')
   end subroutine run_stiffness
 
@@ -524,7 +516,7 @@ contains
     integer :: k
     call header()
     do k = 1, size(sizes)
-      call study_scene('trefoil', 1.0e-4_wp, 'adaptive', scene, r)
+      call study_scene('trefoil', 1.0e-4_wp, update_adaptive, scene, r)
       scene%chain%shape = 'random'
       scene%chain%n_beads = sizes(k)
       call build_initial_chain(scene%chain, r, rot, error)

@@ -25,8 +25,8 @@ module kf_capi_hydro
   use kf_scene_flow, only: flow_params_t, flow_linear
   use kf_flow, only: flow_t
   use kf_hydro_model, only: hydro_model_t
-  use kf_hydro_factory, only: make_hydro_model, hydro_model_names, standalone_eps_lub
-  use kf_overlap_rule, only: overlap_rule_t, make_overlap_rule
+  use kf_hydro_factory, only: make_hydro_model, make_overlap_rule, hydro_model_names, standalone_eps_lub
+  use kf_overlap_rule, only: overlap_rule_t
   use kf_pair_geometry, only: pair_geometry_t
   use kf_hydro_limits, only: eps_lub_range_text
   implicit none

@@ -17,6 +17,11 @@ module kf_hydro_limits
   !> The largest order with lubrication corrections: the orders kf_lubrication_data tabulates
   !> (its lub_max_order; test_lubrication checks that the two agree).
   integer, parameter, public :: lubrication_order_max = 6
+  !> update = 'iterative' (kf_hydro_multipole_iterative): the default of the relative solver
+  !> tolerance (largest change of a bead velocity per iteration over the largest bead velocity)
+  !> and its allowed range.
+  real(wp), parameter, public :: solver_tolerance_default = 1.0e-6_wp
+  real(wp), parameter, public :: solver_tolerance_min = 1.0e-12_wp, solver_tolerance_max = 1.0e-2_wp
 
   public :: eps_lub_in_range, eps_lub_range_text, order_range_text
 

@@ -8,15 +8,18 @@
 !> the positions themselves, or, under 'separate' and only while beads overlap, the nearest
 !> configuration without overlaps, whose velocities (ambient flow included) the beads then take;
 !> under 'relax' the beads also move towards that configuration (its kinematic contact velocity).
+!> The parts (forces, model, flow) are private: run/ and the programs reach them through the
+!> operations below (`compute_forces`, `flow_velocity`, `force_velocity`, `reused_velocity`,
+!> `hydro_statistics`, `stresslet`).
 module kf_dynamics
   use kf_kinds, only: wp, i8
   use kf_error, only: error_t
   use kf_scene, only: scene_t
   use kf_forces, only: forces_t
   use kf_flow, only: flow_t
-  use kf_hydro_model, only: hydro_model_t
-  use kf_hydro_factory, only: make_hydro_model
-  use kf_overlap_rule, only: overlap_rule_t, make_overlap_rule
+  use kf_hydro_model, only: hydro_model_t, hydro_stats_t
+  use kf_hydro_factory, only: make_hydro_model, make_overlap_rule
+  use kf_overlap_rule, only: overlap_rule_t
   use kf_scene_hydro, only: effective_eps_lub
   use kf_ode_system, only: ode_system_t
   use kf_pair_geometry, only: pair_geometry_t
@@ -26,9 +29,9 @@ module kf_dynamics
 
   !> Forces, hydrodynamics and ambient flow of one case.
   type, extends(ode_system_t), public :: dynamics_t
-    type(forces_t) :: forces
-    class(hydro_model_t), allocatable :: model
-    type(flow_t) :: flow
+    type(forces_t), private :: forces
+    class(hydro_model_t), allocatable, private :: model
+    type(flow_t), private :: flow
     integer :: n = 0                     !< number of beads
     integer(i8) :: evaluations = 0       !< calls of velocity
     real(wp) :: pair_cutoff = 0.0_wp     !< range of the pair list (0: none is built)
@@ -47,6 +50,11 @@ module kf_dynamics
     procedure :: step_accepted => dynamics_step_accepted
     procedure :: step_rejected => dynamics_step_rejected
     procedure :: stresslet => dynamics_stresslet
+    procedure :: compute_forces => dynamics_compute_forces
+    procedure :: flow_velocity => dynamics_flow_velocity
+    procedure :: force_velocity => dynamics_force_velocity
+    procedure :: reused_velocity => dynamics_reused_velocity
+    procedure :: hydro_statistics => dynamics_hydro_statistics
   end type dynamics_t
 
 contains
@@ -142,6 +150,56 @@ contains
       v = v + this%u
     end subroutine hydro_velocities
   end subroutine dynamics_velocity
+
+  !> The bead forces f(3, N) at r(3, N) (kf_forces; no shared pair list).
+  subroutine dynamics_compute_forces(this, r, f)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    real(wp), intent(out) :: f(:, :)
+    call this%forces%compute(r, f)
+  end subroutine dynamics_compute_forces
+
+  !> The ambient flow's velocities v0(3, N) at r(3, N) (kf_flow).
+  subroutine dynamics_flow_velocity(this, r, v0)
+    class(dynamics_t), intent(in) :: this
+    real(wp), intent(in) :: r(:, :)
+    real(wp), intent(out) :: v0(:, :)
+    call this%flow%velocity(r, v0)
+  end subroutine dynamics_flow_velocity
+
+  !> The force-driven part uf = mu(r) F(r) of the velocities, exact at r (the model prepared at
+  !> r itself, whatever it reuses and whatever the overlap rule; no ambient flow, no strain).
+  subroutine dynamics_force_velocity(this, r, uf, error)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    real(wp), intent(out) :: uf(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    call this%forces%compute(r, this%f)
+    call this%model%prepare(r, error)
+    if (allocated(error)) return
+    call this%model%apply_mobility(this%f, uf)
+  end subroutine dynamics_force_velocity
+
+  !> The velocities v(3, N) at r from the part the model reuses, as it is (`reused_velocities`
+  !> of the model: no refresh), plus the ambient flow; an error when the model reuses nothing.
+  subroutine dynamics_reused_velocity(this, r, v, error)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    real(wp), intent(out) :: v(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    call this%forces%compute(r, this%f)
+    call this%model%reused_velocities(r, this%f, this%u, error, this%flow%e)
+    if (allocated(error)) return
+    call this%flow%velocity(r, v)
+    v = v + this%u
+  end subroutine dynamics_reused_velocity
+
+  !> The hydrodynamic model's work counters (kf_hydro_model `statistics`).
+  function dynamics_hydro_statistics(this) result(s)
+    class(dynamics_t), intent(in) :: this
+    type(hydro_stats_t) :: s
+    s = this%model%statistics()
+  end function dynamics_hydro_statistics
 
   !> The ode_system_t interface: dydt = velocity(y) (the system is autonomous).
   subroutine dynamics_derivative(this, t, y, dydt, error)

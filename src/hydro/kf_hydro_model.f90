@@ -21,10 +21,12 @@
 !> calls, but a model may reuse work across the stages and steps of the time integration,
 !> within an error budget. The time stepper's hooks reach the model through `step_begin`
 !> (with the trial step size, from which such a budget follows), `step_accepted` and
-!> `step_rejected`; `statistics` reports the work done.
+!> `step_rejected`; `statistics` reports the work done, and a model that reuses work answers
+!> `reused_velocities` (the velocities from its reused part as it is, for measurements; the
+!> default: an error, nothing is reused).
 module kf_hydro_model
   use kf_kinds, only: wp, i8
-  use kf_error, only: error_t
+  use kf_error, only: error_t, fatal_error
   use kf_pair_geometry, only: pair_geometry_t
   use kf_strain_basis, only: strain_basis, tensor_from_pairings
   implicit none
@@ -55,6 +57,7 @@ module kf_hydro_model
     procedure :: step_accepted
     procedure :: step_rejected
     procedure :: statistics
+    procedure :: reused_velocities
     procedure :: pair_cutoff
     procedure :: stresslet
     procedure :: add_pair_strain_stresslet
@@ -155,6 +158,20 @@ contains
     type(hydro_stats_t) :: s
     s = hydro_stats_t()
   end function statistics
+
+  !> u from the part of an earlier evaluation that the model reuses, as it is at r (no refresh),
+  !> for forces f and the strain e: what a reusing model returns when it reuses that part at r
+  !> (for tests and measurements). The default: an error, the model reuses nothing.
+  subroutine reused_velocities(this, r, f, u, error, e)
+    class(hydro_model_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :), f(:, :)
+    real(wp), intent(out) :: u(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), intent(in), optional :: e(3, 3)
+    u = 0.0_wp
+    call fatal_error(error, 'the hydrodynamic model '//this%name()//' reuses nothing (reused_velocities: '// &
+                     "&hydro update = 'adaptive')")
+  end subroutine reused_velocities
 
   !> The largest centre distance at which the model treats pairs apart (lubrication); 0 when it
   !> needs no pair list.

@@ -44,13 +44,11 @@ module kf_overlap_rule
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_pair_geometry, only: pair_geometry_t
-  use kf_scene_hydro, only: overlap_pair, overlap_separate, overlap_relax, overlap_bwe, overlap_names
-  use kf_scene_check, only: name_list
   use kf_hydro_limits, only: eps_lub_in_range, eps_lub_range_text
   implicit none
   private
 
-  public :: make_overlap_rule
+  public :: pair_rule, separate_rule, relax_rule
 
   !> The configuration at which the hydrodynamics of positions r is evaluated.
   type, abstract, public :: overlap_rule_t
@@ -97,7 +95,7 @@ module kf_overlap_rule
   !> 'relax': 'separate', and overlapping beads move towards that configuration over `time`.
   type, extends(overlap_separate_t) :: overlap_relax_t
     private
-    real(wp) :: time = 0.1_wp
+    real(wp) :: time = 0.0_wp            !< overlap_time (> 0; relax_rule sets it)
   contains
     procedure :: add_contact_velocity => relax_contact_velocity
   end type overlap_relax_t
@@ -111,43 +109,48 @@ module kf_overlap_rule
 
 contains
 
-  !> The rule `name` (one of kf_scene_hydro's overlap_names) for the overlap shift eps_lub > 0;
-  !> `overlap_time` (> 0) is used by 'relax' only.
-  subroutine make_overlap_rule(name, eps_lub, overlap_time, rule, error)
-    character(len=*), intent(in) :: name
+  !> 'pair', or with `literal_bwe` 'bwe': the hydrodynamics of the real positions.
+  subroutine pair_rule(literal_bwe, rule)
+    logical, intent(in) :: literal_bwe
+    class(overlap_rule_t), allocatable, intent(out) :: rule
+    if (literal_bwe) then
+      allocate (overlap_bwe_t :: rule)
+    else
+      allocate (overlap_pair_t :: rule)
+    end if
+  end subroutine pair_rule
+
+  !> 'separate' for the overlap shift eps_lub (kf_hydro_limits' range).
+  subroutine separate_rule(eps_lub, rule, error)
+    real(wp), intent(in) :: eps_lub
+    class(overlap_rule_t), allocatable, intent(out) :: rule
+    type(error_t), allocatable, intent(out) :: error
+    if (.not. eps_lub_in_range(eps_lub)) then
+      call fatal_error(error, 'overlap rule separate: eps_lub = '//to_str(eps_lub, '(es12.4)')// &
+        ' out of range '//eps_lub_range_text())
+      return
+    end if
+    allocate (rule, source=overlap_separate_t(target=1.0_wp + eps_lub))
+  end subroutine separate_rule
+
+  !> 'relax' for the overlap shift eps_lub (kf_hydro_limits' range) and the time overlap_time
+  !> (> 0) over which an overlap is undone.
+  subroutine relax_rule(eps_lub, overlap_time, rule, error)
     real(wp), intent(in) :: eps_lub, overlap_time
     class(overlap_rule_t), allocatable, intent(out) :: rule
     type(error_t), allocatable, intent(out) :: error
-    select case (trim(name))
-    case (overlap_pair)
-      allocate (overlap_pair_t :: rule)
-    case (overlap_bwe)
-      allocate (overlap_bwe_t :: rule)
-    case (overlap_separate, overlap_relax)
-      if (.not. eps_lub_in_range(eps_lub)) then
-        call fatal_error(error, 'overlap rule '//trim(name)//': eps_lub = '//to_str(eps_lub, '(es12.4)')// &
-          ' out of range '//eps_lub_range_text())
-        return
-      end if
-      if (trim(name) == overlap_relax) then
-        if (.not. (overlap_time > 0.0_wp)) then
-          call fatal_error(error, 'overlap rule relax: overlap_time = '//to_str(overlap_time, '(es12.4)')// &
-            ' (must be > 0)')
-          return
-        end if
-        allocate (rule, source=overlap_relax_t(time=overlap_time))
-      else
-        allocate (overlap_separate_t :: rule)
-      end if
-      select type (rule)
-      class is (overlap_separate_t)
-        rule%target = 1.0_wp + eps_lub
-      end select
-    case default
-      call fatal_error(error, 'overlap rule "'//trim(name)//'" unknown (one of '// &
-        name_list(overlap_names)//')')
-    end select
-  end subroutine make_overlap_rule
+    if (.not. eps_lub_in_range(eps_lub)) then
+      call fatal_error(error, 'overlap rule relax: eps_lub = '//to_str(eps_lub, '(es12.4)')// &
+        ' out of range '//eps_lub_range_text())
+      return
+    end if
+    if (.not. (overlap_time > 0.0_wp)) then
+      call fatal_error(error, 'overlap rule relax: overlap_time = '//to_str(overlap_time, '(es12.4)')// &
+        ' (must be > 0)')
+      return
+    end if
+    allocate (rule, source=overlap_relax_t(target=1.0_wp + eps_lub, time=overlap_time))
+  end subroutine relax_rule
 
   subroutine pair_configuration(this, r, pairs, rh, moved, error)
     class(overlap_pair_t), intent(inout) :: this

@@ -47,7 +47,7 @@ contains
     call dyn%velocity(r, u, error)
     if (allocated(error)) return
     allocate (v0(3, size(r, 2)))
-    call dyn%flow%velocity(r, v0)
+    call dyn%flow_velocity(r, v0)
     u = u - v0
   end subroutine relative_velocity
 

@@ -428,7 +428,7 @@ contains
     function hydro_counts() result(c)
       integer(i8) :: c(4)
       type(hydro_stats_t) :: st
-      st = dyn%model%statistics()
+      st = dyn%hydro_statistics()
       c = hydro_base + [st%evaluations, st%refreshes, st%reused, st%cg_iterations]
     end function hydro_counts
 
@@ -555,7 +555,7 @@ contains
       line = 'case '//name//': t = '//to_str_short(t)//' / '//to_str_short(sc%integrator%t_end)//', dt = '// &
              to_str_short(integ%dt())//', steps = '//to_str(integ%steps())//' ('//to_str(integ%rejected())// &
              ' rejected), elapsed '//to_str_short(elapsed)//' s, ETA '//to_str_short(eta)//' s'
-      st = dyn%model%statistics()
+      st = dyn%hydro_statistics()
       if (st%reused > 0) line = line//', hydro: '//to_str(hydro_base(2) + st%refreshes)//' refreshes, '// &
         to_str(hydro_base(3) + st%reused)//' reused, '//to_str(hydro_base(4) + st%cg_iterations)// &
         ' CG iterations, refreshing '//to_str(nint(100*st%refresh_seconds/ &

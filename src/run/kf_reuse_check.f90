@@ -8,6 +8,7 @@ module kf_reuse_check
   use kf_kinds, only: wp, i8
   use kf_error, only: error_t
   use kf_scene, only: scene_t
+  use kf_scene_hydro, only: update_stage, update_adaptive
   use kf_dynamics, only: dynamics_t
   use kf_ode_system, only: ode_system_t
   use kf_accuracy, only: velocity_error_norms
@@ -44,10 +45,10 @@ contains
     integer, intent(in), optional :: every
     type(scene_t) :: sc
     sc = scene
-    sc%hydro%update = 'adaptive'
+    sc%hydro%update = update_adaptive
     call this%fast%init(sc, n_beads, error)
     if (allocated(error)) return
-    sc%hydro%update = 'stage'
+    sc%hydro%update = update_stage
     call this%exact%init(sc, n_beads, error)
     if (allocated(error)) return
     allocate (this%v(3, n_beads), this%v0(3, n_beads))
@@ -68,7 +69,7 @@ contains
     if (mod(this%calls - 1, int(this%every, i8)) /= 0) return
     call this%exact%velocity(y, this%v, error)
     if (allocated(error)) return
-    call this%exact%flow%velocity(y, this%v0)
+    call this%exact%flow_velocity(y, this%v0)
     call velocity_error_norms(dydt - this%v0, this%v - this%v0, rms, mx)
     this%checks = this%checks + 1
     this%max_rms = max(this%max_rms, rms)

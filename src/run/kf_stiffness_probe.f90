@@ -14,6 +14,7 @@ module kf_stiffness_probe
   use kf_kinds, only: wp, i8
   use kf_error, only: error_t
   use kf_scene, only: scene_t
+  use kf_scene_hydro, only: update_stage
   use kf_dynamics, only: dynamics_t
   use kf_ode_system, only: ode_system_t
   use kf_hydro_model, only: hydro_model_t
@@ -72,7 +73,7 @@ contains
     call this%dyn%init(scene, n_beads, error)
     if (allocated(error)) return
     sc = scene
-    sc%hydro%update = 'stage'
+    sc%hydro%update = update_stage
     call make_hydro_model(sc%hydro, sc%integrator%tolerance, this%exact, error)
     if (allocated(error)) return
     allocate (this%f(3, n_beads), this%u(3, n_beads), this%g(3, n_beads), this%rp(3, n_beads), &
@@ -125,9 +126,9 @@ contains
       ! g = dF/dr u_k by central differences, displacements of at most 1e-5 d
       eps = 1.0e-5_wp/max(maxval(abs(u(:, :, k))), tiny(1.0_wp))
       this%rp = r + eps*u(:, :, k)
-      call this%dyn%forces%compute(this%rp, this%fp)
+      call this%dyn%compute_forces(this%rp, this%fp)
       this%rp = r - eps*u(:, :, k)
-      call this%dyn%forces%compute(this%rp, this%fm)
+      call this%dyn%compute_forces(this%rp, this%fm)
       this%g = (this%fp - this%fm)/(2.0_wp*eps)
       t(k, k) = sum(this%g*u(:, :, k))
       do i = 1, k    ! full reorthogonalisation in the mu inner product

@@ -1,7 +1,7 @@
 !> The &hydro group: the hydrodynamic model. Owns the parameter type with its defaults, the
-!> reading of the group, its part of the item catalogue, its validation, the names of the models
-!> and update modes (kf_hydro_factory and the multipole model build from them), the overlap rules
-!> (kf_overlap_rule) and the resolution of eps_lub.
+!> reading of the group, its part of the item catalogue, its validation, the names of the models,
+!> the update modes (the default `update_default`) and the overlap rules (kf_hydro_factory builds
+!> the types from them; the rules themselves are kf_overlap_rule) and the resolution of eps_lub.
 module kf_scene_hydro
   use kf_kinds, only: wp, i8
   use kf_strings, only: to_str, to_str_exact
@@ -9,7 +9,7 @@ module kf_scene_hydro
   use kf_scene_item, only: scene_item_t, add_s, add_i, add_l, add_r, name_len
   use kf_scene_check, only: refuse, name_list, quoted, check_finite
   use kf_hydro_limits, only: eps_lub_max, order_max, lubrication_order_max, eps_lub_range_text, &
-    order_range_text
+    order_range_text, solver_tolerance_default
   implicit none
   private
 
@@ -19,11 +19,9 @@ module kf_scene_hydro
     model_multipole]
   character(len=*), parameter, public :: update_stage = 'stage', update_adaptive = 'adaptive', &
     update_iterative = 'iterative'
-  !> update = 'iterative': the default of the relative solver tolerance (largest change of a bead
-  !> velocity per iteration over the largest bead velocity) and its allowed range
-  !> (kf_hydro_multipole_iterative).
-  real(wp), parameter, public :: solver_tolerance_default = 1.0e-6_wp
-  real(wp), parameter, public :: solver_tolerance_min = 1.0e-12_wp, solver_tolerance_max = 1.0e-2_wp
+  !> The default update mode of the multipole model (the one place it is defined; programs that
+  !> offer an update option take it from here).
+  character(len=*), parameter, public :: update_default = update_adaptive
   !> The valid values of &hydro update (multipole).
   character(len=*), parameter, public :: update_names(3) = [character(len=9) :: update_stage, update_adaptive, &
     update_iterative]
@@ -52,7 +50,7 @@ module kf_scene_hydro
     real(wp) :: eps_lub = -1.0_wp
     !> The multipole update: adaptive (reuse, the default) | stage (exact every stage) |
     !> iterative (exact every stage to a solver tolerance, by preconditioned GMRES)
-    character(len=name_len) :: update = update_adaptive
+    character(len=name_len) :: update = update_default
     !> Overlap rule of the multipole model: pair (lubrication and multipole blocks of a pair
     !> clamped at 1 + eps_lub, the default), separate (the configuration without overlaps), relax
     !> (separate, and overlaps undone over overlap_time) or bwe (the study's rule: only the

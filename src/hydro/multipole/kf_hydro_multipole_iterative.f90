@@ -47,7 +47,7 @@ module kf_hydro_multipole_iterative
   use kf_pair_blocks, only: pair_blocks_t
   use kf_pair_geometry, only: pair_geometry_t
   use kf_rigid_fit, only: best_rotation, centroid
-  use kf_scene_hydro, only: solver_tolerance_default, solver_tolerance_min, solver_tolerance_max
+  use kf_hydro_limits, only: solver_tolerance_default, solver_tolerance_min, solver_tolerance_max
   implicit none
   private
 
@@ -84,13 +84,13 @@ module kf_hydro_multipole_iterative
 
 contains
 
-  !> The model's dense arrays for n beads (bytes; a lower bound): the exact model's (not
-  !> adaptive) and one more 6N x 6N matrix (288 N^2), the preconditioner's friction factor; its
-  !> two many-body systems (the reference factor and the assembled one) come on top.
+  !> The model's dense arrays for n beads (bytes; a lower bound): the exact model's and one
+  !> more 6N x 6N matrix (288 N^2), the preconditioner's friction factor; its two many-body
+  !> systems (the reference factor and the assembled one) come on top.
   pure integer(i8) function iterative_memory_bytes(n, stresslet_lubrication) result(bytes)
     integer(i8), intent(in) :: n
     logical, intent(in) :: stresslet_lubrication
-    bytes = multipole_memory_bytes(n, .false., stresslet_lubrication) + 288_i8*n*n
+    bytes = multipole_memory_bytes(n, stresslet_lubrication) + 288_i8*n*n
   end function iterative_memory_bytes
 
   !> Order L, lubrication, overlap shift eps_lub and `literal_bwe` (as the exact model), the

@@ -20,7 +20,7 @@ module kf_multipole_index
     integer :: kmap(3) = [2, 3, 1]          !< P component (real q 0..2) of Cartesian x, y, z
   contains
     procedure :: init
-    procedure :: nr, nqt, n6
+    procedure :: nr, nqt, n6, b_rows, b_run_rows, p_unknowns
     procedure :: k_start, k_row, b_start, b_row, p_start, p_index, strain_row
   end type multipole_index_t
 
@@ -53,6 +53,30 @@ contains
     class(multipole_index_t), intent(in) :: this
     n6 = 6*this%n
   end function n6
+
+  !> Rows of B (the phi unknowns of runs 1 and 3 of every sphere): h N.
+  pure integer function b_rows(this)
+    class(multipole_index_t), intent(in) :: this
+    b_rows = this%h*this%n
+  end function b_rows
+
+  !> Rows of B of the phi run `run` (1: n >= 2, (h - 3) N; 3: n = 1, 3N); they start at
+  !> b_start(run, 1).
+  pure integer function b_run_rows(this, run) result(m)
+    class(multipole_index_t), intent(in) :: this
+    integer, intent(in) :: run
+    if (run == 1) then
+      m = (this%h - 3)*this%n
+    else
+      m = 3*this%n
+    end if
+  end function b_run_rows
+
+  !> Columns of B: the p unknowns of every sphere, h N.
+  pure integer function p_unknowns(this)
+    class(multipole_index_t), intent(in) :: this
+    p_unknowns = this%h*this%n
+  end function p_unknowns
 
   !> First row of K of run `run` (1..4) of sphere s.
   pure integer function k_start(this, run, s) result(k)

@@ -162,7 +162,8 @@ contains
       this%nqt = this%idx%nqt()
       this%n6 = this%idx%n6()
       if (allocated(this%k)) deallocate (this%k, this%bp, this%w6, this%bq, this%d6)
-      allocate (this%k(this%nr, this%nr), this%bp(h*nsph, h*nsph), this%w6(this%n6, this%n6))
+      allocate (this%k(this%nr, this%nr), this%bp(this%idx%b_rows(), this%idx%p_unknowns()), &
+                this%w6(this%n6, this%n6))
       allocate (this%bq(max(1, this%nqt), 5), this%d6(this%n6, 5))
     end if
     associate (idx => this%idx)
@@ -263,25 +264,27 @@ contains
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
     real(wp), allocatable, intent(out), optional :: spectrum(:)
-    integer :: h, info, na, nc, nphi, np, cs
+    integer :: info, na, nc, nphi, np, b3, k3
     integer(8) :: c1, c2, crate
 
     call this%assemble(r, error)
     if (allocated(error)) return
     call system_clock(c1, crate)
-    h = this%lay%h
-    na = (h - 3)*this%n      ! rows of B in run 1
-    nc = 3*this%n            ! rows of B in run 3
-    nphi = h*this%n
-    np = h*this%n
+    ! The offsets are the index map's (kf_multipole_index): rows of B in run 1 (na, from row 1
+    ! of K) and in run 3 (nc, from row b3 of B and row k3 of K), all rows and columns of B.
+    na = this%idx%b_run_rows(1)
+    nc = this%idx%b_run_rows(3)
+    nphi = this%idx%b_rows()
+    np = this%idx%p_unknowns()
+    b3 = this%idx%b_start(3, 1)
+    k3 = this%idx%k_start(3, 1)
     ! Exact elimination of the p-moments (their block is the identity): K_phiphi -= B B^T.
-    cs = 2*na + 1
     if (na > 0) then
       call dsyrk('L', 'N', na, np, -1.0_wp, this%bp, nphi, 1.0_wp, this%k, this%nr)
-      call dgemm('N', 'T', nc, na, np, -1.0_wp, this%bp(na + 1, 1), nphi, this%bp, nphi, 1.0_wp, &
-                 this%k(cs, 1), this%nr)
+      call dgemm('N', 'T', nc, na, np, -1.0_wp, this%bp(b3, 1), nphi, this%bp, nphi, 1.0_wp, &
+                 this%k(k3, 1), this%nr)
     end if
-    call dsyrk('L', 'N', nc, np, -1.0_wp, this%bp(na + 1, 1), nphi, 1.0_wp, this%k(cs, cs), this%nr)
+    call dsyrk('L', 'N', nc, np, -1.0_wp, this%bp(b3, 1), nphi, 1.0_wp, this%k(k3, k3), this%nr)
 
     if (present(spectrum)) then
       allocate (spectrum(this%nr))
