@@ -521,6 +521,8 @@ contains
     do j = 1, n6
       this%w6(j, j + 1:n6) = this%w6(j + 1:n6, j)
     end do
+    ! a copy with a permutation, O(N^2): the columns of sphere j by one thread (no sums)
+    !$omp parallel do default(none) shared(this, zeta) private(i, c, cc) schedule(static)
     do j = 1, this%n
       do cc = 1, 6
         do i = 1, this%n
@@ -531,6 +533,7 @@ contains
         end do
       end do
     end do
+    !$omp end parallel do
   end subroutine system_grand_friction
 
   !> Disturbance [U - U_inf; Omega - Omega_inf] (6N) of force-free, torque-free spheres for the
