@@ -56,7 +56,8 @@ program knotflow_bench_reuse
   use kf_cli, only: standard_option, argument, die
   use kf_accuracy, only: wall_seconds, max_bead_deviation, loglog_slope
   use kf_stiffness_probe, only: stiffness_probe_t, stability_boundary
-  use kf_blas_threads, only: set_blas_threads, blas_threads_in_use, openmp_threads_in_use, use_openmp_threads
+  use kf_blas_threads, only: set_blas_threads, blas_threads_in_use, openmp_threads_in_use, use_openmp_threads, &
+    set_openmp_threads
   use kf_scene_chain, only: chain_params_t
   use kf_multipole_system, only: multipole_system_t
   implicit none
@@ -66,7 +67,10 @@ program knotflow_bench_reuse
   character(len=:), allocatable :: part, config, overlap, update, table
   real(wp) :: t_end, eps_lub, tolerance
   integer :: every
+  logical :: omp_set
 
+  ! The OpenMP pair loops get the BLAS's thread count (OPENBLAS_NUM_THREADS=1: one core; kf_blas_threads).
+  call set_openmp_threads(blas_threads_in_use(), omp_set)
   call parse_arguments()
   select case (part)
   case ('velocity')
