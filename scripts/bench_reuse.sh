@@ -7,8 +7,8 @@
 # A science command (about 1.5 h of one core), not a test.
 #
 #   bash scripts/bench_reuse.sh [part ...]     parts: velocity trajectory speed overlaps
-#                                              scaling profile stiffness compare case (default:
-#                                              all but stiffness, compare and case)
+#                                              scaling profile stiffness compare case threads (default:
+#                                              all but stiffness, compare, case and threads)
 #   stiffness: which limit sets dopri45's step (|lambda_max| h of mu dF/dr at every trial step)
 #   along the trefoil (t = 0-50) and a candy-cane window (t = 800 of the campaign run, 20 units),
 #   into $out/stiffness and the stiffness section of docs/accuracy.md (about 45 min of one core)
@@ -16,6 +16,12 @@
 #   random self-avoiding chain (N = 60, A = 1.3): docs/accuracy.md, "Exact at every stage by
 #   iteration" (about 25 min of one core)
 #   case: the whole reference trefoil case (N = 99, t_end = 1000) with the adaptive path
+#   threads: both cores for one case (OpenMP pair loops + OpenBLAS, 1 against 2 threads): one
+#   evaluation at N = 99 and 152, and 'stage' and 'iterative' on the trefoil t = 0-10, into
+#   $out/threads_trefoil.txt (docs/multipole.md, "Both cores for one case"; about 6 min on a
+#   quiet machine). The machine is shared: it first waits up to KNOTFLOW_QUIET_WAIT seconds
+#   (default 600) for a 1-minute load average below KNOTFLOW_QUIET_LOAD (default 0.5), then
+#   runs anyway; every figure carries the load average at its start.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 cd "$KF_ROOT"
@@ -66,6 +72,15 @@ for part in "${parts[@]}"; do
           --config inputs/configs/candycane_A1_multipole_t800.xyz --t-end 3 --tolerance $tol \
           --table "$out/stiffness/stiffness_candycane_t800_tol$tol.dat"
       done ;;
+    threads)
+      wait_s="${KNOTFLOW_QUIET_WAIT:-600}"; quiet="${KNOTFLOW_QUIET_LOAD:-0.5}"; waited=0
+      while [ "$waited" -lt "$wait_s" ] && \
+            awk -v q="$quiet" '{ exit !($1 >= q) }' /proc/loadavg; do
+        sleep 15; waited=$((waited + 15))
+      done
+      kf_log "threads: load average $(cut -d' ' -f1-3 /proc/loadavg) after waiting ${waited} s"
+      # both cores: the BLAS and OpenMP thread counts are set by the program, not the environment
+      (unset OPENBLAS_NUM_THREADS OMP_NUM_THREADS; bench threads_trefoil threads --config trefoil --t-end 10) ;;
     case)
       dir="$out/case"
       rm -rf "$dir"; mkdir -p "$dir"
@@ -96,7 +111,7 @@ NML
         echo "loadavg_start = $load0"; echo "wall_s = $(( $(date +%s) - start ))";
         echo "loadavg_end = $(cat /proc/loadavg)";
         echo "status = $status (see $dir/log.txt)"; } > "$out/case_trefoil.txt" ;;
-    *) kf_die "unknown part '$part' (velocity trajectory speed overlaps scaling profile stiffness compare case)" ;;
+    *) kf_die "unknown part '$part' (velocity trajectory speed overlaps scaling profile stiffness compare case threads)" ;;
   esac
 done
 
@@ -104,7 +119,7 @@ reuse=0; stiffness=0
 for part in "${parts[@]}"; do
   case "$part" in
     stiffness) stiffness=1 ;;
-    compare) ;;   # its section of docs/accuracy.md is written by hand from $out/compare_*.txt
+    compare | threads) ;;   # their sections of the docs are written by hand from $out/*.txt
     *) reuse=1 ;;
   esac
 done

@@ -31,7 +31,8 @@ program knotflow
   use kf_sweep_tasks, only: sweep_tasks_t, status_word
   use kf_exit, only: exit_program_now
   use kf_cli, only: standard_option, argument, version_line, die
-  use kf_blas_threads, only: allowed_cpus, blas_threads_for, set_blas_threads, blas_threads_in_use, blas_library
+  use kf_blas_threads, only: allowed_cpus, blas_threads_for, set_blas_threads, blas_threads_in_use, blas_library, &
+    set_openmp_threads, openmp_threads_in_use
   use kf_platform, only: load_average
   use kf_kinds, only: wp
   use kf_scene_reference, only: scene_reference
@@ -56,7 +57,7 @@ program knotflow
   logical :: dry_run
   logical :: summary_failed = .false.
   integer :: me = 0, nfailed, nstopped, threads, k
-  logical :: threads_set
+  logical :: threads_set, omp_set
   real(wp) :: load
 
   ! --help and --version before MPI start-up (kf_cli), and the scene reference.
@@ -126,7 +127,8 @@ program knotflow
     stop
   end if
 
-  ! Idle CPUs for the BLAS of a run with one rank on its node (kf_blas_threads).
+  ! Idle CPUs for the BLAS and the OpenMP pair loops of a run with one rank on its node
+  ! (kf_blas_threads).
   call load_average(load, error)
   if (allocated(error)) then   ! not known: taken as an idle machine
     load = 0.0_wp
@@ -134,6 +136,7 @@ program knotflow
   end if
   threads = blas_threads_for(allowed_cpus(), comm%ranks_on_node(), real(load))
   call set_blas_threads(threads, threads_set)
+  call set_openmp_threads(threads, omp_set)
   tasks%sweep = sw
   tasks%reporter%rank = me
   tasks%launch%ranks = comm%size()
@@ -149,6 +152,12 @@ program knotflow
         to_str(tasks%launch%threads)//' thread(s) per rank (OPENBLAS_NUM_THREADS)'
     else
       write (output_unit, '(a)') 'knotflow: BLAS '//tasks%launch%blas
+    end if
+    if (openmp_threads_in_use() > 0 .and. omp_set) then
+      write (output_unit, '(a)') 'knotflow: OpenMP '//to_str(openmp_threads_in_use())//' thread(s) per rank'
+    else if (openmp_threads_in_use() > 0) then
+      write (output_unit, '(a)') 'knotflow: OpenMP '//to_str(openmp_threads_in_use())// &
+        ' thread(s) per rank (OMP_NUM_THREADS)'
     end if
     flush (output_unit)
   end if

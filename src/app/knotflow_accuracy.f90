@@ -22,6 +22,7 @@ program knotflow_accuracy
   use kf_scene, only: scene_t
   use kf_scene_hydro, only: update_stage
   use kf_hydro_limits, only: lubrication_order_max
+  use kf_blas_threads, only: set_openmp_threads, blas_threads_in_use
   use kf_fs, only: make_directory
   use kf_chain_shapes, only: build_initial_chain
   use kf_dynamics, only: dynamics_t
@@ -57,7 +58,10 @@ program knotflow_accuracy
   character(len=:), allocatable :: arg, value
   integer :: i, nargs, ios
   real(wp) :: t_start
+  logical :: omp_set
 
+  ! The OpenMP pair loops get the BLAS's thread count (OPENBLAS_NUM_THREADS=1: one core; kf_blas_threads).
+  call set_openmp_threads(blas_threads_in_use(), omp_set)
   cfg%out = 'results/accuracy'
   cfg%coil = 'inputs/configs/coil_candycane_A1.xyz'
   do_models = .false.

@@ -16,6 +16,7 @@ program knotflow_bench_multipole
   use kf_scene, only: chain_params_t
   use kf_chain_shapes, only: build_initial_chain
   use kf_cli, only: standard_option, argument, die
+  use kf_blas_threads, only: set_openmp_threads, blas_threads_in_use
   implicit none
 
   character(len=*), parameter :: program_name = 'knotflow-bench-multipole'
@@ -29,7 +30,10 @@ program knotflow_bench_multipole
   integer(int64) :: c0, c1, crate
   logical :: lub
   character(len=:), allocatable :: arg
+  logical :: omp_set
 
+  ! The OpenMP pair loops get the BLAS's thread count (OPENBLAS_NUM_THREADS=1: one core; kf_blas_threads).
+  call set_openmp_threads(blas_threads_in_use(), omp_set)
   max_seconds = 60.0_wp
   if (command_argument_count() >= 1) then
     arg = argument(1)

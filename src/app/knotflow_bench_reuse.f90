@@ -20,6 +20,12 @@
 !>              (kf_stiffness_probe), the error estimate and the outcome; per-trial rows into
 !>              FILE, a summary on stdout; TOL (default 1e-4) is the dopri45 tolerance only
 !>              (eps_lub stays 1e-4 unless --eps-lub is given)
+!>   threads    [--config C] [--t-end T]: both cores for one case: one evaluation ('stage'
+!>              prepare, best of 5; assembly, factorisation, lubrication blocks) at N = 99
+!>              (trefoil) and N = 152 (candy-cane), then 'stage' and 'iterative' from 0 to T,
+!>              each with 1 and with 2 threads (OpenMP pair loops and OpenBLAS together; needs
+!>              OPENBLAS_NUM_THREADS unset), the ratios 1 thread / 2 threads, the largest bead
+!>              deviation between the thread counts at T and the load average at every figure
 !>   rigid      [--config C]: the reused part at rigidly moved and at deformed configurations
 !>              (overlap rule pair only: the model's reused part against its exact one, both
 !>              without the dynamics' configuration rules separate and relax)
@@ -45,11 +51,16 @@ program knotflow_bench_reuse
   use kf_stepper, only: stepper_t
   use kf_stepper_factory, only: make_stepper
   use kf_hydro_model, only: hydro_stats_t
+  use kf_hydro_multipole, only: multipole_model_t
   use kf_reuse_check, only: checked_dynamics_t
   use kf_run_diagnostics, only: run_diagnostics_t
   use kf_cli, only: standard_option, argument, die
   use kf_accuracy, only: wall_seconds, max_bead_deviation, loglog_slope
   use kf_stiffness_probe, only: stiffness_probe_t, stability_boundary
+  use kf_blas_threads, only: set_blas_threads, blas_threads_in_use, openmp_threads_in_use, use_openmp_threads, &
+    set_openmp_threads
+  use kf_scene_chain, only: chain_params_t
+  use kf_multipole_system, only: multipole_system_t
   implicit none
 
   character(len=*), parameter :: program_name = 'knotflow-bench-reuse'
@@ -57,7 +68,10 @@ program knotflow_bench_reuse
   character(len=:), allocatable :: part, config, overlap, update, table
   real(wp) :: t_end, eps_lub, tolerance
   integer :: every
+  logical :: omp_set
 
+  ! The OpenMP pair loops get the BLAS's thread count (OPENBLAS_NUM_THREADS=1: one core; kf_blas_threads).
+  call set_openmp_threads(blas_threads_in_use(), omp_set)
   call parse_arguments()
   select case (part)
   case ('velocity')
@@ -76,9 +90,11 @@ program knotflow_bench_reuse
     call run_overlaps()
   case ('stiffness')
     call run_stiffness()
+  case ('threads')
+    call run_threads()
   case default
     call die(program_name, "unknown part '"//part//"' (allowed: velocity, trajectory, speed, compare, scaling, "// &
-             "overlaps, rigid, stiffness)", 2)
+             "overlaps, rigid, stiffness, threads)", 2)
   end select
 
 contains
@@ -89,7 +105,7 @@ contains
     if (command_argument_count() < 1) call die(program_name, 'usage: knotflow-bench-reuse velocity|trajectory|speed|scaling [options]', 2)
     part = argument(1)
     call standard_option(program_name, part, 'usage: knotflow-bench-reuse velocity|trajectory|speed|compare|'// &
-      'overlaps|scaling|rigid|stiffness [--config trefoil|random60|coil|FILE] [--t-end T] [--every K]'// &
+      'overlaps|scaling|rigid|stiffness|threads [--config trefoil|random60|coil|FILE] [--t-end T] [--every K]'// &
       ' [--eps-lub E] [--overlap RULE (one of '//name_list(overlap_names)//')] [--update U] [--tolerance TOL]'// &
       ' [--table FILE]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
@@ -337,6 +353,145 @@ contains
     end do
     write (output_unit, '(a)') 'loadavg_end = '//loadavg()
   end subroutine run_compare
+
+  !> Both cores for one case: 1 and 2 threads (OpenMP pair loops and BLAS) on one evaluation
+  !> and on a window of 'stage' and 'iterative' (module header, part threads).
+  subroutine run_threads()
+    character(len=*), parameter :: modes(2) = [character(len=9) :: 'stage', 'iterative']
+    character(len=*), parameter :: shapes(2) = [character(len=9) :: 'trefoil', 'candycane']
+    real(wp) :: wall(2), asm(2), fac(2), lub(2)
+    real(wp), allocatable :: r1(:, :), r2(:, :)
+    integer :: k, m, threads
+    character(len=:), allocatable :: label
+    call header()
+    do k = 1, size(shapes)
+      do threads = 1, 2
+        call use_threads(threads)
+        label = 'eval.'//trim(shapes(k))//'.threads'//to_str(threads)
+        call one_evaluation(trim(shapes(k)), label, wall(threads), asm(threads), fac(threads), lub(threads))
+      end do
+      label = 'eval.'//trim(shapes(k))
+      write (output_unit, '(a)') label//'.ratio_total = '//to_str(wall(1)/wall(2), '(f8.2)')
+      write (output_unit, '(a)') label//'.ratio_assembly = '//to_str(asm(1)/asm(2), '(f8.2)')
+      write (output_unit, '(a)') label//'.ratio_factor = '//to_str(fac(1)/fac(2), '(f8.2)')
+      write (output_unit, '(a)') label//'.ratio_lubrication_blocks = '//to_str(lub(1)/lub(2), '(f8.2)')
+    end do
+    do m = 1, size(modes)
+      do threads = 1, 2
+        call use_threads(threads)
+        label = trim(modes(m))//'.threads'//to_str(threads)
+        write (output_unit, '(a)') label//'.loadavg_start = '//loadavg()
+        if (threads == 1) then
+          call run_path(label, trim(modes(m)), 1.0e-4_wp, r1, wall(1))
+        else
+          call run_path(label, trim(modes(m)), 1.0e-4_wp, r2, wall(2))
+        end if
+      end do
+      write (output_unit, '(a)') trim(modes(m))//'.ratio_threads1_over_threads2 = '//to_str(wall(1)/wall(2), '(f8.2)')
+      write (output_unit, '(a)') trim(modes(m))//'.deviation_threads1_vs_threads2 = '// &
+        to_str(max_bead_deviation(r1, r2), '(es10.3)')
+    end do
+    call use_threads(1)
+    write (output_unit, '(a)') 'loadavg_end = '//loadavg()
+  end subroutine run_threads
+
+  !> n threads for the OpenMP pair loops and the BLAS; stops when the BLAS cannot be told
+  !> (OPENBLAS_NUM_THREADS set, or not OpenBLAS): the figures would not be what they say.
+  subroutine use_threads(n)
+    integer, intent(in) :: n
+    logical :: applied
+    call use_openmp_threads(n)
+    call set_blas_threads(n, applied)
+    if (.not. applied) call die(program_name, 'threads: the BLAS threads cannot be set (unset '// &
+                                'OPENBLAS_NUM_THREADS; OpenBLAS only)', 2)
+    write (output_unit, '(a)') 'threads = '//to_str(n)//' (OpenMP '//to_str(openmp_threads_in_use())// &
+      ', BLAS '//to_str(blas_threads_in_use())//')'
+  end subroutine use_threads
+
+  !> One 'stage' evaluation of the study's model (L = 2 + lubrication) of shape `name`: best of
+  !> 5 wall times of prepare and the parts of that best one.
+  subroutine one_evaluation(name, label, best, t_asm, t_fac, t_lub)
+    character(len=*), intent(in) :: name, label
+    real(wp), intent(out) :: best, t_asm, t_fac, t_lub
+    type(multipole_model_t) :: model
+    type(chain_params_t) :: p
+    type(error_t), allocatable :: error
+    real(wp), allocatable :: r(:, :)
+    real(wp) :: rot(3, 3), w0, w
+    integer :: rep
+    p%shape = name
+    call build_initial_chain(p, r, rot, error)
+    if (allocated(error)) call die(program_name, error%message, 2)
+    call model%init(2, .true., 1.0e-4_wp, error)
+    if (allocated(error)) call die(program_name, error%message, 2)
+    write (output_unit, '(a)') label//'.loadavg_start = '//loadavg()
+    best = huge(1.0_wp)
+    do rep = 1, 5
+      w0 = wall_seconds()
+      call model%prepare(r, error)
+      if (allocated(error)) call die(program_name, error%message, 2)
+      w = wall_seconds() - w0
+      if (w < best) then
+        best = w
+        call model%prepare_seconds(t_asm, t_fac, t_lub)
+      end if
+    end do
+    write (output_unit, '(a)') label//'.n_beads = '//to_str(size(r, 2))
+    write (output_unit, '(a)') label//'.total_s = '//to_str(best, '(f8.4)')
+    write (output_unit, '(a)') label//'.assembly_s = '//to_str(t_asm, '(f8.4)')
+    write (output_unit, '(a)') label//'.factor_s = '//to_str(t_fac, '(f8.4)')
+    write (output_unit, '(a)') label//'.factor_gflops = '//to_str(factor_flops(size(r, 2))/t_fac/1.0e9_wp, '(f8.2)')
+    write (output_unit, '(a)') label//'.lubrication_blocks_s = '//to_str(t_lub, '(f8.4)')
+    write (output_unit, '(a)') label//'.rest_s = '//to_str(best - t_asm - t_fac - t_lub, '(f8.4)')
+    call factor_cpu_seconds(r, w)
+    write (output_unit, '(a)') label//'.factor_cpu_s = '//to_str(w, '(f8.4)')
+    write (output_unit, '(a)') label//'.factor_gflops_per_cpu_s = '//to_str(factor_flops(size(r, 2))/w/1.0e9_wp, '(f8.2)')
+  end subroutine one_evaluation
+
+  !> Processor time (all threads; cpu_time) of the factorisation of the L = 2 system at r: the
+  !> best of 5 factorise calls (assembly + factorisation) less the best of 5 assemblies. Time
+  !> the process spent waiting for a CPU on a loaded machine does not count, so at one thread
+  !> flops / this time is the rate the core achieved while it ran this code.
+  subroutine factor_cpu_seconds(r, seconds)
+    real(wp), intent(in) :: r(:, :)
+    real(wp), intent(out) :: seconds
+    type(multipole_system_t) :: sys
+    type(error_t), allocatable :: error
+    real(wp) :: c0, c1, best_assembly, best_both
+    integer :: rep
+    call sys%init(2, 1.0_wp + 1.0e-4_wp, error)
+    if (allocated(error)) call die(program_name, error%message, 2)
+    best_assembly = huge(1.0_wp)
+    best_both = huge(1.0_wp)
+    do rep = 1, 5
+      call cpu_time(c0)
+      call sys%assemble(r, error)
+      call cpu_time(c1)
+      if (allocated(error)) call die(program_name, error%message, 2)
+      best_assembly = min(best_assembly, c1 - c0)
+      call cpu_time(c0)
+      call sys%factorise(r, error)
+      call cpu_time(c1)
+      if (allocated(error)) call die(program_name, error%message, 2)
+      best_both = min(best_both, c1 - c0)
+    end do
+    seconds = best_both - best_assembly
+  end subroutine factor_cpu_seconds
+
+  !> Floating-point operations of the factorisation at L = 2 (kf_multipole_system `factorise`)
+  !> for n beads: the p-moment elimination (DSYRK on the na = (h - 3) n rows of B, DGEMM of its
+  !> nc = 3 n rows against them, DSYRK on those; np = h n columns, h = L (L + 2) = 8) and the
+  !> Cholesky factorisation DPOTRF of K (nr = 2 h n): nr^3/3 + nr^2/2 + nr/6.
+  pure real(wp) function factor_flops(n) result(flops)
+    integer, intent(in) :: n
+    integer, parameter :: h = 8
+    real(wp) :: na, nc, np, nr
+    na = real((h - 3)*n, wp)
+    nc = real(3*n, wp)
+    np = real(h*n, wp)
+    nr = real(2*h*n, wp)
+    flops = na*(na + 1.0_wp)*np + 2.0_wp*nc*na*np + nc*(nc + 1.0_wp)*np + nr**3/3.0_wp + nr**2/2.0_wp + nr/6.0_wp
+  end function factor_flops
 
   subroutine run_rigid()
     type(scene_t) :: scene

@@ -38,6 +38,7 @@ program knotflow_mobility
   use kf_scene_hydro, only: overlap_names, overlap_bwe, overlap_pair
   use kf_lapack, only: symmetric_eigenvalues, cholesky_factor
   use kf_hydro_limits, only: eps_lub_in_range, eps_lub_range_text
+  use kf_blas_threads, only: set_openmp_threads, blas_threads_in_use
   implicit none
 
   character(len=*), parameter :: program_name = 'knotflow-mobility'
@@ -49,7 +50,10 @@ program knotflow_mobility
   real(wp), allocatable :: r(:, :), mu(:, :), u(:, :)
   class(hydro_model_t), allocatable :: model
   type(error_t), allocatable :: error
+  logical :: omp_set
 
+  ! The OpenMP pair loops get the BLAS's thread count (OPENBLAS_NUM_THREADS=1: one core; kf_blas_threads).
+  call set_openmp_threads(blas_threads_in_use(), omp_set)
   model_name = 'multipole'
   order = 2
   lubrication = .true.

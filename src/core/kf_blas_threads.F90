@@ -13,12 +13,22 @@
 !> OPENBLAS_NUM_THREADS (any count >= 1) in the environment is the user's choice and is left alone: `OPENBLAS_NUM_THREADS=1 knotflow ...`
 !> really runs on one core (scripts/lib.sh sets 1 unless the caller set it).
 !>
+!> The same count, once, for the OpenMP threads over the pair blocks of one evaluation (the
+!> assembly of the multipole system, the lubrication blocks; `set_openmp_threads`, rule in
+!> `openmp_threads_for`): an explicit OMP_NUM_THREADS is the user's and left to the OpenMP
+!> runtime; else an explicit OPENBLAS_NUM_THREADS sets it too (so `OPENBLAS_NUM_THREADS=1 knotflow`
+!> still runs on one core); else the count of `blas_threads_for`. A build without OpenMP runs
+!> the pair loops on one thread and `openmp_threads_in_use` is 0.
+!>
 !> `blas_library` names the library and the kernels it runs ('OpenBLAS 0.3.21 SkylakeX'), for
 !> the start-up line and the /runs record of every run segment: OpenBLAS chooses its kernels
 !> from the CPU at start-up (or takes OPENBLAS_CORETYPE, scripts/blas_env.sh), and a CPU it does
 !> not know gets its oldest x86-64 kernels, about 3.4 times slower (docs/multipole.md), so a
 !> timing means little without them.
 module kf_blas_threads
+#ifdef _OPENMP
+  use omp_lib, only: omp_set_num_threads, omp_get_max_threads
+#endif
 #ifdef KNOTFLOW_HAVE_OPENBLAS_THREADS
   use, intrinsic :: iso_c_binding, only: c_int
 #endif
@@ -31,6 +41,7 @@ module kf_blas_threads
 
   public :: allowed_cpus, cpu_list_count, blas_threads_for, requested_threads, set_blas_threads, blas_threads_in_use
   public :: blas_library, blas_description
+  public :: openmp_threads_for, set_openmp_threads, openmp_threads_in_use, use_openmp_threads
 
 contains
 
@@ -122,13 +133,8 @@ contains
         integer(c_int), value :: n
       end subroutine openblas_set_num_threads
     end interface
-    character(len=32) :: env
-    integer :: status
     applied = .false.
-    call get_environment_variable('OPENBLAS_NUM_THREADS', env, status=status)
-    if (status == 0) then
-      if (requested_threads(env) > 0) return
-    end if
+    if (requested_from('OPENBLAS_NUM_THREADS') > 0) return
     call openblas_set_num_threads(int(max(1, threads), c_int))
     applied = .true.
 #else
@@ -151,6 +157,68 @@ contains
     n = 0
 #endif
   end function blas_threads_in_use
+
+  !> OpenMP threads for the pair loops from the counts requested in OMP_NUM_THREADS
+  !> (`omp_request`) and OPENBLAS_NUM_THREADS (`blas_request`; each as `requested_threads`, 0:
+  !> none) and the count `automatic` of `blas_threads_for`: the first of the three that is > 0
+  !> (at least 1).
+  pure integer function openmp_threads_for(omp_request, blas_request, automatic) result(threads)
+    integer, intent(in) :: omp_request, blas_request, automatic
+    if (omp_request > 0) then
+      threads = omp_request
+    else if (blas_request > 0) then
+      threads = blas_request
+    else
+      threads = max(1, automatic)
+    end if
+  end function openmp_threads_for
+
+  !> Give the OpenMP pair loops the threads of `openmp_threads_for` with `automatic` the count of
+  !> `blas_threads_for`; `applied` is false in a build without OpenMP and when OMP_NUM_THREADS
+  !> holds a count (the OpenMP runtime already took it). Called once, at set-up.
+  subroutine set_openmp_threads(automatic, applied)
+    integer, intent(in) :: automatic
+    logical, intent(out) :: applied
+#ifdef _OPENMP
+    integer :: omp_request, blas_request
+    omp_request = requested_from('OMP_NUM_THREADS')
+    blas_request = requested_from('OPENBLAS_NUM_THREADS')
+    applied = omp_request == 0
+    if (applied) call use_openmp_threads(openmp_threads_for(omp_request, blas_request, automatic))
+#else
+    applied = .false.
+#endif
+  end subroutine set_openmp_threads
+
+  !> `threads` (>= 1) OpenMP threads for the pair loops from now on, whatever the environment
+  !> says (benchmarks and tests; a program takes `set_openmp_threads`). No effect without OpenMP.
+  subroutine use_openmp_threads(threads)
+    integer, intent(in) :: threads
+#ifdef _OPENMP
+    call omp_set_num_threads(max(1, threads))
+#else
+    if (threads < 1) return
+#endif
+  end subroutine use_openmp_threads
+
+  !> The count `requested_threads` reads in environment variable `name` (0: unset or none).
+  integer function requested_from(name) result(n)
+    character(len=*), intent(in) :: name
+    character(len=32) :: env
+    integer :: status
+    n = 0
+    call get_environment_variable(name, env, status=status)
+    if (status == 0) n = requested_threads(env)
+  end function requested_from
+
+  !> The threads the OpenMP pair loops use now (omp_get_max_threads), 0 in a build without OpenMP.
+  integer function openmp_threads_in_use() result(n)
+#ifdef _OPENMP
+    n = omp_get_max_threads()
+#else
+    n = 0
+#endif
+  end function openmp_threads_in_use
 
   !> The library and its kernels as recorded: 'OpenBLAS <version> <core>' from OpenBLAS's
   !> configuration string `config` (openblas_get_config: 'OpenBLAS 0.3.21 DYNAMIC_ARCH ...', the

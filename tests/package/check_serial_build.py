@@ -1,6 +1,6 @@
-"""The serial build: configure knotflow with -DKNOTFLOW_WITH_MPI=OFF into a temporary directory,
-build the library and `knotflow` only (-j2), and check that
-  - the build prints no compiler warning and the program links no MPI library;
+"""The serial build: configure knotflow with -DKNOTFLOW_WITH_MPI=OFF and -DKNOTFLOW_WITH_OPENMP=OFF
+into a temporary directory, build the library and `knotflow` only (-j2), and check that
+  - the build prints no compiler warning and the program links neither MPI nor OpenMP (libgomp);
   - `knotflow SCENE.nml` (no mpirun) runs every case of a 2-case sweep in one process;
   - its trajectories are the same, frame by frame and bit for bit, as those of the MPI build's
     knotflow on 2 ranks for the same scene (same compiler and flags; one BLAS thread each).
@@ -36,7 +36,7 @@ def run(cmd, **kw):
 
 t0 = time.time()
 run([cmake, "-S", source, "-B", build, "-G", generator, "-DKNOTFLOW_WITH_MPI=OFF",
-     "-DKNOTFLOW_BUILD_TESTS=OFF", "-DCMAKE_BUILD_TYPE=" + build_type,
+     "-DKNOTFLOW_WITH_OPENMP=OFF", "-DKNOTFLOW_BUILD_TESTS=OFF", "-DCMAKE_BUILD_TYPE=" + build_type,
      "-DCMAKE_Fortran_COMPILER=" + fortran, "-DKNOTFLOW_WITH_FFTW=" + with_fftw,
      "-DKNOTFLOW_FYPP=" + fypp])
 out = run([cmake, "--build", build, "-j", "2", "--target", "knotflow"])
@@ -48,6 +48,7 @@ ldd = shutil.which("ldd")
 if ldd:
     libs = run([ldd, serial_exe]).stdout
     assert "libmpi" not in libs, "the serial knotflow links MPI:\n" + libs
+    assert "libgomp" not in libs, "the knotflow built without OpenMP links libgomp:\n" + libs
 version = run([serial_exe, "--version"]).stdout
 assert version.startswith("knotflow "), version
 

@@ -189,18 +189,33 @@ contains
   contains
     subroutine fill(list)
       type(pair_geometry_t), intent(in) :: list
-      real(wp), pointer :: zeta(:, :), xe(:, :, :)
-      real(wp) :: d(3)
-      integer :: i, j, k
-      call blocks%clear()
+      real(wp) :: d(3), q(3, 3), zeta(12, 12), xe(12, 3, 3)
+      integer, allocatable :: near(:)
+      integer :: i, j, k, m
+      logical :: rotate
+      ! The pairs closer than the cutoff, in the order of the list; then their blocks, each
+      ! computed and stored by one thread (the same list, bit for bit, for any thread count).
+      allocate (near(list%size()))
+      m = 0
       do k = 1, list%size()
         if (list%distance(k) >= this%r_cut) cycle
-        call list%pair(k, i, j)
-        d = list%separation(k)
-        if (present(rotation)) d = matmul(rotation, d)
-        call blocks%next_slot(i, j, zeta, xe)
-        call this%pair_correction(d, zeta, xe)
+        m = m + 1
+        near(m) = k
       end do
+      call blocks%resize(m)
+      rotate = present(rotation)
+      q = 0.0_wp
+      if (rotate) q = rotation
+      !$omp parallel do default(none) shared(this, list, blocks, near, m, rotate, q) &
+      !$omp private(k, i, j, d, zeta, xe) schedule(static)
+      do k = 1, m
+        call list%pair(near(k), i, j)
+        d = list%separation(near(k))
+        if (rotate) d = matmul(q, d)
+        call this%pair_correction(d, zeta, xe)
+        call blocks%store(k, i, j, zeta, xe)
+      end do
+      !$omp end parallel do
     end subroutine fill
   end subroutine pair_blocks
 

@@ -20,6 +20,8 @@ module kf_pair_blocks
   contains
     procedure :: clear
     procedure :: next_slot
+    procedure :: resize
+    procedure :: store
     procedure :: n_pairs
     procedure :: pair
     procedure :: apply
@@ -49,6 +51,31 @@ contains
     zeta => this%zeta(:, :, this%count)
     xe => this%xe(:, :, :, this%count)
   end subroutine next_slot
+
+  !> Make the list hold `n` pairs whose contents `store` sets next, slot by slot (the storage
+  !> grows when needed; what it held is not kept).
+  subroutine resize(this, n)
+    class(pair_blocks_t), intent(inout) :: this
+    integer, intent(in) :: n
+    this%count = 0
+    if (.not. allocated(this%ij)) then
+      call grow(this, max(64, n))
+    else if (size(this%ij, 2) < n) then
+      call grow(this, max(n, 2*size(this%ij, 2)))
+    end if
+    this%count = n
+  end subroutine resize
+
+  !> Set slot k (1..n_pairs) to pair (i, j) with block zeta and coupling xe. Different slots
+  !> may be stored by different threads at the same time.
+  subroutine store(this, k, i, j, zeta, xe)
+    class(pair_blocks_t), intent(inout) :: this
+    integer, intent(in) :: k, i, j
+    real(wp), intent(in) :: zeta(12, 12), xe(12, 3, 3)
+    this%ij(:, k) = [i, j]
+    this%zeta(:, :, k) = zeta
+    this%xe(:, :, :, k) = xe
+  end subroutine store
 
   !> Enlarge the storage to `capacity` pairs, keeping the pairs held.
   subroutine grow(this, capacity)

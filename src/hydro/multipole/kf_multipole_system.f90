@@ -55,8 +55,6 @@ module kf_multipole_system
     real(wp), allocatable :: w6(:, :)    !< 6N x 6N work
     real(wp), allocatable :: bq(:, :)    !< nqt x 5 work
     real(wp), allocatable :: d6(:, :)    !< 6N x 5 work
-    real(wp), allocatable :: gr(:, :), y(:)
-    complex(wp), allocatable :: ih(:, :)
     !> Seconds spent in the last assembly of the pair blocks and in the factorisation
     !> (p-moment elimination and Cholesky).
     real(wp) :: t_assembly = 0.0_wp, t_factor = 0.0_wp
@@ -110,9 +108,6 @@ contains
         this%scal(c + 3) = 1.0_wp/lay%sigma_real(lay%index(1, s, 0))
       end do
     end associate
-    if (allocated(this%gr)) deallocate (this%gr, this%y, this%ih)
-    allocate (this%gr(this%lay%nb, this%lay%nb), this%y(2*this%lay%nslot))
-    allocate (this%ih(0:2*order, -2*order:2*order))
   end subroutine system_init
 
   !> Index in P (1..6N) of Cartesian component c (1..3 force, 4..6 torque) of sphere i.
@@ -139,10 +134,13 @@ contains
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
-    integer :: nsph, h, i, j, x, yr, n, q, t, pc
+    integer :: nsph, h, i, j, x, yr, n, q, t, pc, n_over, n_clamp
     integer :: lo(5), hi(5), ks(4, 2), bs(4, 2), ps(2)
+    integer, allocatable :: first_coincident(:)
     integer(8) :: c0, c1, crate
     real(wp) :: d(3), dist
+    real(wp), allocatable :: yw(:), gr(:, :)
+    complex(wp), allocatable :: ih(:, :)
 
     nsph = size(r, 2)
     if (nsph < 1) then
@@ -170,8 +168,7 @@ contains
       lo = idx%lo
       hi = idx%hi
 
-      this%n_clamped = 0
-      this%n_overlapping = 0
+      allocate (first_coincident(nsph))
       do i = 1, nsph
         call starts(i, ks(:, 1), bs(:, 1), ps(1))
         do x = 1, 4
@@ -194,6 +191,18 @@ contains
         end do
       end do
 
+      ! The pair blocks: each pair (i, j) is computed and written by one thread into its own
+      ! rows and columns of K and B (no sums across pairs), so K and B are the same, bit for
+      ! bit, for any number of OpenMP threads (kf_blas_threads sets the count); the counters
+      ! are integer sums.
+      n_over = 0
+      n_clamp = 0
+      first_coincident = 0
+      !$omp parallel default(none) shared(this, r, nsph, lo, hi, h, first_coincident) &
+      !$omp private(i, j, x, yr, ks, bs, ps, d, dist, ih, yw, gr) reduction(+:n_over, n_clamp)
+      allocate (ih(0:2*this%lay%order, -2*this%lay%order:2*this%lay%order), yw(2*this%lay%nslot), &
+                gr(this%lay%nb, this%lay%nb))
+      !$omp do schedule(dynamic)
       do i = 1, nsph
         call starts(i, ks(:, 1), bs(:, 1), ps(1))
         do j = i + 1, nsph
@@ -202,38 +211,50 @@ contains
           d = r(:, j) - r(:, i)
           dist = norm2(d)
           if (dist <= 0.0_wp) then
-            call fatal_error(error, 'multipole system: spheres '//to_str(i)//' and '//to_str(j)//' coincide')
-            this%n = 0
-            return
+            if (first_coincident(i) == 0) first_coincident(i) = j
+            cycle
           end if
-          if (dist <= 1.0_wp) this%n_overlapping = this%n_overlapping + 1
+          if (dist <= 1.0_wp) n_over = n_over + 1
           if (dist < this%min_distance) then
             d = d*(this%min_distance/dist)
-            this%n_clamped = this%n_clamped + 1
+            n_clamp = n_clamp + 1
           end if
-          call irregular_harmonics(d, 2*this%lay%order, this%ih)
-          call pair_block_grouped(this%lay, d, this%ih, this%y, this%gr)
+          call irregular_harmonics(d, 2*this%lay%order, ih)
+          call pair_block_grouped(this%lay, d, ih, yw, gr)
           do x = 1, 4
             if (hi(x) < lo(x)) cycle
             do yr = 1, 4
               if (hi(yr) < lo(yr)) cycle
               if (yr >= x) then
                 this%k(ks(yr, 2):ks(yr, 2) + hi(yr) - lo(yr), ks(x, 1):ks(x, 1) + hi(x) - lo(x)) = &
-                  this%gr(lo(yr):hi(yr), lo(x):hi(x))
+                  gr(lo(yr):hi(yr), lo(x):hi(x))
               else
                 this%k(ks(x, 1):ks(x, 1) + hi(x) - lo(x), ks(yr, 2):ks(yr, 2) + hi(yr) - lo(yr)) = &
-                  transpose(this%gr(lo(yr):hi(yr), lo(x):hi(x)))
+                  transpose(gr(lo(yr):hi(yr), lo(x):hi(x)))
               end if
             end do
           end do
           do x = 1, 3, 2
             if (hi(x) < lo(x)) cycle
             this%bp(bs(x, 2):bs(x, 2) + hi(x) - lo(x), ps(1):ps(1) + h - 1) = &
-              this%gr(lo(x):hi(x), lo(5):hi(5))
+              gr(lo(x):hi(x), lo(5):hi(5))
             this%bp(bs(x, 1):bs(x, 1) + hi(x) - lo(x), ps(2):ps(2) + h - 1) = &
-              transpose(this%gr(lo(5):hi(5), lo(x):hi(x)))
+              transpose(gr(lo(5):hi(5), lo(x):hi(x)))
           end do
         end do
+      end do
+      !$omp end do
+      deallocate (ih, yw, gr)
+      !$omp end parallel
+      this%n_overlapping = n_over
+      this%n_clamped = n_clamp
+      do i = 1, nsph
+        if (first_coincident(i) > 0) then
+          call fatal_error(error, 'multipole system: spheres '//to_str(i)//' and '// &
+                           to_str(first_coincident(i))//' coincide')
+          this%n = 0
+          return
+        end if
       end do
     end associate
     call system_clock(c1)
@@ -503,6 +524,8 @@ contains
     do j = 1, n6
       this%w6(j, j + 1:n6) = this%w6(j + 1:n6, j)
     end do
+    ! a copy with a permutation, O(N^2): the columns of sphere j by one thread (no sums)
+    !$omp parallel do default(none) shared(this, zeta) private(i, c, cc) schedule(static)
     do j = 1, this%n
       do cc = 1, 6
         do i = 1, this%n
@@ -513,6 +536,7 @@ contains
         end do
       end do
     end do
+    !$omp end parallel do
   end subroutine system_grand_friction
 
   !> Disturbance [U - U_inf; Omega - Omega_inf] (6N) of force-free, torque-free spheres for the
