@@ -19,6 +19,7 @@ module kf_dynamics
   use kf_overlap_rule, only: overlap_rule_t, make_overlap_rule
   use kf_scene_hydro, only: effective_eps_lub
   use kf_ode_system, only: ode_system_t
+  use kf_blas, only: dgemm
   use kf_pair_geometry, only: pair_geometry_t
   use kf_rheology, only: fibre_stresslet_t, elastic_stresslet, shear_observables
   implicit none
@@ -46,6 +47,7 @@ module kf_dynamics
     procedure :: step_begin => dynamics_step_begin
     procedure :: step_accepted => dynamics_step_accepted
     procedure :: step_rejected => dynamics_step_rejected
+    procedure :: jacobian => dynamics_jacobian
     procedure :: stresslet => dynamics_stresslet
   end type dynamics_t
 
@@ -152,6 +154,35 @@ contains
     type(error_t), allocatable, intent(out) :: error
     call this%velocity(y, dydt, error, t)
   end subroutine dynamics_derivative
+
+  !> The Jacobian the linearly implicit steppers use (kf_ode_system `jacobian`):
+  !>   J = G (x) I + mu(y) dF/dr (y),
+  !> the ambient flow's gradient on every bead (exact: v0 is linear), the model's mobility at y
+  !> (`mobility_at`: free after a 'stage' evaluation at y) times the forces' Jacobian (central
+  !> differences, kf_forces `jacobian`). Left out: the change of mu and of the strain
+  !> disturbance C:E with y, and the overlap rule's configuration (exact where the forces
+  !> vanish, no strain acts and no pair overlaps); a W-method keeps its order with any J.
+  !> No velocity evaluation is spent (evaluations = 0).
+  subroutine dynamics_jacobian(this, t, y, jac, evaluations, error)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: t
+    real(wp), intent(in) :: y(:, :)
+    real(wp), intent(out) :: jac(:, :)
+    integer, intent(out) :: evaluations
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: mu(:, :), k(:, :)
+    integer :: n3, i
+    evaluations = 0
+    n3 = size(y)
+    allocate (mu(n3, n3), k(n3, n3))
+    call this%model%mobility_at(y, mu, error)
+    if (allocated(error)) return
+    call this%forces%jacobian(y, k)
+    call dgemm('N', 'N', n3, n3, n3, 1.0_wp, mu, n3, k, n3, 0.0_wp, jac, n3)
+    do i = 1, size(y, 2)
+      jac(3*i - 2:3*i, 3*i - 2:3*i) = jac(3*i - 2:3*i, 3*i - 2:3*i) + this%flow%g
+    end do
+  end subroutine dynamics_jacobian
 
   !> The stepper's hooks go to the hydrodynamic model (the one part that reuses work).
   subroutine dynamics_step_begin(this, t, y, h)

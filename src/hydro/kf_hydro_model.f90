@@ -50,6 +50,7 @@ module kf_hydro_model
     procedure(disturb_i), deferred :: add_strain_disturbance
     procedure(name_i), deferred :: name
     procedure :: mobility_matrix
+    procedure :: mobility_at
     procedure :: velocities
     procedure :: step_begin
     procedure :: step_accepted
@@ -116,6 +117,19 @@ contains
       end do
     end do
   end subroutine mobility_matrix
+
+  !> The full 3N x 3N mobility at r (layout as mobility_matrix), exact at r whatever the model
+  !> reuses in `velocities`. The default prepares at r; a model that knows it is prepared at r
+  !> already may skip that (the linearly implicit stepper asks right after an evaluation at r).
+  subroutine mobility_at(this, r, mu, error)
+    class(hydro_model_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    real(wp), intent(out) :: mu(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    call this%prepare(r, error)
+    if (allocated(error)) return
+    call this%mobility_matrix(mu)
+  end subroutine mobility_at
 
   !> u = mu(r) f + C(r) : e (u is overwritten; no strain term when e is absent) at time t of
   !> the integration (optional: a model that reuses work needs it). The default prepares at r
