@@ -21,9 +21,8 @@ module kf_scene_integrator
   character(len=*), parameter :: tolerance_allowed = 'a number in (0, 1)'
   character(len=*), parameter :: dt_min_allowed = 'a number > 0'
   character(len=*), parameter :: max_steps_allowed = 'an integer >= 1'
-  character(len=*), parameter :: jacobian_steps_allowed = 'an integer in [1, 1000]'
   !> The largest &integrator jacobian_steps.
-  integer, parameter :: jacobian_steps_max = 1000
+  integer, parameter, public :: jacobian_steps_max = 1000
 
   !> &integrator: time stepping.
   type, public :: integrator_params_t
@@ -76,7 +75,7 @@ contains
       'smallest step: a step below it fails the case (step size underflow)')
     call add_r(items, 'integrator.dt_max', p%dt_max, 'a number > dt_min', 'largest step')
     call add_i(items, 'integrator.max_steps', p%max_steps, max_steps_allowed, 'the most steps a case may take')
-    call add_i(items, 'integrator.jacobian_steps', int(p%jacobian_steps, i8), jacobian_steps_allowed, &
+    call add_i(items, 'integrator.jacobian_steps', int(p%jacobian_steps, i8), jacobian_steps_allowed(), &
       'ros34pw2: accepted steps a Jacobian is kept (1: a new one at every step); ignored by the others')
   end subroutine integrator_items
 
@@ -114,8 +113,14 @@ contains
       call refuse(error, file, 'integrator', 'max_steps', to_str(p%max_steps), max_steps_allowed); return
     end if
     if (p%jacobian_steps < 1 .or. p%jacobian_steps > jacobian_steps_max) then
-      call refuse(error, file, 'integrator', 'jacobian_steps', to_str(p%jacobian_steps), jacobian_steps_allowed); return
+      call refuse(error, file, 'integrator', 'jacobian_steps', to_str(p%jacobian_steps), jacobian_steps_allowed()); return
     end if
   end subroutine check_integrator
+
+  !> The allowed values of jacobian_steps, in the words of the refusals and the reference.
+  function jacobian_steps_allowed() result(text)
+    character(len=:), allocatable :: text
+    text = 'an integer in [1, '//to_str(jacobian_steps_max)//']'
+  end function jacobian_steps_allowed
 
 end module kf_scene_integrator
