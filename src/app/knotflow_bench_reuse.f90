@@ -22,9 +22,9 @@
 !>              (eps_lub stays 1e-4 unless --eps-lub is given)
 !>   rosenbrock [--config C] [--t-end T] [--model M] [--jacobian-steps K]: the Rosenbrock-W
 !>              stepper ros34pw2 against dopri45 in one run, tolerance 1e-4: with 'stage' and
-!>              'iterative' (multipole; rpy: the one exact path), ros34pw2 'iterative' also with a
-!>              Jacobian kept for K accepted steps (default 4; after a 'stage' evaluation the
-!>              mobility of a new Jacobian costs nothing); per run wall time, steps, rejected,
+!>              'iterative' (multipole; rpy: the one exact path), ros34pw2 'iterative' also with
+!>              the mobility of its Jacobian kept for K steps (&integrator jacobian_steps,
+!>              default 4; after a 'stage' evaluation a new mobility costs nothing); per run wall time, steps, rejected,
 !>              velocity evaluations (per unit time), Jacobians, and the largest bead deviation
 !>              at T from dopri45 'stage'; the cost of one Jacobian (after an evaluation at its
 !>              positions, and cold). M: multipole (the study's model, default) or rpy
@@ -456,8 +456,8 @@ contains
 
   !> ros34pw2 against dopri45 (tolerance 1e-4) in one run: dopri45 'stage' first (the
   !> reference), then ros34pw2 'stage', and with the multipole model dopri45 and ros34pw2
-  !> 'iterative'; ros34pw2 'iterative' also with its Jacobian kept for jacobian_steps accepted
-  !> steps (K > 1).
+  !> 'iterative'; ros34pw2 'iterative' also with the mobility of its Jacobian kept for
+  !> jacobian_steps steps (K > 1).
   subroutine run_rosenbrock()
     character(len=9), allocatable :: updates(:)
     real(wp), allocatable :: r_ref(:, :), r(:, :)
@@ -481,9 +481,9 @@ contains
       call run_method('ros34pw2.'//trim(updates(k)), 'ros34pw2', trim(updates(k)), 1, r, wall)
       call compare_with_reference('ros34pw2.'//trim(updates(k)), r, wall, r_ref, wall_ref)
       if (jacobian_steps > 1 .and. trim(updates(k)) /= 'stage') then
-        call run_method('ros34pw2_keep'//to_str(jacobian_steps)//'.'//trim(updates(k)), 'ros34pw2', &
+        call run_method('ros34pw2_mobility'//to_str(jacobian_steps)//'.'//trim(updates(k)), 'ros34pw2', &
                         trim(updates(k)), jacobian_steps, r, wall)
-        call compare_with_reference('ros34pw2_keep'//to_str(jacobian_steps)//'.'//trim(updates(k)), &
+        call compare_with_reference('ros34pw2_mobility'//to_str(jacobian_steps)//'.'//trim(updates(k)), &
                                     r, wall, r_ref, wall_ref)
       end if
     end do

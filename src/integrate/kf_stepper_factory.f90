@@ -34,8 +34,7 @@ contains
       call move_alloc(dopri45, stepper)
     case (method_ros34pw2)
       allocate (ros)
-      call ros%init(params%tolerance, params%dt_initial, params%dt_min, params%dt_max, params%max_steps, &
-                    params%jacobian_steps)
+      call ros%init(params%tolerance, params%dt_initial, params%dt_min, params%dt_max, params%max_steps)
       call move_alloc(ros, stepper)
     case (method_rk4)
       allocate (rk4)

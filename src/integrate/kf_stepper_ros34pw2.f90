@@ -18,14 +18,12 @@
 !> kf_step_controller with the exponents of an estimate ~ h^3. Work per trial step: one LU
 !> factorisation of I/(h gamma) - J (n = size(y)), 4 solves, 3 derivative evaluations plus
 !> f(t, y), which a retry after a rejection reuses. The Jacobian comes from the system's
-!> `jacobian` hook (kf_ode_system) at the start of a step; it is kept for at most
-!> `jacobian_steps` accepted steps (1: a new one at every step) and renewed after a rejection
-!> unless it belongs to the step's own start.
+!> `jacobian` hook (kf_ode_system) at the start of every step (a retry reuses it); a system may
+!> build it from parts it keeps between calls (the dynamics: the mobility, `&integrator
+!> jacobian_steps`).
 !>
 !> Method part of the state (`get_state`, after the common entries):
-!>   reals = [err_prev, jac(:)]            (jac only when kept = 1)
-!>   ints  = [kept, n, age, jacobians]     (n: size of jac; age: accepted steps since it was made)
-!> A Jacobian that the next step would renew is not kept (kept = 0, n = 0).
+!>   reals = [err_prev],   ints = [jacobians]   (Jacobians made)
 module kf_stepper_ros34pw2
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use kf_kinds, only: wp, i8
@@ -66,16 +64,13 @@ module kf_stepper_ros34pw2
     real(wp) :: a(s, s) = 0.0_wp, c(s, s) = 0.0_wp, m(s) = 0.0_wp, e(s) = 0.0_wp, alpha(s) = 0.0_wp
   end type tableau_t
 
-  !> Adaptive ROS34PW2: tolerance, controller, the Jacobian kept between steps and work space.
+  !> Adaptive ROS34PW2: tolerance, controller and work space.
   type, extends(stepper_t), public :: ros34pw2_stepper_t
     private
     real(wp) :: tolerance = 1.0e-4_wp
-    integer :: jacobian_steps = 1
     type(step_controller_t) :: controller
     type(tableau_t) :: tab
     real(wp) :: last_error = 0.0_wp
-    logical :: jac_valid = .false.
-    integer(i8) :: age = 0                   !< accepted steps since the Jacobian was made
     integer(i8) :: jacobians_ = 0            !< Jacobians made
     real(wp), allocatable :: jac(:, :), w(:, :), u(:, :), rhs(:), f0(:, :), fk(:, :), ytmp(:, :), &
                              ynew(:, :), est(:, :)
@@ -91,17 +86,13 @@ module kf_stepper_ros34pw2
 
 contains
 
-  !> Tolerance per step (units of y), initial step size (capped at dt_max), step-size limits, at
-  !> most max_steps accepted steps, and a Jacobian kept for at most jacobian_steps (>= 1, default
-  !> 1) accepted steps; validated by the factory.
-  subroutine ros_init(this, tolerance, dt_initial, dt_min, dt_max, max_steps, jacobian_steps)
+  !> Tolerance per step (units of y), initial step size (capped at dt_max), step-size limits and
+  !> at most max_steps accepted steps; validated by the factory.
+  subroutine ros_init(this, tolerance, dt_initial, dt_min, dt_max, max_steps)
     class(ros34pw2_stepper_t), intent(out) :: this
     real(wp), intent(in) :: tolerance, dt_initial, dt_min, dt_max
     integer(i8), intent(in) :: max_steps
-    integer, intent(in), optional :: jacobian_steps
     this%tolerance = tolerance
-    this%jacobian_steps = 1
-    if (present(jacobian_steps)) this%jacobian_steps = max(1, jacobian_steps)
     this%tab = transformed_tableau()
     call this%controller%init(dt_min, dt_max, embedded_order)
     call this%reset_stepper(min(dt_initial, dt_max), max_steps)
@@ -145,27 +136,17 @@ contains
     ros_jacobians = this%jacobians_
   end function ros_jacobians
 
-  !> Work space for states shaped like y; a kept Jacobian of another size is dropped.
+  !> Work space for states shaped like y.
   subroutine ensure_work(this, y)
     type(ros34pw2_stepper_t), intent(inout) :: this
     real(wp), intent(in) :: y(:, :)
     integer :: n
     n = size(y)
-    if (allocated(this%jac)) then
-      if (size(this%jac, 1) /= n) then
-        deallocate (this%jac)
-        this%jac_valid = .false.
-      end if
-    end if
-    if (.not. allocated(this%jac)) then
-      allocate (this%jac(n, n))
-      this%jac_valid = .false.
-    end if
     if (allocated(this%f0)) then
       if (all(shape(this%f0) == shape(y))) return
-      deallocate (this%w, this%u, this%rhs, this%f0, this%fk, this%ytmp, this%ynew, this%est, this%ipiv)
+      deallocate (this%jac, this%w, this%u, this%rhs, this%f0, this%fk, this%ytmp, this%ynew, this%est, this%ipiv)
     end if
-    allocate (this%w(n, n), this%u(n, s), this%rhs(n), this%ipiv(n))
+    allocate (this%jac(n, n), this%w(n, n), this%u(n, s), this%rhs(n), this%ipiv(n))
     allocate (this%f0, this%fk, this%ytmp, this%ynew, this%est, mold=y)
   end subroutine ensure_work
 
@@ -181,19 +162,18 @@ contains
     type(error_t), allocatable :: lu_error
     real(wp) :: h, err, dt_proposed, dt_new
     integer :: i, j, n, n_bad, evals
-    logical :: last, finite, f0_valid, jac_here
+    logical :: last, finite, fresh
 
     call check_target(t, t_target, error)
     if (allocated(error)) return
     call ensure_work(this, y)
     n = size(y)
     n_bad = 0
-    f0_valid = .false.          ! f(t, y) of the current start (kept over rejected trials)
-    jac_here = .false.          ! the Jacobian was made at the current start
+    fresh = .true.              ! a new start: f(t, y) and the Jacobian to make (kept over retries)
     do while (t < t_target)
       call this%check_max_steps(t, error)
       if (allocated(error)) return
-      if (.not. f0_valid) then
+      if (fresh) then
         call sys%derivative(t, y, this%f0, error)
         if (allocated(error)) return
         call this%add_evaluations(1)
@@ -201,9 +181,6 @@ contains
           call nonfinite_error(error, t)
           return
         end if
-        f0_valid = .true.
-      end if
-      if (.not. this%jac_valid .or. this%age >= this%jacobian_steps) then
         call sys%jacobian(t, y, this%jac, evals, error)
         if (allocated(error)) return
         call this%add_evaluations(evals)
@@ -212,9 +189,7 @@ contains
           return
         end if
         this%jacobians_ = this%jacobians_ + 1
-        this%jac_valid = .true.
-        this%age = 0
-        jac_here = .true.
+        fresh = .false.
       end if
       dt_proposed = this%controller%proposal(this%dt())
       h = dt_proposed
@@ -272,19 +247,15 @@ contains
           return
         end if
         call this%set_dt(this%controller%after_failure(h))
-        if (.not. jac_here) this%jac_valid = .false.
       else if (err <= 1.0_wp) then
         n_bad = 0
         call this%accept_step(sys, t, y, this%ynew, h, last, t_target, monitor)
-        f0_valid = .false.
-        jac_here = .false.
-        this%age = this%age + 1
+        fresh = .true.
         call this%controller%after_accept(err, h, dt_proposed, last .and. h < dt_proposed, dt_new)
         call this%set_dt(dt_new)
       else
         call this%reject_step(sys)
         call this%set_dt(this%controller%after_rejection(err, h))
-        if (.not. jac_here) this%jac_valid = .false.
       end if
       if (t < t_target) then
         call this%controller%check_underflow(this%dt(), t, error)
@@ -293,18 +264,13 @@ contains
     end do
   end subroutine ros_advance
 
-  !> err_prev and the Jacobian the next step would reuse (layout in the module header).
+  !> err_prev and the count of Jacobians (layout in the module header).
   subroutine ros_get_method_state(this, reals, ints)
     class(ros34pw2_stepper_t), intent(in) :: this
     real(wp), allocatable, intent(out) :: reals(:)
     integer(i8), allocatable, intent(out) :: ints(:)
-    if (this%jac_valid .and. this%age < this%jacobian_steps) then
-      reals = [this%controller%memory(), reshape(this%jac, [size(this%jac)])]
-      ints = [1_i8, int(size(this%jac, 1), i8), this%age, this%jacobians_]
-    else
-      reals = [this%controller%memory()]
-      ints = [0_i8, 0_i8, 0_i8, this%jacobians_]
-    end if
+    reals = [this%controller%memory()]
+    ints = [this%jacobians_]
   end subroutine ros_get_method_state
 
   subroutine ros_set_method_state(this, reals, ints, error)
@@ -313,35 +279,14 @@ contains
     integer(i8), intent(in) :: ints(:)
     type(error_t), allocatable, intent(out) :: error
     type(step_controller_t) :: controller
-    integer(i8) :: n
     character(len=*), parameter :: what = 'ros34pw2 stepper state: '
-    if (size(ints) /= 4) then
-      call fatal_error(error, what//to_str(size(ints))//' integers after the common entries (4 expected)')
+    if (size(reals) /= 1 .or. size(ints) /= 1) then
+      call fatal_error(error, what//to_str(size(reals))//' reals and '//to_str(size(ints))// &
+        ' integers after the common entries (1 and 1 expected)')
       return
     end if
-    if (ints(1) /= 0 .and. ints(1) /= 1) then
-      call fatal_error(error, what//'kept = '//to_str(ints(1))//' (must be 0 or 1)')
-      return
-    end if
-    n = 0
-    if (ints(1) == 1) then
-      n = ints(2)
-      if (.not. (n >= 1 .and. n <= 46340)) then
-        call fatal_error(error, what//'Jacobian size '//to_str(n)//' is not valid')
-        return
-      end if
-    end if
-    if (ints(3) < 0 .or. ints(4) < 0) then
-      call fatal_error(error, what//'negative Jacobian age or count')
-      return
-    end if
-    if (size(reals, kind=i8) /= 1 + n*n) then
-      call fatal_error(error, what//to_str(size(reals))//' reals after the common entries ('// &
-        to_str(1 + n*n)//' expected for a kept Jacobian of size '//to_str(n)//')')
-      return
-    end if
-    if (.not. all(ieee_is_finite(reals))) then
-      call fatal_error(error, what//'non-finite values')
+    if (ints(1) < 0) then
+      call fatal_error(error, what//'jacobians = '//to_str(ints(1))//' (must be >= 0)')
       return
     end if
     controller = this%controller
@@ -351,14 +296,7 @@ contains
       return
     end if
     this%controller = controller
-    this%jacobians_ = ints(4)
-    this%jac_valid = ints(1) == 1
-    this%age = ints(3)
-    if (this%jac_valid) then
-      if (allocated(this%jac)) deallocate (this%jac)
-      allocate (this%jac(n, n))
-      this%jac = reshape(reals(2:), [int(n), int(n)])
-    end if
+    this%jacobians_ = ints(1)
   end subroutine ros_set_method_state
 
 end module kf_stepper_ros34pw2

@@ -33,7 +33,7 @@ module kf_scene_integrator
     real(wp) :: dt_min = 1.0e-9_wp                  !< below this the case fails (step underflow)
     real(wp) :: dt_max = 0.5_wp
     integer(i8) :: max_steps = 100000000_i8
-    integer :: jacobian_steps = 1                   !< ros34pw2: accepted steps a Jacobian is kept
+    integer :: jacobian_steps = 1                   !< ros34pw2: Jacobians a kept mobility serves
   end type integrator_params_t
 
   public :: read_integrator_group, integrator_items, check_integrator
@@ -76,7 +76,8 @@ contains
     call add_r(items, 'integrator.dt_max', p%dt_max, 'a number > dt_min', 'largest step')
     call add_i(items, 'integrator.max_steps', p%max_steps, max_steps_allowed, 'the most steps a case may take')
     call add_i(items, 'integrator.jacobian_steps', int(p%jacobian_steps, i8), jacobian_steps_allowed(), &
-      'ros34pw2: accepted steps a Jacobian is kept (1: a new one at every step); ignored by the others')
+      'ros34pw2 with update = ''adaptive'' or ''iterative'': steps whose Jacobians share one mobility (the '// &
+      'force Jacobian is new at every step; 1: a new mobility too); ignored otherwise')
   end subroutine integrator_items
 
   !> Check &integrator (`file`: the scene file named in the messages, '' from code).

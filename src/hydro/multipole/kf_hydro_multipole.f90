@@ -130,6 +130,8 @@ module kf_hydro_multipole
     procedure :: name => multipole_name
     procedure :: mobility_matrix => multipole_mobility_matrix
     procedure :: mobility_at => multipole_mobility_at
+    procedure :: mobility_cached => multipole_mobility_cached
+    procedure :: mobility_reusable => multipole_mobility_reusable
     procedure :: friction_matrix => multipole_friction_matrix
     procedure :: velocities => multipole_velocities
     procedure :: pair_cutoff => multipole_pair_cutoff
@@ -370,16 +372,28 @@ contains
     real(wp), intent(in) :: r(:, :)
     real(wp), intent(out) :: mu(:, :)
     type(error_t), allocatable, intent(out) :: error
-    logical :: cached
-    cached = this%n == size(r, 2) .and. allocated(this%r_prepared)
-    if (cached) cached = all(shape(this%r_prepared) == shape(r))
-    if (cached) cached = all(this%r_prepared == r)
-    if (.not. cached) then
+    if (.not. this%mobility_cached(r)) then
       call this%prepare(r, error)
       if (allocated(error)) return
     end if
     mu = this%mu
   end subroutine multipole_mobility_at
+
+  !> Was the last prepare at exactly r (and is its mobility still held)?
+  logical function multipole_mobility_cached(this, r) result(cached)
+    class(multipole_model_t), intent(in) :: this
+    real(wp), intent(in) :: r(:, :)
+    cached = this%n == size(r, 2) .and. allocated(this%r_prepared)
+    if (cached) cached = all(shape(this%r_prepared) == shape(r))
+    if (cached) cached = all(this%r_prepared == r)
+  end function multipole_mobility_cached
+
+  !> The adaptive reuse keeps work across calls and a new mobility costs a factorisation: an
+  !> earlier one may be kept ('stage' prepares at every call, its mobility is at hand).
+  pure logical function multipole_mobility_reusable(this) result(reusable)
+    class(multipole_model_t), intent(in) :: this
+    reusable = this%adaptive
+  end function multipole_mobility_reusable
 
   !> The 6N x 6N generalised friction [F; T] = zeta [U; Omega] (project units, ordering
   !> [U_1, Omega_1, U_2, ...]) at the last prepare, including the lubrication corrections.
