@@ -33,7 +33,7 @@ module kf_scene_integrator
     real(wp) :: dt_min = 1.0e-9_wp                  !< below this the case fails (step underflow)
     real(wp) :: dt_max = 0.5_wp
     integer(i8) :: max_steps = 100000000_i8
-    integer :: jacobian_steps = 1                   !< ros34pw2: Jacobians a kept mobility serves
+    integer :: jacobian_steps = 4                   !< ros34pw2: Jacobians a kept mobility serves
   end type integrator_params_t
 
   public :: read_integrator_group, integrator_items, check_integrator
