@@ -15,6 +15,9 @@
 #   compare: 'stage', 'adaptive' and 'iterative' in one run (t = 0-10) on the trefoil and on a
 #   random self-avoiding chain (N = 60, A = 1.3): docs/accuracy.md, "Exact at every stage by
 #   iteration" (about 25 min of one core)
+#   rosenbrock: the Rosenbrock-W stepper ros34pw2 against dopri45 (t = 0-10, tolerance 1e-4) on
+#   the trefoil with the study's model ('stage' and 'iterative') and with RPY: docs/accuracy.md,
+#   "A linearly implicit stepper" (about 30 min of one core)
 #   case: the whole reference trefoil case (N = 99, t_end = 1000) with the adaptive path
 #   threads: both cores for one case (OpenMP pair loops + OpenBLAS, 1 against 2 threads): one
 #   evaluation at N = 99 and 152, and 'stage' and 'iterative' on the trefoil t = 0-10, into
@@ -52,6 +55,9 @@ for part in "${parts[@]}"; do
       bench velocity_collapse velocity --config inputs/configs/candycane_A1_t250.xyz --t-end 30 --every 4 ;;
     trajectory) bench trajectory_trefoil trajectory --config trefoil --t-end 10 ;;
     speed) bench speed_trefoil speed --config trefoil --t-end 50 ;;
+    rosenbrock)
+      bench rosenbrock_trefoil rosenbrock --config trefoil --t-end 10
+      bench rosenbrock_trefoil_rpy rosenbrock --config trefoil --t-end 10 --model rpy --overlap pair ;;
     compare)
       bench compare_trefoil compare --config trefoil --t-end 10
       bench compare_random60 compare --config random60 --t-end 10 ;;

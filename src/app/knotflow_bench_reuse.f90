@@ -26,6 +26,14 @@
 !>              each with 1 and with 2 threads (OpenMP pair loops and OpenBLAS together; needs
 !>              OPENBLAS_NUM_THREADS unset), the ratios 1 thread / 2 threads, the largest bead
 !>              deviation between the thread counts at T and the load average at every figure
+!>   rosenbrock [--config C] [--t-end T] [--model M] [--jacobian-steps K]: the Rosenbrock-W
+!>              stepper ros34pw2 against dopri45 in one run, tolerance 1e-4: with 'stage' and
+!>              'iterative' (multipole; rpy: the one exact path), ros34pw2 'iterative' also with
+!>              the mobility of its Jacobian kept for K steps (&integrator jacobian_steps,
+!>              default 4; after a 'stage' evaluation a new mobility costs nothing); per run wall time, steps, rejected,
+!>              velocity evaluations (per unit time), Jacobians, and the largest bead deviation
+!>              at T from dopri45 'stage'; the cost of one Jacobian (after an evaluation at its
+!>              positions, and cold). M: multipole (the study's model, default) or rpy
 !>   rigid      [--config C]: the reused part at rigidly moved and at deformed configurations
 !>              (overlap rule pair only: the model's reused part against its exact one, both
 !>              without the dynamics' configuration rules separate and relax)
@@ -44,12 +52,14 @@ program knotflow_bench_reuse
   use kf_scene, only: scene_t
   use kf_scene_hydro, only: overlap_names, overlap_pair, overlap_relax, update_names, update_default, update_stage, &
     update_adaptive, update_iterative
+  use kf_scene_integrator, only: jacobian_steps_max
   use kf_scene_check, only: name_list
   use kf_hydro_limits, only: eps_lub_in_range, eps_lub_range_text
   use kf_chain_shapes, only: build_initial_chain
   use kf_dynamics, only: dynamics_t
   use kf_stepper, only: stepper_t
   use kf_stepper_factory, only: make_stepper
+  use kf_stepper_ros34pw2, only: ros34pw2_stepper_t
   use kf_hydro_model, only: hydro_stats_t
   use kf_hydro_multipole, only: multipole_model_t
   use kf_reuse_check, only: checked_dynamics_t
@@ -65,9 +75,9 @@ program knotflow_bench_reuse
 
   character(len=*), parameter :: program_name = 'knotflow-bench-reuse'
 
-  character(len=:), allocatable :: part, config, overlap, update, table
+  character(len=:), allocatable :: part, config, overlap, update, table, model
   real(wp) :: t_end, eps_lub, tolerance
-  integer :: every
+  integer :: every, jacobian_steps
   logical :: omp_set
 
   ! The OpenMP pair loops get the BLAS's thread count (OPENBLAS_NUM_THREADS=1: one core; kf_blas_threads).
@@ -92,9 +102,11 @@ program knotflow_bench_reuse
     call run_stiffness()
   case ('threads')
     call run_threads()
+  case ('rosenbrock')
+    call run_rosenbrock()
   case default
     call die(program_name, "unknown part '"//part//"' (allowed: velocity, trajectory, speed, compare, scaling, "// &
-             "overlaps, rigid, stiffness, threads)", 2)
+             "overlaps, rigid, stiffness, threads, rosenbrock)", 2)
   end select
 
 contains
@@ -105,9 +117,9 @@ contains
     if (command_argument_count() < 1) call die(program_name, 'usage: knotflow-bench-reuse velocity|trajectory|speed|scaling [options]', 2)
     part = argument(1)
     call standard_option(program_name, part, 'usage: knotflow-bench-reuse velocity|trajectory|speed|compare|'// &
-      'overlaps|scaling|rigid|stiffness|threads [--config trefoil|random60|coil|FILE] [--t-end T] [--every K]'// &
+      'overlaps|scaling|rigid|stiffness|threads|rosenbrock [--config trefoil|random60|coil|FILE] [--t-end T] [--every K]'// &
       ' [--eps-lub E] [--overlap RULE (one of '//name_list(overlap_names)//')] [--update U] [--tolerance TOL]'// &
-      ' [--table FILE]'//new_line('a')// &
+      ' [--table FILE] [--model multipole|rpy] [--jacobian-steps K]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
       'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).')
     config = 'trefoil'
@@ -118,6 +130,8 @@ contains
     update = update_default
     table = ''
     tolerance = 1.0e-4_wp
+    model = 'multipole'
+    jacobian_steps = 4
     k = 2
     do while (k <= command_argument_count())
       arg = argument(k)
@@ -147,6 +161,15 @@ contains
           call die(program_name, '--tolerance '//trim(val)//': expected a number in (0, 1)', 2)
       case ('--table')
         table = trim(val)
+      case ('--model')
+        model = trim(val)
+        if (model /= 'multipole' .and. model /= 'rpy') &
+          call die(program_name, '--model '//model//': allowed values are multipole, rpy', 2)
+      case ('--jacobian-steps')
+        read (val, *, iostat=ios) jacobian_steps
+        if (ios /= 0 .or. jacobian_steps < 1 .or. jacobian_steps > jacobian_steps_max) &
+          call die(program_name, '--jacobian-steps '//trim(val)//': expected an integer in [1, '// &
+                   to_str(jacobian_steps_max)//']', 2)
       case ('--every')
         read (val, *, iostat=ios) every
         if (ios /= 0 .or. every < 1) call die(program_name, '--every '//trim(val)//': expected an integer >= 1', 2)
@@ -173,7 +196,7 @@ contains
     real(wp), allocatable, intent(out) :: r(:, :)
     type(error_t), allocatable :: error
     real(wp) :: rot(3, 3)
-    scene%hydro%model = 'multipole'
+    scene%hydro%model = model
     scene%hydro%order = 2
     scene%hydro%lubrication = .true.
     scene%hydro%update = update
@@ -357,7 +380,7 @@ contains
   !> Both cores for one case: 1 and 2 threads (OpenMP pair loops and BLAS) on one evaluation
   !> and on a window of 'stage' and 'iterative' (module header, part threads).
   subroutine run_threads()
-    character(len=*), parameter :: modes(2) = [character(len=9) :: 'stage', 'iterative']
+    character(len=*), parameter :: modes(2) = [character(len=9) :: update_stage, update_iterative]
     character(len=*), parameter :: shapes(2) = [character(len=9) :: 'trefoil', 'candycane']
     real(wp) :: wall(2), asm(2), fac(2), lub(2)
     real(wp), allocatable :: r1(:, :), r2(:, :)
@@ -585,6 +608,127 @@ contains
       if (k == 2) call print_stats(update_adaptive//'.', dyn%hydro_statistics())
     end do
   end subroutine run_overlaps
+
+  !> ros34pw2 against dopri45 (tolerance 1e-4) in one run: dopri45 'stage' first (the
+  !> reference), then ros34pw2 'stage', and with the multipole model dopri45 and ros34pw2
+  !> 'iterative'; ros34pw2 'iterative' also with the mobility of its Jacobian kept for
+  !> jacobian_steps steps (K > 1).
+  subroutine run_rosenbrock()
+    character(len=9), allocatable :: updates(:)
+    real(wp), allocatable :: r_ref(:, :), r(:, :)
+    real(wp) :: wall_ref, wall
+    integer :: k
+    call header()
+    write (output_unit, '(a)') 'model = '//model
+    write (output_unit, '(a)') 'jacobian_steps = '//to_str(jacobian_steps)
+    if (model == 'multipole') then
+      updates = [character(len=9) :: update_stage, update_iterative]
+    else
+      updates = [character(len=9) :: update_stage]
+    end if
+    call jacobian_cost()
+    call run_method('dopri45.stage', 'dopri45', update_stage, 1, r_ref, wall_ref)
+    do k = 1, size(updates)
+      if (k > 1) then
+        call run_method('dopri45.'//trim(updates(k)), 'dopri45', trim(updates(k)), 1, r, wall)
+        call compare_with_reference('dopri45.'//trim(updates(k)), r, wall, r_ref, wall_ref)
+      end if
+      call run_method('ros34pw2.'//trim(updates(k)), 'ros34pw2', trim(updates(k)), 1, r, wall)
+      call compare_with_reference('ros34pw2.'//trim(updates(k)), r, wall, r_ref, wall_ref)
+      if (jacobian_steps > 1 .and. trim(updates(k)) /= update_stage) then
+        call run_method('ros34pw2_mobility'//to_str(jacobian_steps)//'.'//trim(updates(k)), 'ros34pw2', &
+                        trim(updates(k)), jacobian_steps, r, wall)
+        call compare_with_reference('ros34pw2_mobility'//to_str(jacobian_steps)//'.'//trim(updates(k)), &
+                                    r, wall, r_ref, wall_ref)
+      end if
+    end do
+    write (output_unit, '(a)') 'loadavg_end = '//loadavg()
+  end subroutine run_rosenbrock
+
+  !> The wall-time ratio and the largest bead deviation of a run (r, wall) from the reference.
+  subroutine compare_with_reference(label, r, wall, r_ref, wall_ref)
+    character(len=*), intent(in) :: label
+    real(wp), intent(in) :: r(:, :), wall, r_ref(:, :), wall_ref
+    write (output_unit, '(a)') label//'.ratio_wall_dopri45_stage_over_this = '//to_str(wall_ref/wall, '(f8.3)')
+    write (output_unit, '(a)') label//'.deviation_vs_dopri45_stage = '//to_str(max_bead_deviation(r, r_ref), '(es10.3)')
+  end subroutine compare_with_reference
+
+  !> One integration of the configuration to t_end (tolerance 1e-4) with `method` and `upd`:
+  !> its figures under `label`; r the final positions.
+  subroutine run_method(label, method, upd, keep, r, wall)
+    character(len=*), intent(in) :: label, method, upd
+    integer, intent(in) :: keep
+    real(wp), allocatable, intent(out) :: r(:, :)
+    real(wp), intent(out) :: wall
+    type(scene_t) :: scene
+    type(dynamics_t) :: dyn
+    class(stepper_t), allocatable :: integ
+    type(error_t), allocatable :: error
+    real(wp) :: t, w0
+    call study_scene(config, 1.0e-4_wp, upd, scene, r)
+    if (eps_lub < 0.0_wp) scene%hydro%eps_lub = 1.0e-4_wp
+    scene%integrator%method = method
+    scene%integrator%jacobian_steps = keep
+    call dyn%init(scene, size(r, 2), error)
+    if (allocated(error)) call die(program_name, error%message, 2)
+    call make_stepper(scene%integrator, integ, error)
+    if (allocated(error)) call die(program_name, error%message, 2)
+    t = 0.0_wp
+    w0 = wall_seconds()
+    call integ%advance(dyn, t, r, t_end, error)
+    if (allocated(error)) call die(program_name, label//': '//error%message, 2)
+    wall = wall_seconds() - w0
+    write (output_unit, '(a)') label//'.wall_s = '//to_str(wall, '(f10.2)')
+    write (output_unit, '(a)') label//'.steps = '//to_str(integ%steps())
+    write (output_unit, '(a)') label//'.rejected = '//to_str(integ%rejected())
+    write (output_unit, '(a)') label//'.evaluations = '//to_str(dyn%evaluations)
+    write (output_unit, '(a)') label//'.evaluations_per_unit_time = '// &
+      to_str(real(dyn%evaluations, wp)/t_end, '(f10.2)')
+    write (output_unit, '(a)') label//'.mean_dt = '//to_str(t_end/real(max(1_i8, integ%steps()), wp), '(es10.3)')
+    select type (integ)
+    type is (ros34pw2_stepper_t)
+      write (output_unit, '(a)') label//'.jacobians = '//to_str(integ%jacobians())
+    end select
+    if (upd /= update_stage) call print_stats(label//'.', dyn%hydro_statistics())
+  end subroutine run_method
+
+  !> Wall time of one Jacobian of the dynamics at the start configuration: right after a
+  !> 'stage' evaluation there (the mobility cached) and cold (the model prepared first), and of
+  !> one 'stage' evaluation, each the mean of 3.
+  subroutine jacobian_cost()
+    type(scene_t) :: scene
+    type(dynamics_t) :: dyn
+    type(error_t), allocatable :: error
+    real(wp), allocatable :: r(:, :), v(:, :), jac(:, :), r2(:, :)
+    real(wp) :: w0, t_eval, t_cached, t_cold
+    integer :: k, evals
+    call study_scene(config, 1.0e-4_wp, update_stage, scene, r)
+    if (eps_lub < 0.0_wp) scene%hydro%eps_lub = 1.0e-4_wp
+    call dyn%init(scene, size(r, 2), error)
+    if (allocated(error)) call die(program_name, error%message, 2)
+    allocate (v, r2, mold=r)
+    allocate (jac(size(r), size(r)))
+    t_eval = 0.0_wp
+    t_cached = 0.0_wp
+    t_cold = 0.0_wp
+    do k = 1, 3
+      w0 = wall_seconds()
+      call dyn%velocity(r, v, error)
+      t_eval = t_eval + (wall_seconds() - w0)/3.0_wp
+      w0 = wall_seconds()
+      call dyn%jacobian(0.0_wp, r, jac, evals, error)
+      t_cached = t_cached + (wall_seconds() - w0)/3.0_wp
+      r2 = r
+      r2(1, 1) = r2(1, 1) + 1.0e-3_wp*k
+      w0 = wall_seconds()
+      call dyn%jacobian(0.0_wp, r2, jac, evals, error)
+      t_cold = t_cold + (wall_seconds() - w0)/3.0_wp
+      if (allocated(error)) call die(program_name, error%message, 2)
+    end do
+    write (output_unit, '(a)') 'stage_evaluation_s = '//to_str(t_eval, '(f10.4)')
+    write (output_unit, '(a)') 'jacobian_after_evaluation_s = '//to_str(t_cached, '(f10.4)')
+    write (output_unit, '(a)') 'jacobian_cold_s = '//to_str(t_cold, '(f10.4)')
+  end subroutine jacobian_cost
 
   !> Velocities from the adaptive model's last many-body part reused as it is at rr.
   subroutine reused(fast, rr, vv)

@@ -5,7 +5,7 @@ module kf_blas
   implicit none
   private
 
-  public :: dpotrf, dpotrs, dpotri, dsyev, dtrsm, dtrsv, dgemm, dsyrk, dgemv, dsymv
+  public :: dpotrf, dpotrs, dpotri, dsyev, dtrsm, dtrsv, dgemm, dsyrk, dgemv, dsymv, dgetrf, dgetrs
 
   interface
     subroutine dpotrf(uplo, n, a, lda, info)
@@ -85,6 +85,22 @@ module kf_blas
       real(wp), intent(in) :: alpha, beta, a(lda, *), x(*)
       real(wp), intent(inout) :: y(*)
     end subroutine dsymv
+    subroutine dgetrf(m, n, a, lda, ipiv, info)
+      import :: wp
+      integer, intent(in) :: m, n, lda
+      real(wp), intent(inout) :: a(lda, *)
+      integer, intent(out) :: ipiv(*)
+      integer, intent(out) :: info
+    end subroutine dgetrf
+    subroutine dgetrs(trans, n, nrhs, a, lda, ipiv, b, ldb, info)
+      import :: wp
+      character(len=1), intent(in) :: trans
+      integer, intent(in) :: n, nrhs, lda, ldb
+      real(wp), intent(in) :: a(lda, *)
+      integer, intent(in) :: ipiv(*)
+      real(wp), intent(inout) :: b(ldb, *)
+      integer, intent(out) :: info
+    end subroutine dgetrs
   end interface
 
 end module kf_blas

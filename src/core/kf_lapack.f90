@@ -2,12 +2,12 @@
 module kf_lapack
   use kf_kinds, only: wp
   use kf_strings, only: to_str
-  use kf_blas, only: dpotrf, dpotrs, dpotri, dsyev
+  use kf_blas, only: dpotrf, dpotrs, dpotri, dsyev, dgetrf, dgetrs
   use kf_error, only: error_t, fatal_error
   implicit none
   private
 
-  public :: cholesky_factor, cholesky_solve, cholesky_invert, symmetric_eigenvalues
+  public :: cholesky_factor, cholesky_solve, cholesky_invert, symmetric_eigenvalues, lu_factor, lu_solve
 
   !> Solve A X = B (B a matrix or a vector) given the factor from cholesky_factor.
   interface cholesky_solve
@@ -84,5 +84,30 @@ contains
       a(1:i - 1, i) = a(i, 1:i - 1)
     end do
   end subroutine cholesky_invert
+
+  !> LU factorisation with partial pivoting P A = L U of the square matrix a, in place (LAPACK
+  !> dgetrf); ipiv(size(a, 1)) receives the pivots. A singular matrix is an error.
+  subroutine lu_factor(a, ipiv, error, what)
+    real(wp), intent(inout) :: a(:, :)
+    integer, intent(out) :: ipiv(:)
+    type(error_t), allocatable, intent(out) :: error
+    character(len=*), intent(in) :: what   !< name of the matrix, for the message
+    integer :: info
+    call dgetrf(size(a, 1), size(a, 2), a, size(a, 1), ipiv, info)
+    if (info > 0) then
+      call fatal_error(error, 'LU factorisation of the '//what//' failed: matrix singular (pivot '//to_str(info)//')')
+    else if (info < 0) then
+      call fatal_error(error, 'dgetrf: illegal argument '//to_str(info)//' for the '//what)
+    end if
+  end subroutine lu_factor
+
+  !> Solve A x = b for one right-hand side given the factors from lu_factor; b is overwritten by x.
+  subroutine lu_solve(factor, ipiv, b)
+    real(wp), intent(in) :: factor(:, :)
+    integer, intent(in) :: ipiv(:)
+    real(wp), intent(inout) :: b(:)
+    integer :: info
+    call dgetrs('N', size(factor, 1), 1, factor, size(factor, 1), ipiv, b, size(b), info)
+  end subroutine lu_solve
 
 end module kf_lapack

@@ -22,6 +22,7 @@ module kf_dynamics
   use kf_overlap_rule, only: overlap_rule_t
   use kf_scene_hydro, only: effective_eps_lub
   use kf_ode_system, only: ode_system_t
+  use kf_blas, only: dgemm
   use kf_pair_geometry, only: pair_geometry_t
   use kf_rheology, only: fibre_stresslet_t, elastic_stresslet, shear_observables
   implicit none
@@ -41,6 +42,9 @@ module kf_dynamics
     real(wp), allocatable, private :: f(:, :)     !< work: forces of the last evaluation
     real(wp), allocatable, private :: u(:, :)     !< work: mu F + C:E of the last evaluation
     real(wp), allocatable, private :: rh(:, :)    !< work: the separated configuration
+    integer, private :: mobility_steps = 1        !< Jacobians a kept mobility serves (&integrator jacobian_steps)
+    integer, private :: mobility_uses = 0         !< Jacobians the kept mobility has served
+    real(wp), allocatable, private :: mu(:, :)    !< the mobility of the Jacobian
   contains
     procedure :: init => dynamics_init
     procedure :: velocity => dynamics_velocity
@@ -49,6 +53,7 @@ module kf_dynamics
     procedure :: step_begin => dynamics_step_begin
     procedure :: step_accepted => dynamics_step_accepted
     procedure :: step_rejected => dynamics_step_rejected
+    procedure :: jacobian => dynamics_jacobian
     procedure :: stresslet => dynamics_stresslet
     procedure :: compute_forces => dynamics_compute_forces
     procedure :: flow_velocity => dynamics_flow_velocity
@@ -75,6 +80,8 @@ contains
       effective_eps_lub(scene%hydro, scene%integrator%tolerance), scene%hydro%overlap_time, this%overlap, error)
     if (allocated(error)) return
     this%n = n_beads
+    this%mobility_steps = scene%integrator%jacobian_steps
+    this%mobility_uses = 0
     this%pair_cutoff = max(this%forces%pair_range(), this%model%pair_cutoff())
     allocate (this%f(3, n_beads), this%u(3, n_beads), this%rh(3, n_beads))
   end subroutine dynamics_init
@@ -210,6 +217,51 @@ contains
     type(error_t), allocatable, intent(out) :: error
     call this%velocity(y, dydt, error, t)
   end subroutine dynamics_derivative
+
+  !> The Jacobian the linearly implicit steppers use (kf_ode_system `jacobian`):
+  !>   J = G (x) I + mu dF/dr (y),
+  !> the ambient flow's gradient on every bead (exact: v0 is linear) and the forces' Jacobian at y
+  !> (kf_forces `jacobian`) times a mobility: the model's at y (`mobility_at`: free after a
+  !> 'stage' evaluation at y), or, where the model allows it (`mobility_reusable`: 'adaptive',
+  !> 'iterative', whose new mobility costs a factorisation) and it is not at hand, the one of an
+  !> earlier call, kept for &integrator jacobian_steps calls in all. Left out: the change of mu
+  !> and of the strain disturbance C:E with y, and the overlap rule's configuration (exact where
+  !> the forces vanish, no strain acts and no pair overlaps); a W-method keeps its order with
+  !> any J. No velocity evaluation is spent (evaluations = 0).
+  subroutine dynamics_jacobian(this, t, y, jac, evaluations, error)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: t
+    real(wp), intent(in) :: y(:, :)
+    real(wp), intent(out) :: jac(:, :)
+    integer, intent(out) :: evaluations
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: k(:, :)
+    integer :: n3, i
+    logical :: renew
+    evaluations = 0
+    n3 = size(y)
+    renew = .not. allocated(this%mu)
+    if (.not. renew) renew = size(this%mu, 1) /= n3
+    if (.not. renew) renew = this%mobility_uses >= this%mobility_steps .or. .not. this%model%mobility_reusable() &
+                             .or. this%model%mobility_cached(y)
+    if (renew) then
+      if (allocated(this%mu)) deallocate (this%mu)
+      allocate (this%mu(n3, n3))
+      call this%model%mobility_at(y, this%mu, error)
+      if (allocated(error)) then
+        deallocate (this%mu)
+        return
+      end if
+      this%mobility_uses = 0
+    end if
+    this%mobility_uses = this%mobility_uses + 1
+    allocate (k(n3, n3))
+    call this%forces%jacobian(y, k)
+    call dgemm('N', 'N', n3, n3, n3, 1.0_wp, this%mu, n3, k, n3, 0.0_wp, jac, n3)
+    do i = 1, size(y, 2)
+      jac(3*i - 2:3*i, 3*i - 2:3*i) = jac(3*i - 2:3*i, 3*i - 2:3*i) + this%flow%g
+    end do
+  end subroutine dynamics_jacobian
 
   !> The stepper's hooks go to the hydrodynamic model (the one part that reuses work).
   subroutine dynamics_step_begin(this, t, y, h)

@@ -33,6 +33,7 @@ module kf_forces
     procedure :: init => forces_init
     procedure :: compute => forces_compute
     procedure :: energy => forces_energy
+    procedure :: jacobian => forces_jacobian
     procedure :: pair_range
   end type forces_t
 
@@ -98,6 +99,70 @@ contains
       end do
     end if
   end subroutine forces_compute
+
+  !> k = dF/dr at r(3, N) as a dense 3N x 3N matrix (entry (3(i-1)+a, 3(j-1)+b) = dF_i,a/dr_j,b).
+  !> Springs and bending by central differences (displacements jacobian_step, units of d) with
+  !> beads five apart moved together: a bead's bonded force depends on the beads at most two
+  !> away, so each force change has one moved bead as its source (30 force evaluations of the
+  !> bonded terms); the excluded volume exactly, pair by pair: for x = r_i - r_j, d = |x| <
+  !> ev_range, the force on i, s (ev_range - d) x/d, has the derivative
+  !>   E = s [(ev_range/d - 1)(I - x x^T/d^2) - x x^T/d^2]
+  !> (+E on the diagonal blocks of i and j, -E on the two off-diagonal ones). The external force
+  !> drops out. Symmetric up to the differencing error (the forces derive from a potential).
+  subroutine forces_jacobian(this, r, k)
+    class(forces_t), intent(in) :: this
+    real(wp), intent(in) :: r(:, :)
+    real(wp), intent(out) :: k(:, :)
+    real(wp), parameter :: jacobian_step = 1.0e-5_wp
+    integer, parameter :: stride = 5
+    type(forces_t) :: bonded
+    type(pair_geometry_t) :: pairs
+    real(wp), allocatable :: rp(:, :), fp(:, :), fm(:, :)
+    real(wp) :: x(3), d, e(3, 3), xx(3, 3)
+    integer :: c, a, j, m, n, p, i, b
+    n = size(r, 2)
+    k = 0.0_wp
+    bonded = this
+    bonded%excluded_volume = .false.
+    bonded%external = .false.
+    allocate (rp, fp, fm, mold=r)
+    do c = 1, min(stride, n)
+      do a = 1, 3
+        rp = r
+        rp(a, c:n:stride) = r(a, c:n:stride) + jacobian_step
+        call bonded%compute(rp, fp)
+        rp(a, c:n:stride) = r(a, c:n:stride) - jacobian_step
+        call bonded%compute(rp, fm)
+        fp = (fp - fm)/(2.0_wp*jacobian_step)
+        do j = c, n, stride
+          do m = max(1, j - 2), min(n, j + 2)
+            k(3*m - 2:3*m, 3*(j - 1) + a) = fp(:, m)
+          end do
+        end do
+      end do
+    end do
+    if (.not. this%excluded_volume) return
+    call pairs%build(r, this%ev_range)
+    do p = 1, pairs%size()
+      call pairs%pair(p, i, j)
+      if (abs(j - i) < 2) cycle
+      d = pairs%distance(p)
+      if (.not. (d < this%ev_range .and. d > 0.0_wp)) cycle
+      x = -pairs%separation(p)/d            ! unit vector from j to i
+      do b = 1, 3
+        xx(:, b) = x*x(b)
+      end do
+      e = -this%ev_strength*xx
+      do b = 1, 3
+        e(:, b) = e(:, b) - this%ev_strength*(this%ev_range/d - 1.0_wp)*xx(:, b)
+        e(b, b) = e(b, b) + this%ev_strength*(this%ev_range/d - 1.0_wp)
+      end do
+      k(3*i - 2:3*i, 3*i - 2:3*i) = k(3*i - 2:3*i, 3*i - 2:3*i) + e
+      k(3*j - 2:3*j, 3*j - 2:3*j) = k(3*j - 2:3*j, 3*j - 2:3*j) + e
+      k(3*i - 2:3*i, 3*j - 2:3*j) = k(3*i - 2:3*i, 3*j - 2:3*j) - e
+      k(3*j - 2:3*j, 3*i - 2:3*i) = k(3*j - 2:3*j, 3*i - 2:3*i) - e
+    end do
+  end subroutine forces_jacobian
 
   !> The largest centre distance at which a pair force acts (0 when none is enabled).
   pure real(wp) function pair_range(this)

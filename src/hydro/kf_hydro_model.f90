@@ -52,6 +52,9 @@ module kf_hydro_model
     procedure(disturb_i), deferred :: add_strain_disturbance
     procedure(name_i), deferred :: name
     procedure :: mobility_matrix
+    procedure :: mobility_at
+    procedure :: mobility_cached
+    procedure :: mobility_reusable
     procedure :: velocities
     procedure :: step_begin
     procedure :: step_accepted
@@ -119,6 +122,39 @@ contains
       end do
     end do
   end subroutine mobility_matrix
+
+  !> The full 3N x 3N mobility at r (layout as mobility_matrix), exact at r whatever the model
+  !> reuses in `velocities`. The default prepares at r; a model that knows it is prepared at r
+  !> already may skip that (the linearly implicit stepper asks right after an evaluation at r).
+  subroutine mobility_at(this, r, mu, error)
+    class(hydro_model_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    real(wp), intent(out) :: mu(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    call this%prepare(r, error)
+    if (allocated(error)) return
+    call this%mobility_matrix(mu)
+  end subroutine mobility_at
+
+  !> Is the mobility at r at hand already (`mobility_at` then costs a copy)? Default: no.
+  logical function mobility_cached(this, r)
+    class(hydro_model_t), intent(in) :: this
+    real(wp), intent(in) :: r(:, :)
+    mobility_cached = .false.
+    associate (unused_this => this, unused_r => r)
+    end associate
+  end function mobility_cached
+
+  !> May a user of the mobility (the dynamics' Jacobian) keep an earlier one instead of asking
+  !> `mobility_at` at every configuration? Only where that costs a factorisation and the model
+  !> reuses work across calls itself (so that a resumed run is not bitwise the uninterrupted one
+  !> anyway); default: no.
+  pure logical function mobility_reusable(this)
+    class(hydro_model_t), intent(in) :: this
+    mobility_reusable = .false.
+    associate (unused_this => this)
+    end associate
+  end function mobility_reusable
 
   !> u = mu(r) f + C(r) : e (u is overwritten; no strain term when e is absent) at time t of
   !> the integration (optional: a model that reuses work needs it). The default prepares at r

@@ -11,6 +11,13 @@
 !>    the next trial starts again from the same (t, y).
 !> A step abandoned with an error (of the system, non-finite values in rk4) gets neither
 !> `step_accepted` nor `step_rejected`. The defaults do nothing.
+!>
+!> The linearly implicit steppers (kf_stepper_ros34pw2) also ask for `jacobian(t, y, jac,
+!> evaluations, error)`: an approximation of df/dy at (t, y) as a dense n x n matrix, n =
+!> size(y), the entries of y taken column by column (y(a, i) is entry 3(i - 1) + a for 3-row
+!> states). Any approximation keeps a W-method's order; how well it captures the stiff part
+!> sets its stability. The default is central differences of `derivative` (2n evaluations,
+!> reported in `evaluations`); a system that knows its stiff part better overrides it.
 module kf_ode_system
   use kf_kinds, only: wp
   use kf_error, only: error_t
@@ -26,6 +33,8 @@ module kf_ode_system
     procedure :: step_accepted => ode_step_accepted
     !> The trial step was rejected.
     procedure :: step_rejected => ode_step_rejected
+    !> An approximation of df/dy at (t, y) (default: central differences of derivative).
+    procedure :: jacobian => ode_jacobian
   end type ode_system_t
 
   abstract interface
@@ -63,5 +72,37 @@ contains
     associate (unused_this => this)
     end associate
   end subroutine ode_step_rejected
+
+  !> jac = df/dy at (t, y) by central differences of `derivative` (step
+  !> cbrt(epsilon) max(1, |y_j|) per entry); evaluations: the 2n derivative calls it made.
+  subroutine ode_jacobian(this, t, y, jac, evaluations, error)
+    class(ode_system_t), intent(inout) :: this
+    real(wp), intent(in) :: t
+    real(wp), intent(in) :: y(:, :)
+    real(wp), intent(out) :: jac(:, :)
+    integer, intent(out) :: evaluations
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: yp(:, :), fp(:, :), fm(:, :)
+    real(wp) :: eps, keep
+    integer :: j, a, i
+    allocate (yp, fp, fm, mold=y)
+    yp = y
+    evaluations = 0
+    do j = 1, size(y)
+      a = modulo(j - 1, size(y, 1)) + 1
+      i = (j - 1)/size(y, 1) + 1
+      keep = yp(a, i)
+      eps = epsilon(1.0_wp)**(1.0_wp/3.0_wp)*max(1.0_wp, abs(keep))
+      yp(a, i) = keep + eps
+      call this%derivative(t, yp, fp, error)
+      if (allocated(error)) return
+      yp(a, i) = keep - eps
+      call this%derivative(t, yp, fm, error)
+      if (allocated(error)) return
+      yp(a, i) = keep
+      evaluations = evaluations + 2
+      jac(:, j) = reshape(fp - fm, [size(y)])/(2.0_wp*eps)
+    end do
+  end subroutine ode_jacobian
 
 end module kf_ode_system

@@ -25,8 +25,8 @@ module kf_step_controller
     real(wp) :: safety = 0.9_wp
     real(wp) :: fac_min = 0.2_wp
     real(wp) :: fac_max = 5.0_wp
-    real(wp) :: alpha = 0.7_wp/5.0_wp     !< PI exponents for a method of order 4 (+1)
-    real(wp) :: beta = 0.4_wp/5.0_wp
+    real(wp) :: alpha = 0.7_wp/5.0_wp     !< PI exponents 0.7/(q + 1), 0.4/(q + 1) for an
+    real(wp) :: beta = 0.4_wp/5.0_wp      !< error estimate ~ h^(q+1) (dopri45: q = 4)
     real(wp) :: err_prev = 1.0e-4_wp      !< scaled error of the last accepted step
   contains
     procedure :: init => controller_init
@@ -45,12 +45,20 @@ module kf_step_controller
 
 contains
 
-  !> Set the step-size limits and forget the error history.
-  subroutine controller_init(this, dt_min, dt_max)
+  !> Set the step-size limits and forget the error history; `order` (default 4, dopri45) is the
+  !> order q of the lower solution of the embedded pair: the error estimate is ~ h^(q+1) and the
+  !> PI exponents are 0.7/(q + 1) and 0.4/(q + 1).
+  subroutine controller_init(this, dt_min, dt_max, order)
     class(step_controller_t), intent(out) :: this
     real(wp), intent(in) :: dt_min, dt_max
+    integer, intent(in), optional :: order
+    integer :: q
+    q = 4
+    if (present(order)) q = order
     this%dt_min = dt_min
     this%dt_max = dt_max
+    this%alpha = 0.7_wp/real(q + 1, wp)
+    this%beta = 0.4_wp/real(q + 1, wp)
   end subroutine controller_init
 
   !> The step size to try next given the current proposal dt (capped at dt_max).

@@ -1,6 +1,6 @@
 !> The time steppers for y(3, N) (kf_ode_system): an abstract type with one `advance` and the
-!> bookkeeping every method shares. The concrete methods are kf_stepper_rk4 and
-!> kf_stepper_dopri45; kf_stepper_factory builds one from the &integrator parameters and alone
+!> bookkeeping every method shares. The concrete methods are kf_stepper_rk4,
+!> kf_stepper_dopri45 and kf_stepper_ros34pw2; kf_stepper_factory builds one from the &integrator parameters and alone
 !> knows their names.
 !>
 !> Contract of `advance(sys, t, y, t_target, error, monitor)`: integrate y from t exactly to

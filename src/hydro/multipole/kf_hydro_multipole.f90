@@ -59,6 +59,7 @@ module kf_hydro_multipole
     real(wp), private :: t_lubrication = 0.0_wp   !< seconds in the lubrication part of the last prepare
     type(pair_blocks_t), private :: pairs
     real(wp), allocatable, private :: mu(:, :)    !< 3N x 3N translational mobility
+    real(wp), allocatable, private :: r_prepared(:, :) !< the positions mu belongs to (valid when n > 0)
     real(wp), allocatable, private :: dist(:, :)  !< 3N x 5 disturbance for the basis strains
     real(wp), allocatable, private :: zt(:, :), x6(:, :) !< 6N x 6N, 6N x 5 friction route work
     real(wp), allocatable, private :: v3(:), w3(:)       !< 3N work
@@ -70,6 +71,8 @@ module kf_hydro_multipole
     procedure :: add_strain_disturbance => multipole_disturbance
     procedure :: name => multipole_name
     procedure :: mobility_matrix => multipole_mobility_matrix
+    procedure :: mobility_at => multipole_mobility_at
+    procedure :: mobility_cached => multipole_mobility_cached
     procedure :: friction_matrix => multipole_friction_matrix
     procedure :: velocities => multipole_velocities
     procedure :: pair_cutoff => multipole_pair_cutoff
@@ -172,6 +175,7 @@ contains
       do j = 1, nb
         this%dist(3*j - 2:3*j, 1:5) = this%x6(6*j - 5:6*j - 3, 1:5)
       end do
+      this%r_prepared = r
       this%n = nb
       return
     end if
@@ -187,6 +191,7 @@ contains
       end do
       this%dist(3*j - 2:3*j, 1:5) = this%x6(6*j - 5:6*j - 3, 1:5)
     end do
+    this%r_prepared = r
     this%n = nb
   end subroutine multipole_prepare
 
@@ -273,6 +278,29 @@ contains
     real(wp), intent(out) :: mu(:, :)
     mu = this%mu
   end subroutine multipole_mobility_matrix
+
+  !> The 3N x 3N mobility at r: the cached one when the last prepare was at exactly r (as after
+  !> a 'stage' evaluation there), else prepare at r first.
+  subroutine multipole_mobility_at(this, r, mu, error)
+    class(multipole_model_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    real(wp), intent(out) :: mu(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    if (.not. this%mobility_cached(r)) then
+      call this%prepare(r, error)
+      if (allocated(error)) return
+    end if
+    mu = this%mu
+  end subroutine multipole_mobility_at
+
+  !> Was the last prepare at exactly r (and is its mobility still held)?
+  logical function multipole_mobility_cached(this, r) result(cached)
+    class(multipole_model_t), intent(in) :: this
+    real(wp), intent(in) :: r(:, :)
+    cached = this%n == size(r, 2) .and. allocated(this%r_prepared)
+    if (cached) cached = all(shape(this%r_prepared) == shape(r))
+    if (cached) cached = all(this%r_prepared == r)
+  end function multipole_mobility_cached
 
   !> The 6N x 6N generalised friction [F; T] = zeta [U; Omega] (project units, ordering
   !> [U_1, Omega_1, U_2, ...]) at the last prepare, including the lubrication corrections.

@@ -84,6 +84,7 @@ module kf_hydro_multipole_adaptive
     procedure :: step_begin => adaptive_step_begin
     procedure :: statistics => adaptive_statistics
     procedure :: reused_velocities => adaptive_reused_velocities
+    procedure :: mobility_reusable => adaptive_mobility_reusable
   end type multipole_adaptive_t
 
 contains
@@ -514,5 +515,14 @@ contains
     if (this%w(2) /= 0.0_wp) call dsymv('L', n6, this%w(2), this%zh2, n6, xv, 1, 1.0_wp, y, 1)
     if (this%lubrication) call this%blocks%apply(xv, y)
   end subroutine operator_apply
+
+  !> It reuses work across calls and a new mobility costs a factorisation: a user of the
+  !> mobility (the dynamics' Jacobian) may keep an earlier one.
+  pure logical function adaptive_mobility_reusable(this) result(reusable)
+    class(multipole_adaptive_t), intent(in) :: this
+    reusable = .true.
+    associate (unused_this => this)
+    end associate
+  end function adaptive_mobility_reusable
 
 end module kf_hydro_multipole_adaptive

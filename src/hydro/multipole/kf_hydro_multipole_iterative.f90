@@ -80,6 +80,7 @@ module kf_hydro_multipole_iterative
     procedure :: setup => iterative_setup
     procedure :: velocities => iterative_velocities
     procedure :: statistics => iterative_statistics
+    procedure :: mobility_reusable => iterative_mobility_reusable
   end type multipole_iterative_t
 
 contains
@@ -404,5 +405,14 @@ contains
       end if
     end do
   end subroutine gmres
+
+  !> Its calls never prepare, so a mobility costs a factorisation; its reference is rebuilt after
+  !> a resume anyway: an earlier mobility may be kept.
+  pure logical function iterative_mobility_reusable(this) result(reusable)
+    class(multipole_iterative_t), intent(in) :: this
+    reusable = .true.
+    associate (unused_this => this)
+    end associate
+  end function iterative_mobility_reusable
 
 end module kf_hydro_multipole_iterative
