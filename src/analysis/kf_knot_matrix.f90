@@ -43,24 +43,33 @@ contains
   !> K(N, N) for r(3, N); K(i+1, j+1) holds the subchain i..j. Entries not computed are NaN.
   !> With part/nparts only the subchains number part, part+nparts, ... (0-based, in the order
   !> i ascending, then j ascending) are computed: the others are NaN (for parallel farming).
-  subroutine knot_matrix(r, closures, seed, min_length, kmat, error, part, nparts)
+  !> With stride > 1 only the subchains with i and j on the grid 0, stride, 2 stride, ... (and
+  !> j = N - 1) are computed (the others NaN); each computed entry equals the full matrix's, its
+  !> stream being the subchain's own.
+  subroutine knot_matrix(r, closures, seed, min_length, kmat, error, part, nparts, stride)
     real(wp), intent(in) :: r(:, :)
     integer, intent(in) :: closures
     integer(i8), intent(in) :: seed
     integer, intent(in) :: min_length
     real(wp), intent(out) :: kmat(:, :)
     type(error_t), allocatable, intent(out) :: error
-    integer, intent(in), optional :: part, nparts
+    integer, intent(in), optional :: part, nparts, stride
     type(knot_stats_t) :: st
-    integer :: n, i, j, idx, p, np
+    integer :: n, i, j, idx, p, np, step
     n = size(r, 2)
     p = 0
     np = 1
+    step = 1
     if (present(part)) p = part
     if (present(nparts)) np = nparts
+    if (present(stride)) step = stride
     kmat = ieee_value(0.0_wp, ieee_quiet_nan)
     if (min_length < 2) then
       call fatal_error(error, 'knot matrix: min_length must be >= 2, got '//to_str(min_length))
+      return
+    end if
+    if (step < 1) then
+      call fatal_error(error, 'knot matrix: stride must be >= 1, got '//to_str(step))
       return
     end if
     if (size(kmat, 1) /= n .or. size(kmat, 2) /= n) then
@@ -71,6 +80,7 @@ contains
     do i = 0, n - 2
       do j = i + 1, n - 1
         if (j - i + 1 < min_length) cycle
+        if (modulo(i, step) /= 0 .or. (modulo(j, step) /= 0 .and. j /= n - 1)) cycle
         idx = idx + 1
         if (modulo(idx, np) /= p) cycle
         call analyse_closures(r(:, i + 1:j + 1), closures, seed, st, error, stream=subchain_stream(i, j))

@@ -20,11 +20,7 @@ program knotflow
                    write_file_atomic, ignore_file_size_signal
   use kf_h5, only: h5_initialize, h5_finalize
   use kf_case_runner, only: case_path
-  use kf_case_match, only: check_reusable
-  use kf_resources, only: check_resources, physical_memory
-  use kf_dynamics, only: dynamics_t
-  use kf_stepper, only: stepper_t
-  use kf_stepper_factory, only: make_stepper
+  use kf_scene_run, only: check_case_resources, check_existing_cases
   use kf_comm, only: comm_t, comm_init, comm_finalize
   use kf_task_farm, only: run_task_farm, task_result_t, task_ok, task_failed, task_skipped, task_stopped
   use kf_signals, only: catch_stop_signals, stop_signal, signal_name, exit_resubmit
@@ -82,7 +78,7 @@ program knotflow
   call read_sweep(scene_file, sw, error)
   if (allocated(error)) call stop_all(error%message, 2)
   ! What a case needs (memory, frames): refuse what cannot fit before anything is written.
-  if (me == 0) call check_case_resources(error)
+  if (me == 0) call check_case_resources(scene_file, sw, error)
   call agree(error)
   if (allocated(error)) call stop_all(error%message, 2)
   directory = trim(sw%base%output%directory)
@@ -107,7 +103,7 @@ program knotflow
                                  ''': '//error%message, 2)
   ! Existing case files are reused only when they hold the requested scene: refuse otherwise,
   ! before any case runs.
-  if (me == 0) call check_existing_cases(error)
+  if (me == 0) call check_existing_cases(sw, error)
   call agree(error)
   if (allocated(error)) call stop_all(trim(scene_file)//': '//error%message, 2)
 
@@ -224,55 +220,6 @@ contains
     type(scene_t) :: sc
     call sw%case_scene(1, sc, name)
   end function single_case_name
-
-  !> The resources of one case (kf_resources), and the models built once for it (they refuse
-  !> what they cannot compute): the listed parameters of a sweep (A,
-  !> orientation, seed) change neither the number of beads nor the sizes, so case 1 stands for
-  !> all.
-  subroutine check_case_resources(err)
-    type(error_t), allocatable, intent(out) :: err
-    type(scene_t) :: sc
-    character(len=:), allocatable :: name
-    integer :: n_beads
-    call sw%case_scene(1, sc, name)
-    n_beads = sc%chain%n_beads   ! resolved when the scene was read
-    call check_resources(sc, n_beads, physical_memory(), err)
-    if (allocated(err)) return
-    ! What the models themselves reject is refused here too, not by every case at run time.
-    block
-      type(dynamics_t) :: dyn
-      class(stepper_t), allocatable :: integ
-      call dyn%init(sc, n_beads, err)
-      if (.not. allocated(err)) call make_stepper(sc%integrator, integ, err)
-      if (allocated(err)) err%message = trim(scene_file)//': the models reject the scene: '//err%message
-    end block
-  end subroutine check_case_resources
-
-  !> Every finished or interrupted case file of the sweep must hold the requested scene
-  !> (kf_case_match): the first mismatch in full, the others by name.
-  subroutine check_existing_cases(err)
-    type(error_t), allocatable, intent(out) :: err
-    type(error_t), allocatable :: mismatch
-    type(scene_t) :: sc
-    character(len=:), allocatable :: name, others
-    integer :: k, nothers
-    others = ''
-    nothers = 0
-    do k = 1, sw%n_cases()
-      call sw%case_scene(k, sc, name)
-      call check_reusable(case_path(sc), sc, mismatch)
-      if (.not. allocated(mismatch)) cycle
-      if (.not. allocated(err)) then
-        call move_alloc(mismatch, err)
-      else
-        nothers = nothers + 1
-        if (nothers <= 10) others = others//merge(', ', '  ', nothers > 1)//case_path(sc)
-        if (nothers == 11) others = others//', ...'
-      end if
-    end do
-    if (nothers > 0) err%message = err%message//' (and '//to_str(nothers)// &
-      ' more case file(s) with another scene: '//trim(adjustl(others))//')'
-  end subroutine check_existing_cases
 
   !> summary.txt (one line per case) and summary.json in the output directory, each written
   !> whole or not at all (kf_fs: write_file_atomic: a new temporary file of a unique name, every

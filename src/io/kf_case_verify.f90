@@ -16,7 +16,7 @@ module kf_case_verify
   implicit none
   private
 
-  public :: case_file_status, verify_case_file, read_frames, read_open_frames
+  public :: case_file_status, verify_case_file, read_frames, read_open_frames, read_observables
 
 contains
 
@@ -240,5 +240,63 @@ contains
       end if
     end do
   end subroutine check_finite_frames
+
+  !> Read the shape observables of the first `nframes` frames of the case file `path`
+  !> (/frames/observables: as many frames as `read_frames` returns): values(nframes, 6) holds
+  !> rg, a, b, c, theta, phi (in this order, one column each) and close_pairs(nframes).
+  !> Refused with an error naming the file and the dataset: missing, unreadable, or shorter than
+  !> `nframes`.
+  subroutine read_observables(path, nframes, values, close_pairs, error)
+    character(len=*), intent(in) :: path
+    integer, intent(in) :: nframes
+    real(wp), allocatable, intent(out) :: values(:, :)
+    integer(i4), allocatable, intent(out) :: close_pairs(:)
+    type(error_t), allocatable, intent(out) :: error
+    character(len=*), parameter :: names(6) = [character(len=5) :: 'rg', 'a', 'b', 'c', 'theta', 'phi']
+    type(h5_file_t) :: file
+    real(wp), allocatable :: column(:)
+    integer(i4), allocatable :: counts(:)
+    integer :: k
+    allocate (values(nframes, 6), close_pairs(nframes))
+    call h5_open_file(file, path, .false., error)
+    if (allocated(error)) return
+    do k = 1, size(names)
+      call read_column('/frames/observables/'//trim(names(k)))
+      if (allocated(error)) exit
+      values(:, k) = column(1:nframes)
+    end do
+    if (.not. allocated(error)) then
+      if (.not. h5_exists(file, '/frames/observables/close_pairs')) then
+        call fatal_error(error, '/frames/observables/close_pairs missing (not a knotflow case file)')
+      else
+        call h5_read(file, '/frames/observables/close_pairs', counts, error)
+      end if
+      if (.not. allocated(error) .and. size(counts) < nframes) call too_short('/frames/observables/close_pairs', &
+                                                                             size(counts))
+      if (.not. allocated(error)) close_pairs = counts(1:nframes)
+    end if
+    call h5_close_file(file)
+    if (allocated(error)) error%message = "case file '"//path//"': "//error%message
+
+  contains
+
+    subroutine read_column(name)
+      character(len=*), intent(in) :: name
+      if (.not. h5_exists(file, name)) then
+        call fatal_error(error, name//' missing (not a knotflow case file)')
+        return
+      end if
+      call h5_read(file, name, column, error)
+      if (.not. allocated(error) .and. size(column) < nframes) call too_short(name, size(column))
+    end subroutine read_column
+
+    subroutine too_short(name, length)
+      character(len=*), intent(in) :: name
+      integer, intent(in) :: length
+      call fatal_error(error, name//' holds '//to_str(length)//' frame(s), fewer than the '//to_str(nframes)// &
+        ' of /frames/positions')
+    end subroutine too_short
+
+  end subroutine read_observables
 
 end module kf_case_verify

@@ -11,7 +11,7 @@ module kf_fs
   private
 
   public :: make_directory, check_writable_directory, check_directory_creatable, parent_directory
-  public :: file_exists, remove_file, lock_directory, lock_case
+  public :: file_exists, remove_file, lock_directory, lock_case, release_locks
   public :: rename_file, move_aside, clear_os_error, os_error_text, ignore_file_size_signal
   public :: write_file_atomic, file_in_use, file_not_writable, copy_file_exclusive, replace_file
 
@@ -425,11 +425,16 @@ contains
   !> run writing into the same directory would otherwise find the case files open (HDF5 file
   !> locking) and take them for corrupt ones. The kernel releases the lock when the process ends,
   !> however it ends (kill -9 included), so a killed run never leaves a stale lock.
-  subroutine lock_directory(dir, error)
+  !> `fds` (optional) receives the lock's descriptor (and -1), for `release_locks` by a caller
+  !> that goes on after the run (the C interface: a Python process runs several scenes).
+  subroutine lock_directory(dir, error, fds)
     character(len=*), intent(in) :: dir
     type(error_t), allocatable, intent(out) :: error
+    integer(c_int), intent(out), optional :: fds(2)
+    integer(c_int) :: fd
     call take_lock(trim(dir)//'/.knotflow.lock', lock_ex, 'another knotflow run is writing into this directory', &
-      error)
+      error, fd)
+    if (present(fds)) fds = [fd, -1_c_int]
   end subroutine lock_directory
 
   !> The locks of a run of one case (a scene without &sweep, e.g. from knotflow --write-scenes),
@@ -437,22 +442,40 @@ contains
   !> single cases may write into the directory at the same time while a sweep or an analysis of
   !> it (which lock it exclusively) may not, and `<dir>/.knotflow.<case>.lock` exclusive, so
   !> that the same case is not run twice at once.
-  subroutine lock_case(dir, case_name, error)
+  !> `fds` (optional) receives the two descriptors (-1 where none was opened), for `release_locks`.
+  subroutine lock_case(dir, case_name, error, fds)
     character(len=*), intent(in) :: dir, case_name
     type(error_t), allocatable, intent(out) :: error
+    integer(c_int), intent(out), optional :: fds(2)
+    integer(c_int) :: fd(2)
+    fd = -1
     call take_lock(trim(dir)//'/.knotflow.lock', lock_sh, 'a knotflow sweep or analysis is using this directory', &
-      error)
+      error, fd(1))
     if (.not. allocated(error)) call take_lock(trim(dir)//'/.knotflow.'//trim(case_name)//'.lock', lock_ex, &
-                                               'another knotflow run is computing case '//trim(case_name)//' here', error)
+                                               'another knotflow run is computing case '//trim(case_name)//' here', &
+                                               error, fd(2))
+    if (present(fds)) fds = fd
   end subroutine lock_case
+
+  !> Release the locks of `lock_directory` or `lock_case` (close their descriptors; -1 is skipped).
+  subroutine release_locks(fds)
+    integer(c_int), intent(in) :: fds(2)
+    integer(c_int) :: rc
+    integer :: k
+    do k = 1, 2
+      if (fds(k) >= 0) rc = c_close(fds(k))
+    end do
+  end subroutine release_locks
 
   !> flock(2) `operation` (without blocking) on `path`, created if missing; the descriptor
   !> stays open on purpose: closing it would release the lock.
-  subroutine take_lock(path, operation, held_by, error)
+  !> `fd` is the descriptor holding the lock (-1 when none is held: it is closed on failure).
+  subroutine take_lock(path, operation, held_by, error, fd)
     character(len=*), intent(in) :: path, held_by
     integer(c_int), intent(in) :: operation
     type(error_t), allocatable, intent(out) :: error
-    integer(c_int) :: fd
+    integer(c_int), intent(out) :: fd
+    integer(c_int) :: rc
     integer :: try
     ! An existing lock file is opened as it is; a missing one is created exclusively
     ! (O_CREAT|O_EXCL), so a dangling link planted under its name never creates a file elsewhere.
@@ -469,6 +492,8 @@ contains
     end if
     if (c_flock(fd, ior(operation, lock_nb)) /= 0) then
       call fatal_error(error, held_by//' (it holds '''//path//'''): wait for it to end, or choose another output directory')
+      rc = c_close(fd)
+      fd = -1
     end if
   end subroutine take_lock
 

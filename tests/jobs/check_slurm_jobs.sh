@@ -58,6 +58,8 @@ mkdir -p "${proj}/tools" && cp -r "${src}/tools/pyproject.toml" "${src}/tools/sr
 cp "${src}/inputs/trefoil_table2.nml" "${src}/inputs/candycane.nml" "${src}"/inputs/*_multipole.nml "${proj}/inputs/"
 ln -s "${build}/bin/knotflow" "${proj}/build/bin/knotflow"
 ln -s "${build}/bin/knotflow-analyze" "${proj}/build/bin/knotflow-analyze"
+# the C-interface library the tools call (knot cores in knotflow-study; tests/jobs/project_copy.sh)
+mkdir -p "${proj}/build/lib" && ln -s "${build}/lib/libknotflow_capi.so" "${proj}/build/lib/libknotflow_capi.so"
 chown -R "${user}" "${proj}" "${work}/home"
 as_user() {
   runuser -u "${user}" -- env HOME="${work}/home" SLURM_CONF="${SLURM_CONF}" PATH="/usr/local/bin:/usr/bin:/bin" \

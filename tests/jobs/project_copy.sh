@@ -1,7 +1,8 @@
 # shellcheck shell=bash
 # Shared by the tests of the study's scripts (sourced; defines functions only):
 #   kf_project_copy SRC BUILD WORK   a copy of the project in WORK/project (scripts, the Python
-#                                    tools, links to BUILD's knotflow and knotflow-analyze, and
+#                                    tools, links to BUILD's knotflow, knotflow-analyze and
+#                                    C-interface library (lib/libknotflow_capi.so), and
 #                                    build/venv with this checkout's tools, without a network);
 #                                    sets `proj`; exits 77 (ctest: skipped) when the system's
 #                                    python3 lacks numpy/h5py/matplotlib for the tools
@@ -17,6 +18,10 @@ kf_project_copy() {
   cp -r "${src}/tools/pyproject.toml" "${src}/tools/src" "${proj}/tools/"
   ln -s "${build}/bin/knotflow" "${proj}/build/bin/knotflow"
   ln -s "${build}/bin/knotflow-analyze" "${proj}/build/bin/knotflow-analyze"
+  # the library's C interface, which the tools call for knots and shape (the package `knotflow`
+  # finds it in the checkout's build/lib)
+  mkdir -p "${proj}/build/lib"
+  ln -s "${build}/lib/libknotflow_capi.so" "${proj}/build/lib/libknotflow_capi.so"
   # The Python tools of this checkout in build/venv (as tests/jobs/check_slurm_jobs.sh)
   if ! { /usr/bin/python3 -m venv --system-site-packages "${proj}/build/venv" \
          && "${proj}/build/venv/bin/python" -m pip install -q --no-deps --no-build-isolation --no-index -e "${proj}/tools" \

@@ -103,7 +103,15 @@ def test_interpreter_survives_every_refusal():
                lambda: knotflow.Model('nope'),
                lambda: knotflow.Model(order=-3),
                lambda: knotflow.knotted_fraction(np.zeros((1, 3))),
-               lambda: knotflow.knots(np.eye(3), closures=0)]
+               lambda: knotflow.knots(np.eye(3), closures=0),
+               lambda: knotflow.knot_matrix(np.full((4, 3), np.nan)),
+               lambda: knotflow.knot_matrix(np.eye(3), min_length=-7),
+               lambda: knotflow.knot_core(np.zeros((2, 5))),
+               lambda: knotflow.run_scene('/nonexistent/scene.nml'),
+               lambda: knotflow.scene_cases('/dev/null'),
+               lambda: knotflow.read_case('/nonexistent/case.h5'),
+               lambda: knotflow.read_case('/dev/null'),
+               lambda: knotflow.read_case('/')]
         n = 0
         for call in bad:
             try:
@@ -114,4 +122,4 @@ def test_interpreter_survives_every_refusal():
     """)
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
-    assert done.stdout.strip() == "refused 7"
+    assert done.stdout.strip() == "refused 15"

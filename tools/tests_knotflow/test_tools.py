@@ -2,6 +2,7 @@
 results equal knotflow-analyze's on a case file and the numpy oracle's."""
 
 import importlib.util
+import json
 from pathlib import Path
 
 import h5py
@@ -48,3 +49,37 @@ def test_shape_series_is_the_library_and_agrees_with_the_oracle(trefoil, cluster
         assert series["close_pairs"][k] == oracle.close_pairs
     with pytest.raises(ValueError, match="at least 2 needed"):
         tools_shape.shape_series(np.zeros((1, 1, 3)))
+
+
+def test_knotflow_kf_equals_knotflow_analyze(tmp_path, capsys):
+    """knotflow-kf (the library's knots and knot matrix) prints knotflow-analyze's k_f, spectrum,
+    closures, knot matrix, core and slipknot for the same seed, to the last bit."""
+    from knotflow_tools import cli
+    r = tools_conftest.unknotting_trefoil_frames(4)[0]
+    path = tmp_path / "chain.xyz"
+    path.write_text("".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in r.tolist()))
+    args = ["--closures", "60", "--seed", "31", "--json", "--per-closure", "--matrix",
+            "--matrix-closures", "3", "--min-length", str(len(r) - 12)]
+    expected = json.loads(run("knotflow-analyze", str(path), *args))
+    assert cli.main_kf([str(path), *args]) == 0
+    got = json.loads(capsys.readouterr().out)
+    for key in ("n_beads", "closures", "seed", "kf", "spectrum", "dominant", "per_closure", "matrix",
+                "knot_core", "slipknot"):
+        assert got[key] == expected[key], key
+    assert got["kf"] > 0.5 and got["knot_core"] is not None
+
+
+def test_tools_knot_matrix_equals_knotflow_analyze(tmp_path):
+    """knotflow_tools.analysis computes a frame's knot matrix with the library: equal to
+    knotflow-analyze --matrix-frames on the same case file and seed."""
+    frames = tools_conftest.unknotting_trefoil_frames(3)
+    theirs = tools_conftest.write_case(tmp_path / "theirs_A1_a.h5", frames, time=np.linspace(0.0, 2.0, 3))
+    ours = tools_conftest.write_case(tmp_path / "ours_A1_a.h5", frames, time=np.linspace(0.0, 2.0, 3))
+    n = frames.shape[1]
+    run("knotflow-analyze", str(theirs), "--closures", "10", "--seed", "5", "--matrix-frames", "0",
+        "--matrix-closures", "3", "--min-length", str(n - 10))
+    expected = io.read_case(str(theirs)).knot_matrices[0]
+    ana = analysis.analyze_case(io.read_case(str(ours)), closures=10, stride=1, seed=5, matrix_frames=[0],
+                                matrix_closures=3, matrix_stride=1, min_length=n - 10, use_stored=False)
+    assert np.array_equal(ana.knot_matrices[0], expected, equal_nan=True)
+    assert np.isfinite(expected).sum() == 11 * 12 // 2 and np.nanmax(expected) > 0.5

@@ -85,8 +85,18 @@ _SIGNATURES: dict[str, list[object]] = {
     "knotflow_knots": [_I, _DOUBLES_C, _I, _I64, _I64, ctypes.POINTER(_D), _DOUBLES_C, ctypes.POINTER(_I),
                        _INTS, ctypes.POINTER(_D), _STR, _I],
     "knotflow_shape": [_I, _DOUBLES_C, _DOUBLES_C, ctypes.POINTER(_I), _STR, _I],
+    "knotflow_knots_at_points": [_I, _DOUBLES_C, _I, _DOUBLES_C, _I64, ctypes.POINTER(_D), _DOUBLES_C,
+                                 ctypes.POINTER(_I), _INTS, ctypes.POINTER(_D), _STR, _I],
+    "knotflow_knot_matrix": [_I, _DOUBLES_C, _I, _I64, _I, _I, _D, _DOUBLES_F, _INTS, ctypes.POINTER(_I),
+                             ctypes.POINTER(_I), ctypes.POINTER(_D), _STR, _I],
+    "knotflow_matrix_defaults": [ctypes.POINTER(_I), ctypes.POINTER(_I)],
+    "knotflow_knot_core": [_I, _DOUBLES_F, _INTS, ctypes.POINTER(_I), _STR, _I],
+    "knotflow_scene_cases": [_STR, _I, _STR, _I, ctypes.POINTER(_I), _STR, _I, ctypes.POINTER(_I), _STR, _I],
+    "knotflow_run_scene": [_STR, _I, _STR, _I, _I, _I, _INTS, _STR, _I, _STR, _I],
+    "knotflow_case_size": [_STR, _I, ctypes.POINTER(_I), ctypes.POINTER(_I), _STR, _I],
+    "knotflow_read_case": [_STR, _I, _I, _I, _DOUBLES_C, _DOUBLES_C, _DOUBLES_C, _INTS, _STR, _I, _STR, _I],
 }
-_VOID = {"knotflow_defaults", "knotflow_forces_defaults", "knotflow_model_free"}
+_VOID = {"knotflow_defaults", "knotflow_forces_defaults", "knotflow_model_free", "knotflow_matrix_defaults"}
 
 _loaded: ctypes.CDLL | None = None
 _loaded_path: Path | None = None

@@ -133,9 +133,9 @@ def analyze_case(case: Case, closures: int = 200, stride: int = 0, seed: int = 1
     for fi in matrix_frames:
         fi = int(fi) % case.nframes
         if fi not in mats:
-            mats[fi] = knots.knot_matrix(case.positions[fi], closures=matrix_closures,
-                                         seed=seed, min_length=min_length,
-                                         stride=matrix_stride)
+            mats[fi] = knotflow.knot_matrix(case.positions[fi], closures=matrix_closures,
+                                            seed=seed, min_length=min_length,
+                                            stride=matrix_stride).matrix
     return CaseAnalysis(frame_index=np.asarray(frames), time=np.asarray(tk), kf=np.asarray(kf),
                         dominant=list(dom), events=events, low=low, high=high,
                         observables=obs, modes=modes, case_mode=cmode, spectra=spec,

@@ -21,7 +21,9 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from . import __version__, knots
+import knotflow
+
+from . import __version__
 
 #: Exit status of a usage error or refused input (as argparse's own usage errors).
 EXIT_USAGE = 2
@@ -99,8 +101,10 @@ def _kf(argv: Argv) -> int:
     points = read_xyz(args.closure_points) if args.closure_points else None
     if args.closures < 1 and points is None:
         raise ValueError("--closures must be >= 1")
+    # the library's knot code (knotflow.knots, knotflow.knot_matrix: knotflow-analyze's)
     try:
-        res = knots.analyze_chain(r, closures=args.closures, seed=args.seed, points=points)
+        res = knotflow.knots(r, closures=None if points is not None else args.closures, seed=args.seed,
+                             points=points)
     except ValueError as exc:
         raise ValueError(f"{args.chain}: {exc}") from exc
     mat = None
@@ -108,15 +112,14 @@ def _kf(argv: Argv) -> int:
     slip = False
     if args.matrix:
         mc = args.matrix_closures or args.closures
-        mat = knots.knot_matrix(r, closures=mc, seed=args.seed, min_length=args.min_length,
-                                stride=args.matrix_stride)
-        core = knots.knot_core(mat)
-        slip = knots.is_slipknot(mat, res.kf)
+        km = knotflow.knot_matrix(r, closures=mc, seed=args.seed, min_length=args.min_length,
+                                  stride=args.matrix_stride, kf_whole=res.kf)
+        mat, core, slip = km.matrix, km.core, bool(km.slipknot)
     if args.json:
         out = {"n_beads": int(len(r)), "closures": res.closures, "seed": args.seed,
                "kf": res.kf, "spectrum": res.spectrum, "dominant": res.dominant}
         if args.per_closure:
-            out["per_closure"] = res.per_closure
+            out["per_closure"] = list(res.per_closure)
         if args.matrix:
             out["matrix"] = _nan_to_none(mat)
         out["knot_core"] = list(core) if core is not None else None

@@ -217,9 +217,10 @@ class MovieFigure:
 
 
 def knot_cores(case: Case) -> dict:
-    """Stored knot matrix frame -> its knot core (i, j), or None when no subchain is knotted."""
-    from .knots import knot_core
-    return {int(fi): knot_core(mat) for fi, mat in case.knot_matrices.items()}
+    """Stored knot matrix frame -> its knot core (i, j), or None when no subchain is knotted
+    (the library's knot core: knotflow.knot_core)."""
+    import knotflow
+    return {int(fi): knotflow.knot_core(mat) for fi, mat in case.knot_matrices.items()}
 
 
 def render_movie(case: Case, out, frames=None, kf=None, fps: int = 10, width: int = 960,

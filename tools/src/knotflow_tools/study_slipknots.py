@@ -15,10 +15,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+import knotflow  # noqa: E402
+
 from .analysis import analyze_case  # noqa: E402
 from .atomic import save_figure  # noqa: E402
 from .campaign import load_case  # noqa: E402
-from .knots import knot_core  # noqa: E402
 from .plot import _draw_chain  # noqa: E402
 
 #: Slipknot threshold on the knot matrix and whole-chain threshold (docs/analysis.md).
@@ -46,10 +47,10 @@ def slipknot_scan(case, kf_time, kf, confirm_dir=None):
 
 def max_and_core(mat):
     """Largest finite entry of a knot matrix (-1 without one) and its knot core ([i, j], the
-    shortest subchain with K >= SLIP_K, smallest i on a tie, as knots.knot_core and the Fortran
+    shortest subchain with K >= 0.5 (SLIP_K), smallest i on a tie: the library's knot_core,
     kf_knot_matrix; None without one)."""
     finite = np.where(np.isfinite(mat), mat, -1.0)
-    core = knot_core(finite, SLIP_K)
+    core = knotflow.knot_core(finite)
     return float(finite.max()) if finite.size else -1.0, None if core is None else list(core)
 
 
