@@ -24,10 +24,14 @@ module kf_stepper
   use kf_error, only: error_t, fatal_error
   use kf_ode_system, only: ode_system_t
   use kf_step_monitor, only: step_monitor_t
+  use kf_step_controller, only: step_controller_t
   implicit none
   private
 
-  public :: check_target, all_finite, nonfinite_error
+  public :: check_target, all_finite, nonfinite_error, error_norm
+
+  !> Non-finite trial steps in a row after which an adaptive method gives up.
+  integer, parameter, public :: max_bad_trials = 10
 
   !> Version of the layout of `get_state` (first entry of ints).
   integer(i8), parameter, public :: stepper_state_version = 1
@@ -71,6 +75,7 @@ module kf_stepper
     procedure, non_overridable :: check_max_steps
     procedure, non_overridable :: accept_step
     procedure, non_overridable :: reject_step
+    procedure, non_overridable :: finish_trial
   end type stepper_t
 
   abstract interface
@@ -299,7 +304,70 @@ contains
     call sys%step_rejected()
   end subroutine reject_step
 
+  !> The end of one trial step of an adaptive method: h from t (the controller proposed
+  !> dt_proposed; `last`: the step ends at t_target), the new state ynew and the error estimate
+  !> err over the tolerance (`finite`: both usable). A non-finite trial is rejected and the step
+  !> shrunk hard (an error after max_bad_trials in a row, counted in n_bad); err <= 1 accepts
+  !> ynew (accept_step) and the controller proposes the next step; else the trial is rejected
+  !> with a smaller step. Then the step-size underflow check. `accepted` tells the method to
+  !> update its own state (e.g. dopri45's FSAL stage).
+  subroutine finish_trial(this, controller, sys, t, y, ynew, h, dt_proposed, last, t_target, err, finite, &
+                          n_bad, accepted, error, monitor)
+    class(stepper_t), intent(inout) :: this
+    type(step_controller_t), intent(inout) :: controller
+    class(ode_system_t), intent(inout) :: sys
+    real(wp), intent(inout) :: t
+    real(wp), intent(inout) :: y(:, :)
+    real(wp), intent(in) :: ynew(:, :)
+    real(wp), intent(in) :: h, dt_proposed, t_target, err
+    logical, intent(in) :: last, finite
+    integer, intent(inout) :: n_bad
+    logical, intent(out) :: accepted
+    type(error_t), allocatable, intent(out) :: error
+    class(step_monitor_t), intent(inout), optional :: monitor
+    real(wp) :: dt_new
+    accepted = .false.
+    if (.not. finite) then
+      n_bad = n_bad + 1
+      call this%reject_step(sys)
+      if (n_bad >= max_bad_trials) then
+        call nonfinite_error(error, t)
+        return
+      end if
+      call this%set_dt(controller%after_failure(h))
+    else if (err <= 1.0_wp) then
+      n_bad = 0
+      call this%accept_step(sys, t, y, ynew, h, last, t_target, monitor)
+      accepted = .true.
+      call controller%after_accept(err, h, dt_proposed, last .and. h < dt_proposed, dt_new)
+      call this%set_dt(dt_new)
+    else
+      call this%reject_step(sys)
+      call this%set_dt(controller%after_rejection(err, h))
+    end if
+    if (t < t_target) call controller%check_underflow(this%dt(), t, error)
+  end subroutine finish_trial
+
   ! ---------------------------------------------------------------- helpers
+
+  !> The error of a trial step over the tolerance: the largest Euclidean norm over the columns
+  !> (beads) of the estimate est, in `raw` (units of y) and divided by `tolerance` in `err`;
+  !> `finite` (in: est usable) is false on return when err is not a finite number.
+  pure subroutine error_norm(est, tolerance, finite, err, raw)
+    real(wp), intent(in) :: est(:, :), tolerance
+    logical, intent(inout) :: finite
+    real(wp), intent(out) :: err
+    real(wp), intent(inout) :: raw
+    integer :: i
+    err = 0.0_wp
+    if (.not. finite) return
+    do i = 1, size(est, 2)
+      err = max(err, norm2(est(:, i)))
+    end do
+    raw = err
+    err = err/tolerance
+    finite = ieee_is_finite(err)
+  end subroutine error_norm
 
   !> The check at the start of `advance`: t_target must not be before t.
   subroutine check_target(t, t_target, error)

@@ -15,7 +15,7 @@ module kf_stepper_dopri45
   use kf_error, only: error_t, fatal_error
   use kf_ode_system, only: ode_system_t
   use kf_step_monitor, only: step_monitor_t
-  use kf_stepper, only: stepper_t, check_target, all_finite, nonfinite_error
+  use kf_stepper, only: stepper_t, check_target, all_finite, nonfinite_error, error_norm
   use kf_step_controller, only: step_controller_t
   implicit none
   private
@@ -35,7 +35,6 @@ module kf_stepper_dopri45
                          e5 = -17253.0_wp/339200, e6 = 22.0_wp/525, e7 = -1.0_wp/40
 
   !> Trials in a row with non-finite values after which the step fails.
-  integer, parameter :: max_bad_trials = 10
 
   !> Adaptive Dormand-Prince 5(4): tolerance, controller, FSAL stage and work space.
   type, extends(stepper_t), public :: dopri45_stepper_t
@@ -97,9 +96,9 @@ contains
     real(wp), intent(in) :: t_target
     type(error_t), allocatable, intent(out) :: error
     class(step_monitor_t), intent(inout), optional :: monitor
-    real(wp) :: h, err, dt_proposed, dt_new
-    integer :: i, n_bad
-    logical :: last, finite
+    real(wp) :: h, err, dt_proposed
+    integer :: n_bad
+    logical :: last, finite, accepted
 
     call check_target(t, t_target, error)
     if (allocated(error)) return
@@ -153,39 +152,14 @@ contains
       ! Error estimate (into ytmp): largest Euclidean norm over beads, relative to tolerance.
       this%ytmp = h*(e1*this%k1 + e3*this%k3 + e4*this%k4 + e5*this%k5 + e6*this%k6 + e7*this%k7)
       finite = all_finite(this%ytmp) .and. all_finite(this%ynew) .and. all_finite(this%k7)
-      err = 0.0_wp
-      if (finite) then
-        do i = 1, size(y, 2)
-          err = max(err, norm2(this%ytmp(:, i)))
-        end do
-        this%last_error = err
-        err = err/this%tolerance
-        finite = ieee_is_finite(err)
-      end if
-      if (.not. finite) then
-        ! Non-finite trial step: shrink hard; give up after repeated failures.
-        n_bad = n_bad + 1
-        call this%reject_step(sys)
-        if (n_bad >= max_bad_trials) then
-          call nonfinite_error(error, t)
-          return
-        end if
-        call this%set_dt(this%controller%after_failure(h))
-      else if (err <= 1.0_wp) then
-        n_bad = 0
-        call this%accept_step(sys, t, y, this%ynew, h, last, t_target, monitor)
+      call error_norm(this%ytmp, this%tolerance, finite, err, this%last_error)
+      call this%finish_trial(this%controller, sys, t, y, this%ynew, h, dt_proposed, last, t_target, err, finite, &
+                             n_bad, accepted, error, monitor)
+      if (allocated(error)) return
+      if (accepted) then
         this%k1 = this%k7
         this%t_fsal = t
         this%y_fsal = y
-        call this%controller%after_accept(err, h, dt_proposed, last .and. h < dt_proposed, dt_new)
-        call this%set_dt(dt_new)
-      else
-        call this%reject_step(sys)
-        call this%set_dt(this%controller%after_rejection(err, h))
-      end if
-      if (t < t_target) then
-        call this%controller%check_underflow(this%dt(), t, error)
-        if (allocated(error)) return
       end if
     end do
   end subroutine dopri45_advance

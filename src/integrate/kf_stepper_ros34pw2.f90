@@ -32,7 +32,7 @@ module kf_stepper_ros34pw2
   use kf_lapack, only: lu_factor, lu_solve
   use kf_ode_system, only: ode_system_t
   use kf_step_monitor, only: step_monitor_t
-  use kf_stepper, only: stepper_t, check_target, all_finite, nonfinite_error
+  use kf_stepper, only: stepper_t, check_target, all_finite, nonfinite_error, error_norm
   use kf_step_controller, only: step_controller_t
   implicit none
   private
@@ -57,7 +57,6 @@ module kf_stepper_ros34pw2
   !> Order of the embedded (lower) solution: the estimate is ~ h^3.
   integer, parameter :: embedded_order = 2
   !> Trials in a row with non-finite values (or a singular iteration matrix) before failing.
-  integer, parameter :: max_bad_trials = 10
 
   !> The tableau in the variables u (module header), worked out once from the published one.
   type :: tableau_t
@@ -160,9 +159,9 @@ contains
     type(error_t), allocatable, intent(out) :: error
     class(step_monitor_t), intent(inout), optional :: monitor
     type(error_t), allocatable :: lu_error
-    real(wp) :: h, err, dt_proposed, dt_new
+    real(wp) :: h, err, dt_proposed
     integer :: i, j, n, n_bad, evals
-    logical :: last, finite, fresh
+    logical :: last, finite, fresh, accepted
 
     call check_target(t, t_target, error)
     if (allocated(error)) return
@@ -229,38 +228,12 @@ contains
         this%est = reshape(matmul(this%u, this%tab%e), shape(y))
         finite = all_finite(this%ynew) .and. all_finite(this%est)
       end if
-      err = 0.0_wp
-      if (finite) then
-        do i = 1, size(y, 2)
-          err = max(err, norm2(this%est(:, i)))
-        end do
-        this%last_error = err
-        err = err/this%tolerance
-        finite = ieee_is_finite(err)
-      end if
-      if (.not. finite) then
-        ! Non-finite trial step or singular W: shrink hard; give up after repeated failures.
-        n_bad = n_bad + 1
-        call this%reject_step(sys)
-        if (n_bad >= max_bad_trials) then
-          call nonfinite_error(error, t)
-          return
-        end if
-        call this%set_dt(this%controller%after_failure(h))
-      else if (err <= 1.0_wp) then
-        n_bad = 0
-        call this%accept_step(sys, t, y, this%ynew, h, last, t_target, monitor)
-        fresh = .true.
-        call this%controller%after_accept(err, h, dt_proposed, last .and. h < dt_proposed, dt_new)
-        call this%set_dt(dt_new)
-      else
-        call this%reject_step(sys)
-        call this%set_dt(this%controller%after_rejection(err, h))
-      end if
-      if (t < t_target) then
-        call this%controller%check_underflow(this%dt(), t, error)
-        if (allocated(error)) return
-      end if
+      call error_norm(this%est, this%tolerance, finite, err, this%last_error)
+      call this%finish_trial(this%controller, sys, t, y, this%ynew, h, dt_proposed, last, t_target, err, finite, &
+                             n_bad, accepted, error, monitor)
+      if (allocated(error)) return
+      ! a new start after an accepted step: f(t, y) and the Jacobian to make (kept over retries)
+      if (accepted) fresh = .true.
     end do
   end subroutine ros_advance
 
