@@ -1,5 +1,6 @@
 # shellcheck shell=bash
-# The ensembles of issue 36 (RPY + excluded volume, inputs/ensembles/): the one list that
+# The ensembles of issue 36 (inputs/ensembles/; RPY + excluded volume, then the study's model
+# on chosen cells and starts): the one list that
 # scripts/campaign.sh --set ensembles runs, in the order it runs them (sourced: it only defines
 # functions; nothing set, nothing run).
 #
@@ -18,6 +19,10 @@
 #   trefoil_samples_first   cells (c, 2.1-2.3), (0.8, a), (1, c), (1.4, b)      6 x 10 seeds
 #   candycane_haar_rest     A = 0.5, 0.8, 1.4, 2, seeds 1..20                   80
 #   trefoil_samples_rest    the other 23 cells, perturbation seeds 1..10       230
+# and then the study's model (multipole L = 2 + lubrication, overlap 'relax', update 'iterative'):
+#   trefoil_samples_multipole_first   the six cells of trefoil_samples_first, seeds 1, 2   12
+#   candycane_haar_multipole          A = 1, 3, four Haar starts each (the file says which) 8
+#   trefoil_samples_multipole_rest    the six cells, seeds 3..10                          48
 
 kf_ensemble_sweeps() {
   printf '%s\n' "ensemble candycane_haar_A1_A3" \
@@ -25,7 +30,10 @@ kf_ensemble_sweeps() {
                 "ensemble candycane_tilt60" "ensemble candycane_tilt90" \
                 "trefoil trefoil_samples_first" \
                 "ensemble candycane_haar_rest" \
-                "trefoil trefoil_samples_rest"
+                "trefoil trefoil_samples_rest" \
+                "trefoil trefoil_samples_multipole_first" \
+                "ensemble candycane_haar_multipole" \
+                "trefoil trefoil_samples_multipole_rest"
 }
 
 kf_ensemble_arrays() {
