@@ -19,6 +19,7 @@
 #   trefoil_samples_first   cells (c, 2.1-2.3), (0.8, a), (1, c), (1.4, b)      6 x 10 seeds
 #   candycane_haar_rest     A = 0.5, 0.8, 1.4, 2, seeds 1..20                   80
 #   trefoil_samples_rest    the other 23 cells, perturbation seeds 1..10       230
+#   trefoil_samples_p1e-3   the six cells of trefoil_samples_first, 1e-3 d     6 x 10 seeds
 # and then the study's model (multipole L = 2 + lubrication, overlap 'relax', update 'iterative'):
 #   trefoil_samples_multipole_first   the six cells of trefoil_samples_first, seeds 1, 2   12
 #   candycane_haar_multipole          A = 1, 3, four Haar starts each (the file says which) 8
@@ -31,6 +32,7 @@ kf_ensemble_sweeps() {
                 "trefoil trefoil_samples_first" \
                 "ensemble candycane_haar_rest" \
                 "trefoil trefoil_samples_rest" \
+                "trefoil trefoil_samples_p1e-3" \
                 "trefoil trefoil_samples_multipole_first" \
                 "ensemble candycane_haar_multipole" \
                 "trefoil trefoil_samples_multipole_rest"
