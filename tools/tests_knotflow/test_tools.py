@@ -69,6 +69,30 @@ def test_knotflow_kf_equals_knotflow_analyze(tmp_path, capsys):
     assert got["kf"] > 0.5 and got["knot_core"] is not None
 
 
+def test_default_seed_is_knotflow_analyze_s(tmp_path, capsys):
+    """Without --seed, knotflow-kf and the tools' analysis draw knotflow-analyze's closures: the
+    same closure types one by one, and the same k_f series of a case file."""
+    from knotflow_tools import cli
+    frames = tools_conftest.unknotting_trefoil_frames(4)
+    path = tmp_path / "chain.xyz"
+    path.write_text("".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in frames[0].tolist()))
+    expected = json.loads(run("knotflow-analyze", str(path), "--closures", "40", "--json",
+                              "--per-closure"))
+    assert cli.main_kf([str(path), "--closures", "40", "--json", "--per-closure"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["seed"] == expected["seed"] and got["per_closure"] == expected["per_closure"]
+    # a seed that differs from the default draws other closures (the check above can fail)
+    other = json.loads(run("knotflow-analyze", str(path), "--closures", "40", "--json",
+                           "--per-closure", "--seed", str(expected["seed"] + 1)))
+    assert other["per_closure"] != expected["per_closure"]
+    theirs = tools_conftest.write_case(tmp_path / "theirs_A1_a.h5", frames, time=np.linspace(0.0, 3.0, 4))
+    run("knotflow-analyze", str(theirs), "--closures", "50")
+    with h5py.File(theirs, "r") as f:
+        kf = f["analysis/knots/kf"][:]
+    ana = analysis.analyze_case(io.read_case(str(theirs)), closures=50, stride=1, use_stored=False)
+    assert np.array_equal(ana.kf, kf)
+
+
 def test_tools_knot_matrix_equals_knotflow_analyze(tmp_path):
     """knotflow_tools.analysis computes a frame's knot matrix with the library: equal to
     knotflow-analyze --matrix-frames on the same case file and seed."""

@@ -67,10 +67,11 @@ def kf_label(kf, t, sub="<sub>f</sub>") -> str:
     return f"k{sub} = {value:.3f}{at}"
 
 
-def knot_series(positions, frames, closures=200, seed=1):
+def knot_series(positions, frames, closures=200, seed=None):
     """k_f, spectrum rows and dominant types for the given frame indices: the library's knot
     analysis (knotflow.knots), frame k with the closure stream k as knotflow-analyze draws it,
-    so that the results equal knotflow-analyze's for the same closures and seed."""
+    so that the results equal knotflow-analyze's for the same closures and seed (None: the
+    library's default seed, knotflow-analyze's)."""
     kf, spec, dom = [], [], []
     for fi in frames:
         res = knotflow.knots(positions[fi], closures=closures, seed=seed, stream=int(fi))
@@ -88,7 +89,7 @@ def observables_of(case: Case) -> dict:
     return shape.shape_series(case.positions)
 
 
-def analyze_case(case: Case, closures: int = 200, stride: int = 0, seed: int = 1,
+def analyze_case(case: Case, closures: int = 200, stride: int = 0, seed: int | None = None,
                  matrix_frames=(), matrix_closures: int = 50, matrix_stride: int = 4,
                  min_length: int = 10, use_stored: bool = True) -> CaseAnalysis:
     """Analyse a case; stored /analysis results are used when present (unless use_stored).

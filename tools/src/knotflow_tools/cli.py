@@ -66,7 +66,8 @@ def _kf_parser():
     p.add_argument("--frame", type=int, default=-1,
                    help="frame of a .h5 case file (0-based; negative from the end; default last)")
     p.add_argument("--closures", type=int, default=1000, help="number of random closures")
-    p.add_argument("--seed", type=int, default=1, help="random seed")
+    p.add_argument("--seed", type=int, default=knotflow.default_seed(),
+                   help="seed of the random closures (default %(default)s, knotflow-analyze's)")
     p.add_argument("--matrix", action="store_true", help="compute the knot matrix")
     p.add_argument("--min-length", type=int, default=10,
                    help="shortest subchain of the knot matrix (beads)")
@@ -155,7 +156,8 @@ def _plot(argv: Argv) -> int:
                    help="closures per frame when k_f is computed (no /analysis)")
     p.add_argument("--stride", type=int, default=0,
                    help="analyse every stride-th frame (0: automatic, at most 100 frames)")
-    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--seed", type=int, default=knotflow.default_seed(),
+                   help="seed of the random closures (default %(default)s, knotflow-analyze's)")
     p.add_argument("--matrix-frames", type=int, nargs="*", default=[],
                    help="frames whose knot matrix is computed (if not stored)")
     p.add_argument("--matrix-closures", type=int, default=50)
@@ -197,7 +199,8 @@ def _report(argv: Argv) -> int:
     p.add_argument("--closures", type=int, default=200)
     p.add_argument("--stride", type=int, default=0,
                    help="analyse every stride-th frame (0: automatic, at most 100 frames)")
-    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--seed", type=int, default=knotflow.default_seed(),
+                   help="seed of the random closures (default %(default)s, knotflow-analyze's)")
     p.add_argument("--movie", action="store_true",
                    help="(default) a movie of each case, linked from the report")
     p.add_argument("--no-movie", action="store_true", help="no movies")

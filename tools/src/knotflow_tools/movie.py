@@ -297,7 +297,7 @@ def _encoder_reason(exc: subprocess.CalledProcessError) -> str:
             else f"ffmpeg exited with status {exc.returncode}")
 
 
-def case_kf(case: Case, closures: int = 0, frames=None, seed: int = 1):
+def case_kf(case: Case, closures: int = 0, frames=None, seed: int | None = None):
     """(time, k_f) from /analysis/knots, or computed with ``closures`` on ``frames``
     (``closures`` 0: None)."""
     if case.knots is not None and len(case.knots["kf"]):

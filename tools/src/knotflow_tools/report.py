@@ -37,7 +37,7 @@ def _state_name(state) -> str:
     return {"knotted": "knotted", "unknotted": "unknotted"}.get(state, "undecided")
 
 
-def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int = 1,
+def build_report(sweep_dir, closures: int = 200, stride: int = 0, seed: int | None = None,
                  movie: bool = True, movie_max_frames: int = 40, viewer: bool = True) -> dict:
     """Analyse every case of sweep_dir and write report/report.md and report/report.html,
     with a movie of each case (at most ``movie_max_frames`` frames, 640 x 360), an XDMF file
