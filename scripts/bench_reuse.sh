@@ -18,7 +18,11 @@
 #   rosenbrock: the Rosenbrock-W stepper ros34pw2 against dopri45 (t = 0-10, tolerance 1e-4) on
 #   the trefoil with the study's model ('stage' and 'iterative') and with RPY: docs/accuracy.md,
 #   "A linearly implicit stepper" (about 30 min of one core)
-#   case: the whole reference trefoil case (N = 99, t_end = 1000) with the adaptive path
+#   case, case-candycane: a whole reference case on one core, the trefoil (N = 99, orientation
+#   c, A = 2.2, t_end = 1000) or the seeded candy-cane (N = 152, A = 1, t_end = 2000), with the
+#   path of KNOTFLOW_CASE_UPDATE and KNOTFLOW_CASE_METHOD (default 'iterative' and 'ros34pw2');
+#   wall and processor seconds into $out/case_<shape>_<update>_<method>.txt (docs/accuracy.md,
+#   "A whole case")
 #   threads: both cores for one case (OpenMP pair loops + OpenBLAS, 1 against 2 threads): one
 #   evaluation at N = 99 and 152, and 'stage' and 'iterative' on the trefoil t = 0-10, into
 #   $out/threads_trefoil.txt (docs/multipole.md, "Both cores for one case"; about 6 min on a
@@ -87,37 +91,51 @@ for part in "${parts[@]}"; do
       kf_log "threads: load average $(cut -d' ' -f1-3 /proc/loadavg) after waiting ${waited} s"
       # both cores: the BLAS and OpenMP thread counts are set by the program, not the environment
       (unset OPENBLAS_NUM_THREADS OMP_NUM_THREADS; bench threads_trefoil threads --config trefoil --t-end 10) ;;
-    case)
-      dir="$out/case"
+    case | case-candycane)
+      # A whole reference case on one core with the path of KNOTFLOW_CASE_UPDATE (default
+      # 'iterative') and KNOTFLOW_CASE_METHOD (default 'ros34pw2'): the trefoil (orientation c,
+      # A = 2.2, t_end = 1000) or the seeded candy-cane (A = 1, t_end = 2000); the study's model
+      # (L = 2 + lubrication, overlap 'relax' as the study inputs, tolerance 1e-4). Wall and
+      # processor seconds and the load average at both ends into $out/<name>.txt.
+      update="${KNOTFLOW_CASE_UPDATE:-iterative}" method="${KNOTFLOW_CASE_METHOD:-ros34pw2}"
+      if [ "$part" = case ]; then
+        name="case_trefoil_${update}_${method}"
+        chain="shape = 'trefoil', orientation = 'c'" a=2.2 t_end=1000.0
+      else
+        name="case_candycane_${update}_${method}"
+        chain="shape = 'candycane', seed = 20150509" a=1.0 t_end=2000.0
+      fi
+      dir="$out/$name"
       rm -rf "$dir"; mkdir -p "$dir"
-      overlap=relax   # the rule of the study inputs
-      sed -e "s|@DIR@|$dir|" -e "s|@OVERLAP@|$overlap|" > "$dir/trefoil.nml" <<'NML'
+      cat > "$dir/case.nml" <<NML
 &chain
-  shape = 'trefoil', orientation = 'c'
+  $chain
 /
 &forces
-  bending_a = 2.2
+  bending_a = $a
 /
 &hydro
-  model = 'multipole', order = 2, lubrication = .true., update = 'adaptive', overlap = '@OVERLAP@'
+  model = 'multipole', order = 2, lubrication = .true., update = '$update', overlap = 'relax'
 /
 &integrator
-  t_end = 1000.0, tolerance = 1.0e-4
+  method = '$method', t_end = $t_end, tolerance = 1.0e-4
 /
 &output
-  directory = '@DIR@', case_name = 'trefoil_A2.20_orc', progress_interval = 300
+  directory = '$dir', case_name = '$name', progress_interval = 300
 /
 NML
-      kf_log "the whole reference case (taskset: one core): $dir"
-      start=$(date +%s)
+      kf_log "a whole reference case on one core (taskset -c 0): $dir"
       load0=$(cat /proc/loadavg)
       status=finished
-      taskset -c 0 "$KF_ROOT/build/bin/knotflow" "$dir/trefoil.nml" | tee "$dir/log.txt" || status=failed
-      { echo "part = case"; echo "config = trefoil"; echo "t_end = 1000"; echo "overlap = $overlap";
-        echo "loadavg_start = $load0"; echo "wall_s = $(( $(date +%s) - start ))";
+      /usr/bin/time -f 'wall_s = %e\nprocessor_s = %U user + %S system' -o "$dir/time.txt" \
+        taskset -c 0 "$KF_ROOT/build/bin/knotflow" "$dir/case.nml" > "$dir/log.txt" 2>&1 \
+        || status=failed
+      { echo "part = $part"; echo "update = $update"; echo "method = $method"; echo "t_end = $t_end";
+        echo "overlap = relax"; echo "loadavg_start = $load0"; cat "$dir/time.txt";
         echo "loadavg_end = $(cat /proc/loadavg)";
-        echo "status = $status (see $dir/log.txt)"; } > "$out/case_trefoil.txt" ;;
-    *) kf_die "unknown part '$part' (velocity trajectory speed overlaps scaling profile stiffness compare case threads)" ;;
+        echo "status = $status (see $dir/log.txt)"; } > "$out/$name.txt"
+      cat "$out/$name.txt" ;;
+    *) kf_die "unknown part '$part' (velocity trajectory speed overlaps scaling profile stiffness compare rosenbrock case case-candycane threads)" ;;
   esac
 done
 
@@ -125,7 +143,7 @@ reuse=0; stiffness=0
 for part in "${parts[@]}"; do
   case "$part" in
     stiffness) stiffness=1 ;;
-    compare | threads) ;;   # their sections of the docs are written by hand from $out/*.txt
+    compare | threads | rosenbrock | case | case-candycane) ;;   # their sections of the docs are written by hand from $out/*.txt
     *) reuse=1 ;;
   esac
 done
