@@ -25,7 +25,6 @@ program knotflow_mobility
   use kf_kinds, only: wp
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use kf_strings, only: to_str
-  use kf_vector_ops, only: distances_representable, span_limit
   use kf_cli, only: standard_option, argument, die
   use kf_error, only: error_t
   use kf_text_coords, only: read_coordinates
@@ -118,9 +117,6 @@ program knotflow_mobility
   call read_coordinates(file, r, error)
   if (allocated(error)) call die(program_name, error%message, 2)
   n = size(r, 2)
-  if (.not. distances_representable(r)) call die(program_name, 'the beads of '//file// &
-    ' are too far apart: their squared distances overflow (allowed: each coordinate ranging over less than '// &
-    trim(adjustl(to_str(span_limit, '(es10.3e3)')))//' d); nothing printed', 2)
 
   select case (model_name)
   case ('multipole')

@@ -8,6 +8,7 @@ module kf_capi_status
   use kf_kinds, only: i8
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
+  use kf_vector_ops, only: distances_representable, too_far_apart
   implicit none
   private
 
@@ -44,7 +45,8 @@ contains
     end do
   end function from_c_chars
 
-  !> Refuse n < min_beads beads or a non-finite coordinate of r(3, n); `what` names the call.
+  !> Refuse n < min_beads beads, a non-finite coordinate of r(3, n) or beads so far apart that
+  !> their squared distances overflow; `what` names the call.
   subroutine check_positions(what, n, min_beads, r, error)
     character(len=*), intent(in) :: what
     integer(c_int), intent(in) :: n
@@ -63,6 +65,7 @@ contains
         return
       end if
     end do
+    if (.not. distances_representable(r)) call fatal_error(error, too_far_apart(what//': the beads'))
   end subroutine check_positions
 
   !> Seconds of wall time since the system_clock count `start` (64-bit counter).

@@ -5,10 +5,11 @@
 module kf_vector_ops
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use kf_kinds, only: wp
+  use kf_strings, only: to_str
   implicit none
   private
 
-  public :: cross, sort_index, sort_small, distances_representable, span_limit
+  public :: cross, sort_index, sort_small, distances_representable, span_limit, too_far_apart
 
   !> Largest range of one coordinate over a configuration for which every squared distance
   !> |r_i - r_j|^2 (three squared differences added) is a finite number.
@@ -61,5 +62,14 @@ contains
         distances_representable = .false.
     end do
   end function distances_representable
+
+  !> The refusal of a configuration that fails distances_representable, after the words that
+  !> name it (`what`, e.g. "the beads of 'chain.txt'"), with the allowed span.
+  function too_far_apart(what) result(s)
+    character(len=*), intent(in) :: what
+    character(len=:), allocatable :: s
+    s = what//' are too far apart: their squared distances overflow (allowed: each coordinate '// &
+      'ranging over less than '//trim(adjustl(to_str(span_limit, '(es10.3e3)')))//' d)'
+  end function too_far_apart
 
 end module kf_vector_ops

@@ -9,6 +9,7 @@ module kf_case_verify
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_file_type, only: check_regular_file
+  use kf_vector_ops, only: distances_representable, too_far_apart
   use kf_h5, only: h5_file_t, h5_open_file, h5_close_file, h5_exists, h5_attr_exists, h5_read_attr, h5_read
   use kf_case_frames, only: frames_time, frames_positions, file_frame_template, check_frames
   use kf_case_checkpoint, only: checkpoint_t, latest_checkpoint, checkpoint_frames
@@ -236,6 +237,11 @@ contains
           to_str(t(k), '(g0.6)')//') holds '//to_str(bad)//' non-finite coordinates'// &
           merge(' and a non-finite time', '                      ', .not. ieee_is_finite(t(k))))
         error%message = trim(error%message)
+        return
+      end if
+      if (.not. distances_representable(r(:, :, k))) then
+        call fatal_error(error, too_far_apart("case file '"//path//"': frame "//to_str(k - 1)//' (t = '// &
+          to_str(t(k), '(g0.6)')//'): the beads'))
         return
       end if
     end do

@@ -11,6 +11,7 @@ module kf_text_coords
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_file_type, only: check_regular_file
+  use kf_vector_ops, only: distances_representable, too_far_apart
   implicit none
   private
 
@@ -78,6 +79,8 @@ contains
       end if
     end do
     close (unit)
+    if (.not. distances_representable(r)) &
+      call fatal_error(error, "coordinates: "//too_far_apart("the points of '"//trim(path)//"'"))
   end subroutine read_coordinates
 
   !> The next line of `unit`, of any length, without its end of line (non-advancing reads).

@@ -34,6 +34,29 @@ def test_non_finite_coordinate(bad):
         knotflow.shape(r)
 
 
+@pytest.mark.parametrize("span", [1.0e300, 1.0e154])
+def test_beads_too_far_apart(span):
+    """Beads whose squared distances overflow (a coordinate ranging over sqrt(huge/3) = 7.741e153
+    d or more) are refused before anything is computed: k_f used to come out as an unknot and
+    the forces as NaN, with no error."""
+    r = GOOD.copy()
+    r[2, 0] = span
+    rule = r"are too far apart: their squared distances overflow \(allowed: each coordinate " \
+           r"ranging over less than 7\.741E\+153 d\)"
+    for call, name in ((lambda: knotflow.mobility(r), "knotflow_model_mobility"),
+                       (lambda: knotflow.knotted_fraction(r, closures=10, seed=1), "knotflow_knots"),
+                       (lambda: knotflow.knot_matrix(r, closures=2, seed=1, min_length=2),
+                        "knotflow_knot_matrix"),
+                       (lambda: knotflow.chain_forces(r), "knotflow_chain_forces"),
+                       (lambda: knotflow.shape(r), "knotflow_shape")):
+        with pytest.raises(KnotflowError, match=name + ": the beads " + rule):
+            call()
+    # just inside the limit the same beads are accepted (the forces of a bond 7.7e153 long)
+    r[2, 0] = 7.7e153
+    forces, _ = knotflow.chain_forces(r, bending=False)
+    assert np.all(np.isfinite(forces))
+
+
 def test_too_few_beads():
     # k_f needs a chain: the knot code's own limit and message
     with pytest.raises(KnotflowError, match="the chain has 1 bead\\(s\\), at least 2 are needed"):

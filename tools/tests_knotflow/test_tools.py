@@ -3,6 +3,7 @@ results equal knotflow-analyze's on a case file and the numpy oracle's."""
 
 import importlib.util
 import json
+import subprocess
 from pathlib import Path
 
 import h5py
@@ -12,7 +13,7 @@ import pytest
 from knotflow_tools import analysis, io
 from knotflow_tools import shape as tools_shape
 
-from conftest import run
+from conftest import program, run
 
 # the synthetic case files of the tools' tests (knotflow's HDF5 schema)
 _spec = importlib.util.spec_from_file_location(
@@ -91,6 +92,22 @@ def test_default_seed_is_knotflow_analyze_s(tmp_path, capsys):
         kf = f["analysis/knots/kf"][:]
     ana = analysis.analyze_case(io.read_case(str(theirs)), closures=50, stride=1, use_stored=False)
     assert np.array_equal(ana.kf, kf)
+
+
+def test_knotflow_analyze_refuses_a_frame_too_far_apart(tmp_path):
+    """A case file whose frame 2 has beads so far apart that their squared distances overflow is
+    refused by knotflow-analyze, naming the file and the frame, and nothing is written to it."""
+    frames = tools_conftest.unknotting_trefoil_frames(4)
+    frames[2, 5, 0] = 1.0e300
+    path = tools_conftest.write_case(tmp_path / "far_A1_a.h5", frames, time=np.linspace(0.0, 3.0, 4),
+                                     observables=False)
+    before = path.read_bytes()
+    done = subprocess.run([program("knotflow-analyze"), str(path), "--closures", "10"],
+                          capture_output=True, text=True, check=False)
+    assert done.returncode != 0
+    assert (f"case file '{path}': frame 2 (t = 2.00000): the beads are too far apart: their squared "
+            "distances overflow") in done.stderr
+    assert path.read_bytes() == before
 
 
 def test_tools_knot_matrix_equals_knotflow_analyze(tmp_path):
