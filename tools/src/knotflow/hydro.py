@@ -49,7 +49,8 @@ class Model:
         model: one of :func:`model_names` (``'none'``, ``'rpy'``, ``'multipole'``).
         order: multipole order L (1..8; at most 6 with lubrication).
         lubrication: the two-sphere lubrication corrections (multipole).
-        eps_lub: the BWE shift of overlapping pairs, 0 < eps_lub < 0.5; None: knotflow-mobility's
+        eps_lub: the shift of overlapping pairs (the overlap rule evaluates a pair with r <= 1 at
+            1 + eps_lub), 0 < eps_lub < 0.5; None: knotflow-mobility's
             default (:func:`default_eps_lub`).
         overlap: the overlap rule (one of :func:`overlap_rules`; only ``'pair'`` for none/rpy).
         overlap_time: the ``'relax'`` rule's time; None: the &hydro default.
