@@ -20,6 +20,7 @@ module kf_capi_run
   use kf_case_runner, only: case_path, case_reporter_t, case_failed
   use kf_run_segment, only: run_launch_t
   use kf_blas_threads, only: blas_threads_in_use, blas_library
+  use kf_signals, only: request_stop, clear_stop
   use kf_case_verify, only: case_file_status, read_frames, read_observables
   implicit none
   private
@@ -80,6 +81,18 @@ contains
     call put_message(list, files, fileslen)
     status = kf_ok
   end function knotflow_scene_cases
+
+  !> Ask a knotflow_run_scene running in another thread to stop as on SIGINT: the running case
+  !> after the frame it is computing (written with its checkpoint, status 3 'stopped'), the cases
+  !> after it not started. The request lasts until knotflow_clear_stop.
+  subroutine knotflow_request_stop() bind(c, name='knotflow_request_stop')
+    call request_stop()
+  end subroutine knotflow_request_stop
+
+  !> Forget a stop asked for by knotflow_request_stop (call it before a run).
+  subroutine knotflow_clear_stop() bind(c, name='knotflow_clear_stop')
+    call clear_stop()
+  end subroutine knotflow_clear_stop
 
   !> Run every case of the scene file path[pathlen] (outdir as in knotflow_scene_cases) in this
   !> process, as `knotflow SCENE` on one rank does: the scene checked (a bad scene: nothing is

@@ -8,12 +8,14 @@
 !>
 !> The received signal is the one piece of process-wide state of the library: a signal handler
 !> can only reach module data (a `volatile` integer, written by the handler, read by the loop).
+!> A process that does not install the handler (Python, through the C layer) asks for the same
+!> stop with `request_stop` from another thread and clears it with `clear_stop` before a run.
 module kf_signals
   use, intrinsic :: iso_c_binding, only: c_int, c_funptr, c_funloc
   implicit none
   private
 
-  public :: catch_stop_signals, stop_signal, signal_name
+  public :: catch_stop_signals, stop_signal, signal_name, request_stop, clear_stop
 
   !> Exit status of a run stopped by SIGTERM or SIGINT: resubmit (EX_TEMPFAIL of sysexits.h,
   !> "temporary failure, try again").
@@ -52,6 +54,17 @@ contains
     if (received /= 0) call c_exit_now(int(exit_resubmit, c_int))
     received = signum
   end subroutine on_stop_signal
+
+  !> Stop as SIGINT would (the running case after its current frame, no case after it), without
+  !> a signal: for a caller that runs the library in another thread of its own (Ctrl-C in Python).
+  subroutine request_stop()
+    received = sigint
+  end subroutine request_stop
+
+  !> Forget a stop asked for before (a caller's next run starts afresh).
+  subroutine clear_stop()
+    received = 0
+  end subroutine clear_stop
 
   !> The stop signal received so far (SIGTERM 15, SIGINT 2), 0 if none.
   integer function stop_signal()

@@ -170,3 +170,44 @@ def test_read_case_in_threads(tmp_path):
         cases = list(pool.map(lambda _: knotflow.read_case(res.case_files[0]), range(8)))
     for c in cases:
         assert np.array_equal(c.positions, first.positions) and np.array_equal(c.time, first.time)
+
+
+def test_ctrl_c_stops_after_a_frame_and_the_run_resumes(tmp_path):
+    """SIGINT to a Python process inside run_scene (Ctrl-C) stops the running case after a whole
+    frame with its checkpoint, starts no further case and raises KeyboardInterrupt; run_scene
+    again resumes both cases, and the files equal the program's uninterrupted run frame for frame."""
+    import signal
+    import sys
+    import time
+    sweep = "&sweep bending_a = 2.2, 3.0 /\n"
+    scene = write_scene(tmp_path / "long.nml", tmp_path / "py", sweep)
+    scene.write_text(scene.read_text().replace("t_end = 3.0", "t_end = 200.0"))
+    # the interpreter's Ctrl-C (a process started in the background may inherit SIGINT ignored)
+    code = ("import signal, sys, knotflow; signal.signal(signal.SIGINT, signal.default_int_handler); "
+            "knotflow.run_scene(sys.argv[1])")
+    child = subprocess.Popen([sys.executable, "-c", code, str(scene)], cwd=tmp_path,
+                             env=dict(os.environ, OPENBLAS_NUM_THREADS="1"),
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    first = tmp_path / "py" / "c_A2.20.h5"
+    for _ in range(600):   # the first case file appears when its run starts (at most 60 s)
+        if first.exists() or child.poll() is not None:
+            break
+        time.sleep(0.1)
+    time.sleep(0.5)
+    child.send_signal(signal.SIGINT)
+    out, err = child.communicate(timeout=120)
+    assert child.returncode != 0 and "KeyboardInterrupt" in err, out + err
+    stopped = h5_frames(first)
+    assert stopped["status"] == "running" and 2 <= len(stopped["time"]) < 401
+    assert np.all(np.isfinite(stopped["positions"]))
+    assert not (tmp_path / "py" / "c_A3.00.h5").exists()
+    run = knotflow.run_scene(scene)
+    assert run.statuses == ("finished", "finished")
+    program_scene = write_scene(tmp_path / "prog.nml", tmp_path / "prog", sweep)
+    program_scene.write_text(scene.read_text().replace(str(tmp_path / "py"), str(tmp_path / "prog")))
+    run_program(program_scene)
+    for name in ("c_A2.20", "c_A3.00"):
+        ours, theirs = h5_frames(tmp_path / "py" / f"{name}.h5"), h5_frames(tmp_path / "prog" / f"{name}.h5")
+        assert ours["status"] == theirs["status"] == "finished"
+        for key in ("time", "positions", *OBSERVABLES):
+            assert np.array_equal(ours[key], theirs[key]), (name, key)

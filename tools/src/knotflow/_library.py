@@ -95,8 +95,11 @@ _SIGNATURES: dict[str, list[object]] = {
     "knotflow_run_scene": [_STR, _I, _STR, _I, _I, _I, _INTS, _STR, _I, _STR, _I],
     "knotflow_case_size": [_STR, _I, ctypes.POINTER(_I), ctypes.POINTER(_I), _STR, _I],
     "knotflow_read_case": [_STR, _I, _I, _I, _DOUBLES_C, _DOUBLES_C, _DOUBLES_C, _INTS, _STR, _I, _STR, _I],
+    "knotflow_request_stop": [],
+    "knotflow_clear_stop": [],
 }
-_VOID = {"knotflow_defaults", "knotflow_forces_defaults", "knotflow_model_free", "knotflow_matrix_defaults"}
+_VOID = {"knotflow_defaults", "knotflow_forces_defaults", "knotflow_model_free", "knotflow_matrix_defaults",
+         "knotflow_request_stop", "knotflow_clear_stop"}
 
 _loaded: ctypes.CDLL | None = None
 _loaded_path: Path | None = None

@@ -24,6 +24,9 @@ HDF5_LOCK = threading.Lock()
 #: The words of a case's outcome, by the library's status code (kf_case_runner).
 CASE_STATUSES = ("finished", "failed", "skipped", "stopped")
 
+#: How often run_scene's calling thread wakes to take a KeyboardInterrupt (seconds).
+_POLL_SECONDS = 0.2
+
 #: Room for one case's message in knotflow_run_scene's buffer (the library cuts them to 512).
 _CASE_MESSAGE_ROOM = 514
 #: Length of the buffer for the file's status text.
@@ -116,6 +119,11 @@ def run_scene(scene: str | os.PathLike[str], output_dir: str | os.PathLike[str] 
     those of the program for the same scene, frame for frame. ``verbose`` prints the library's
     progress lines. A case that fails raises :class:`KnotflowError` with its message (the other
     cases have run). Returns the :class:`Run` (its case files: :func:`read_case`).
+
+    Ctrl-C (KeyboardInterrupt in the calling thread) stops the run as SIGINT stops the program:
+    the running case after the frame it is computing, which is written with its checkpoint, and
+    no case after it; then the KeyboardInterrupt is raised (a further Ctrl-C waits for that frame
+    too). The same call again resumes.
     """
     scene_b, outdir_b = _path_bytes(scene, "scene"), _output_bytes(output_dir)
     lib = library()
@@ -126,8 +134,29 @@ def run_scene(scene: str | os.PathLike[str], output_dir: str | os.PathLike[str] 
         room = n * _CASE_MESSAGE_ROOM
         messages = ctypes.create_string_buffer(room)
         buf = message_buffer()
-        check(lib.knotflow_run_scene(scene_b, len(scene_b), outdir_b, len(outdir_b), int(verbose), n,
-                                     statuses, messages, room, buf, len(buf)), buf)
+        done: list[int] = []
+        # The run goes on in a thread of its own, so that this one can take Ctrl-C and ask the
+        # library to stop after the current frame (a C call holds KeyboardInterrupt back).
+        lib.knotflow_clear_stop()
+        worker = threading.Thread(
+            target=lambda: done.append(lib.knotflow_run_scene(
+                scene_b, len(scene_b), outdir_b, len(outdir_b), int(verbose), n, statuses, messages,
+                room, buf, len(buf))),
+            name="knotflow.run_scene", daemon=True)
+        worker.start()
+        try:
+            while worker.is_alive():
+                worker.join(_POLL_SECONDS)
+        except KeyboardInterrupt:
+            lib.knotflow_request_stop()
+            while worker.is_alive():   # a further Ctrl-C waits too: the frame is being written
+                try:
+                    worker.join()
+                except KeyboardInterrupt:
+                    continue
+            lib.knotflow_clear_stop()
+            raise
+        check(done[0], buf)
     texts = messages.value.decode(errors="replace").split("\n")
     return Run(scene=Path(os.fsdecode(scene_b)), case_files=files,
                statuses=tuple(CASE_STATUSES[s] for s in statuses.tolist()),
