@@ -1,6 +1,7 @@
 !> The C interface's name lists and defaults, taken from the library's own definitions (one
 !> source): the hydrodynamic models and overlap rules of the &hydro group, the knot types of
-!> kf_knot_invariants, and the defaults of the closures and of eps_lub.
+!> kf_knot_invariants, the outcomes of a case of kf_case_runner, and the defaults of the
+!> closures and of eps_lub.
 module kf_capi_names
   use, intrinsic :: iso_c_binding, only: c_int, c_char, c_double, c_int64_t
   use kf_capi_status, only: kf_ok, kf_invalid_argument, put_message
@@ -9,18 +10,20 @@ module kf_capi_names
   use kf_scene_hydro, only: hydro_params_t, overlap_names
   use kf_knot_invariants, only: n_knot_types, knot_type_names
   use kf_knot_closure, only: default_closures, default_knot_seed
+  use kf_case_runner, only: case_outcome_names
   implicit none
   private
 
   !> The list kinds of knotflow_names.
-  integer(c_int), parameter :: list_models = 1, list_overlap_rules = 2, list_knot_types = 3
+  integer(c_int), parameter :: list_models = 1, list_overlap_rules = 2, list_knot_types = 3, &
+    list_case_statuses = 4
 
   public :: knotflow_names, knotflow_defaults
 
 contains
 
   !> Write the names of list `kind` (1: hydrodynamic models, 2: overlap rules, 3: knot types in
-  !> the order of the spectrum), separated by single blanks, into buf(buflen). Returns kf_ok, or
+  !> the order of the spectrum, 4: the case statuses of knotflow_run_scene from 0), separated by single blanks, into buf(buflen). Returns kf_ok, or
   !> kf_invalid_argument for an unknown kind or a buffer too short (the message is then in buf).
   integer(c_int) function knotflow_names(kind, buf, buflen) bind(c, name='knotflow_names') result(status)
     integer(c_int), value, intent(in) :: kind
@@ -34,9 +37,11 @@ contains
       list = joined(overlap_names)
     case (list_knot_types)
       list = joined(knot_type_names)
+    case (list_case_statuses)
+      list = joined(case_outcome_names)
     case default
       call put_message('knotflow_names: list '//to_str(int(kind))//' unknown (allowed: 1 models, '// &
-        '2 overlap rules, 3 knot types)', buf, buflen)
+        '2 overlap rules, 3 knot types, 4 case statuses)', buf, buflen)
       status = kf_invalid_argument
       return
     end select

@@ -82,6 +82,12 @@ contains
     status = kf_ok
   end function knotflow_scene_cases
 
+  !> The length to which knotflow_run_scene cuts each case's message (its buffer needs this plus
+  !> one character per case).
+  integer(c_int) function knotflow_case_message_length() bind(c, name='knotflow_case_message_length') result(n)
+    n = case_message_len
+  end function knotflow_case_message_length
+
   !> Ask a knotflow_run_scene running in another thread to stop as on SIGINT: the running case
   !> after the frame it is computing (written with its checkpoint, status 3 'stopped'), the cases
   !> after it not started. The request lasts until knotflow_clear_stop.

@@ -33,6 +33,9 @@ module kf_case_runner
 
   !> Outcomes of a case; case_stopped: a stop signal (kf_signals) ended it after a whole frame.
   integer, parameter, public :: case_ok = 0, case_failed = 1, case_skipped = 2, case_stopped = 3
+  !> Their names, indexed by the outcome (the C interface's case statuses).
+  character(len=8), parameter, public :: case_outcome_names(0:3) = &
+    [character(len=8) :: 'finished', 'failed', 'skipped', 'stopped']
   !> The status while the phases of run_case go on (never returned).
   integer, parameter :: case_undecided = -1
 

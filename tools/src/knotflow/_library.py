@@ -95,6 +95,7 @@ _SIGNATURES: dict[str, list[object]] = {
     "knotflow_run_scene": [_STR, _I, _STR, _I, _I, _I, _INTS, _STR, _I, _STR, _I],
     "knotflow_case_size": [_STR, _I, ctypes.POINTER(_I), ctypes.POINTER(_I), _STR, _I],
     "knotflow_read_case": [_STR, _I, _I, _I, _DOUBLES_C, _DOUBLES_C, _DOUBLES_C, _INTS, _STR, _I, _STR, _I],
+    "knotflow_case_message_length": [],
     "knotflow_request_stop": [],
     "knotflow_clear_stop": [],
 }
@@ -150,7 +151,7 @@ def check(status: int, buf: ctypes.Array[ctypes.c_char]) -> None:
 
 
 def names(kind: int) -> tuple[str, ...]:
-    """The library's name list `kind` (1 models, 2 overlap rules, 3 knot types)."""
+    """The library's name list `kind` (1 models, 2 overlap rules, 3 knot types, 4 case statuses)."""
     buf = message_buffer()
     check(library().knotflow_names(kind, buf, MESSAGE_LENGTH), buf)
     return tuple(buf.value.decode().split())

@@ -16,19 +16,14 @@ from pathlib import Path
 
 import numpy as np
 
-from knotflow._library import KnotflowError, check, library, message_buffer
+from knotflow._library import KnotflowError, check, library, message_buffer, names
 
 #: Serialises every call of this module into the library (HDF5 is not thread-safe).
 HDF5_LOCK = threading.Lock()
 
-#: The words of a case's outcome, by the library's status code (kf_case_runner).
-CASE_STATUSES = ("finished", "failed", "skipped", "stopped")
-
 #: How often run_scene's calling thread wakes to take a KeyboardInterrupt (seconds).
 _POLL_SECONDS = 0.2
 
-#: Room for one case's message in knotflow_run_scene's buffer (the library cuts them to 512).
-_CASE_MESSAGE_ROOM = 514
 #: Length of the buffer for the file's status text.
 _STATE_LENGTH = 1024
 
@@ -131,7 +126,8 @@ def run_scene(scene: str | os.PathLike[str], output_dir: str | os.PathLike[str] 
         files = _scene_cases(scene_b, outdir_b)
         n = len(files)
         statuses = np.full(n, -1, dtype=np.int32)
-        room = n * _CASE_MESSAGE_ROOM
+        # each message cut to the library's length, with a line end, and the final NUL
+        room = n * (lib.knotflow_case_message_length() + 1) + 1
         messages = ctypes.create_string_buffer(room)
         buf = message_buffer()
         done: list[int] = []
@@ -159,7 +155,7 @@ def run_scene(scene: str | os.PathLike[str], output_dir: str | os.PathLike[str] 
         check(done[0], buf)
     texts = messages.value.decode(errors="replace").split("\n")
     return Run(scene=Path(os.fsdecode(scene_b)), case_files=files,
-               statuses=tuple(CASE_STATUSES[s] for s in statuses.tolist()),
+               statuses=tuple(names(4)[s] for s in statuses.tolist()),
                messages=tuple(texts + [""] * (n - len(texts))))
 
 
