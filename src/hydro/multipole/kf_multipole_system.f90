@@ -37,6 +37,8 @@ module kf_multipole_system
   integer, parameter, public :: max_multipole_order = 20
   !> Spheres per tile side in the pair loop of `assemble` (cache blocking of the writes).
   integer, parameter :: assembly_tile = 8
+  !> Columns of B per panel in `apply` (a panel of 16 N rows: 200 kB at N = 99, L = 2).
+  integer, parameter :: apply_panel = 32
 
   !> The factorised N-sphere system.
   !> Work arrays and sizes are private; `n_clamped` and `seconds` report on the last factorise.
@@ -361,7 +363,7 @@ contains
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(in), contiguous :: x(:)
     real(wp), intent(out), contiguous :: y(:)
-    integer :: na, nc, nphi, np, cs
+    integer :: na, nc, nphi, np, cs, c0, w
     real(wp) :: t(this%lay%h*this%n)
     na = (this%lay%h - 3)*this%n
     nc = 3*this%n
@@ -369,11 +371,16 @@ contains
     np = nphi
     cs = 2*na + 1
     call dsymv('L', this%nr, 1.0_wp, this%k, this%nr, x, 1, 0.0_wp, y, 1)
-    ! t = B^T x_phi; y_phi -= B t (rows of B: run 1 of K, then run 3 from cs)
-    call dgemv('T', nc, np, 1.0_wp, this%bp(na + 1, 1), nphi, x(cs:), 1, 0.0_wp, t, 1)
-    if (na > 0) call dgemv('T', na, np, 1.0_wp, this%bp, nphi, x, 1, 1.0_wp, t, 1)
-    call dgemv('N', nc, np, -1.0_wp, this%bp(na + 1, 1), nphi, t, 1, 1.0_wp, y(cs:), 1)
-    if (na > 0) call dgemv('N', na, np, -1.0_wp, this%bp, nphi, t, 1, 1.0_wp, y, 1)
+    ! t = B^T x_phi; y_phi -= B t (rows of B: run 1 of K, then run 3 from cs), by panels of
+    ! apply_panel columns of B: a panel's part of t needs only its own columns, so each panel
+    ! is read from memory once and again from cache for its share of B t.
+    do c0 = 1, np, apply_panel
+      w = min(apply_panel, np - c0 + 1)
+      call dgemv('T', nc, w, 1.0_wp, this%bp(na + 1, c0), nphi, x(cs:), 1, 0.0_wp, t(c0), 1)
+      if (na > 0) call dgemv('T', na, w, 1.0_wp, this%bp(1, c0), nphi, x, 1, 1.0_wp, t(c0), 1)
+      call dgemv('N', nc, w, -1.0_wp, this%bp(na + 1, c0), nphi, t(c0), 1, 1.0_wp, y(cs:), 1)
+      if (na > 0) call dgemv('N', na, w, -1.0_wp, this%bp(1, c0), nphi, t(c0), 1, 1.0_wp, y, 1)
+    end do
   end subroutine system_apply
 
   !> x = L^-1 x with the Cholesky factor K = L L^T of the last `factorise` (nr unknowns).
