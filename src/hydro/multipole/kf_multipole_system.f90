@@ -212,56 +212,56 @@ contains
       gr = 0.0_wp
       !$omp do schedule(dynamic)
       do ti = 1, ntile
-      do tj = ti, ntile
-      do i = (ti - 1)*assembly_tile + 1, min(ti*assembly_tile, nsph)
-        call starts(i, ks(:, 1), bs(:, 1), ps(1))
-        do j = max(i + 1, (tj - 1)*assembly_tile + 1), min(tj*assembly_tile, nsph)
-          call starts(j, ks(:, 2), bs(:, 2), ps(2))
-          ! Receiver j (rows), source i (columns).
-          d = r(:, j) - r(:, i)
-          dist = norm2(d)
-          if (dist <= 0.0_wp) then
-            if (first_coincident(i) == 0) first_coincident(i) = j
-            cycle
-          end if
-          if (dist <= 1.0_wp) n_over = n_over + 1
-          if (dist < this%min_distance) then
-            d = d*(this%min_distance/dist)
-            n_clamp = n_clamp + 1
-          end if
-          call irregular_harmonics(d, 2*this%lay%order, ih)
-          call pair_block_grouped(this%lay, d, ih, yw, gr, zeroed=.true.)
-          ! Column by column, each a contiguous run of K or B: the blocks below the diagonal
-          ! runs (yr >= x) from the columns of gr, the others (rows of sphere i) from its rows.
-          do x = 1, 4
-            if (hi(x) < lo(x)) cycle
-            do yr = 1, 4
-              if (hi(yr) < lo(yr)) cycle
-              if (yr >= x) then
-                do b = 0, hi(x) - lo(x)
-                  this%k(ks(yr, 2):ks(yr, 2) + hi(yr) - lo(yr), ks(x, 1) + b) = gr(lo(yr):hi(yr), lo(x) + b)
+        do tj = ti, ntile
+          do i = (ti - 1)*assembly_tile + 1, min(ti*assembly_tile, nsph)
+            call starts(i, ks(:, 1), bs(:, 1), ps(1))
+            do j = max(i + 1, (tj - 1)*assembly_tile + 1), min(tj*assembly_tile, nsph)
+              call starts(j, ks(:, 2), bs(:, 2), ps(2))
+              ! Receiver j (rows), source i (columns).
+              d = r(:, j) - r(:, i)
+              dist = norm2(d)
+              if (dist <= 0.0_wp) then
+                if (first_coincident(i) == 0) first_coincident(i) = j
+                cycle
+              end if
+              if (dist <= 1.0_wp) n_over = n_over + 1
+              if (dist < this%min_distance) then
+                d = d*(this%min_distance/dist)
+                n_clamp = n_clamp + 1
+              end if
+              call irregular_harmonics(d, 2*this%lay%order, ih)
+              call pair_block_grouped(this%lay, d, ih, yw, gr, zeroed=.true.)
+              ! Column by column, each a contiguous run of K or B: the blocks below the diagonal
+              ! runs (yr >= x) from the columns of gr, the others (rows of sphere i) from its rows.
+              do x = 1, 4
+                if (hi(x) < lo(x)) cycle
+                do yr = 1, 4
+                  if (hi(yr) < lo(yr)) cycle
+                  if (yr >= x) then
+                    do b = 0, hi(x) - lo(x)
+                      this%k(ks(yr, 2):ks(yr, 2) + hi(yr) - lo(yr), ks(x, 1) + b) = gr(lo(yr):hi(yr), lo(x) + b)
+                    end do
+                  else
+                    do b = 0, hi(yr) - lo(yr)
+                      do a = 0, hi(x) - lo(x)
+                        this%k(ks(x, 1) + a, ks(yr, 2) + b) = gr(lo(yr) + b, lo(x) + a)
+                      end do
+                    end do
+                  end if
                 end do
-              else
-                do b = 0, hi(yr) - lo(yr)
+              end do
+              do x = 1, 3, 2
+                if (hi(x) < lo(x)) cycle
+                do b = 0, h - 1
+                  this%bp(bs(x, 2):bs(x, 2) + hi(x) - lo(x), ps(1) + b) = gr(lo(x):hi(x), lo(5) + b)
                   do a = 0, hi(x) - lo(x)
-                    this%k(ks(x, 1) + a, ks(yr, 2) + b) = gr(lo(yr) + b, lo(x) + a)
+                    this%bp(bs(x, 1) + a, ps(2) + b) = gr(lo(5) + b, lo(x) + a)
                   end do
                 end do
-              end if
-            end do
-          end do
-          do x = 1, 3, 2
-            if (hi(x) < lo(x)) cycle
-            do b = 0, h - 1
-              this%bp(bs(x, 2):bs(x, 2) + hi(x) - lo(x), ps(1) + b) = gr(lo(x):hi(x), lo(5) + b)
-              do a = 0, hi(x) - lo(x)
-                this%bp(bs(x, 1) + a, ps(2) + b) = gr(lo(5) + b, lo(x) + a)
               end do
             end do
           end do
         end do
-      end do
-      end do
       end do
       !$omp end do
       deallocate (ih, yw, gr)
