@@ -26,6 +26,12 @@
 !>              each with 1 and with 2 threads (OpenMP pair loops and OpenBLAS together; needs
 !>              OPENBLAS_NUM_THREADS unset), the ratios 1 thread / 2 threads, the largest bead
 !>              deviation between the thread counts at T and the load average at every figure
+!>   evaluation [--config C]: the cost of one evaluation of the study's model, split: processor
+!>              seconds (cpu_time, best of 5-20 repetitions) of the assembly of K, the
+!>              lubrication blocks, the 6N friction Cholesky of an 'iterative' call, one product
+!>              K x, one triangular-solve pair with the factor of K, and of whole 'iterative'
+!>              calls (at a configuration deformed by 0.003 d per bead from the reference: the
+!>              GMRES solve; and a factorising call) and 'stage' calls
 !>   rosenbrock [--config C] [--t-end T] [--model M] [--jacobian-steps K]: the Rosenbrock-W
 !>              stepper ros34pw2 against dopri45 in one run, tolerance 1e-4: with 'stage' and
 !>              'iterative' (multipole; rpy: the one exact path), ros34pw2 'iterative' also with
@@ -71,6 +77,10 @@ program knotflow_bench_reuse
     set_openmp_threads
   use kf_scene_chain, only: chain_params_t
   use kf_multipole_system, only: multipole_system_t
+  use kf_hydro_multipole_iterative, only: multipole_iterative_t
+  use kf_lubrication, only: lubrication_t
+  use kf_pair_blocks, only: pair_blocks_t
+  use kf_lapack, only: cholesky_factor
   implicit none
 
   character(len=*), parameter :: program_name = 'knotflow-bench-reuse'
@@ -104,9 +114,11 @@ program knotflow_bench_reuse
     call run_threads()
   case ('rosenbrock')
     call run_rosenbrock()
+  case ('evaluation')
+    call run_evaluation()
   case default
     call die(program_name, "unknown part '"//part//"' (allowed: velocity, trajectory, speed, compare, scaling, "// &
-             "overlaps, rigid, stiffness, threads, rosenbrock)", 2)
+             "overlaps, rigid, stiffness, threads, rosenbrock, evaluation)", 2)
   end select
 
 contains
@@ -117,7 +129,7 @@ contains
     if (command_argument_count() < 1) call die(program_name, 'usage: knotflow-bench-reuse velocity|trajectory|speed|scaling [options]', 2)
     part = argument(1)
     call standard_option(program_name, part, 'usage: knotflow-bench-reuse velocity|trajectory|speed|compare|'// &
-      'overlaps|scaling|rigid|stiffness|threads|rosenbrock [--config trefoil|random60|coil|FILE] [--t-end T] [--every K]'// &
+      'overlaps|scaling|rigid|stiffness|threads|rosenbrock|evaluation [--config trefoil|random60|coil|FILE] [--t-end T] [--every K]'// &
       ' [--eps-lub E] [--overlap RULE (one of '//name_list(overlap_names)//')] [--update U] [--tolerance TOL]'// &
       ' [--table FILE] [--model multipole|rpy] [--jacobian-steps K]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
@@ -470,6 +482,107 @@ contains
     write (output_unit, '(a)') label//'.factor_cpu_s = '//to_str(w, '(f8.4)')
     write (output_unit, '(a)') label//'.factor_gflops_per_cpu_s = '//to_str(factor_flops(size(r, 2))/w/1.0e9_wp, '(f8.2)')
   end subroutine one_evaluation
+
+  !> The cost of one evaluation of the study's model at the configuration `config`, split
+  !> (module header, part evaluation); processor seconds, so that the time the process waits
+  !> for a CPU on a shared machine does not count.
+  subroutine run_evaluation()
+    integer, parameter :: reps(8) = [7, 7, 20, 20, 7, 5, 3, 3]
+    type(scene_t) :: scene
+    type(multipole_system_t) :: sys
+    type(lubrication_t) :: lub
+    type(pair_blocks_t) :: blocks
+    type(multipole_iterative_t) :: iter
+    type(multipole_model_t) :: stage
+    type(hydro_stats_t) :: s0, s1
+    type(error_t), allocatable :: error
+    real(wp), allocatable :: r(:, :), r2(:, :), f(:, :), u(:, :), zeta(:, :), pre(:, :), x(:), y(:)
+    real(wp) :: e(3, 3), eps, best(8), c0, c1
+    integer :: n, i, rep, what
+    call header()
+    call study_scene(config, 1.0e-4_wp, update_stage, scene, r)
+    eps = merge(eps_lub, 1.0e-4_wp, eps_lub > 0.0_wp)
+    n = size(r, 2)
+    allocate (f(3, n), u(3, n), r2(3, n), zeta(6*n, 6*n), pre(6*n, 6*n))
+    do i = 1, n
+      f(:, i) = [sin(1.7_wp*i), cos(2.3_wp*i), 0.5_wp*sin(0.9_wp*i)]
+      r2(:, i) = r(:, i) + 0.003_wp*[sin(3.1_wp*i), cos(1.3_wp*i), sin(0.7_wp*i)]
+    end do
+    e = 0.0_wp
+    e(1, 3) = 0.5_wp
+    e(3, 1) = 0.5_wp
+    write (output_unit, '(a)') 'n_beads = '//to_str(n)
+    call sys%init(2, 1.0_wp + eps, error)
+    if (allocated(error)) call die(program_name, error%message, 2)
+    call lub%init(2, eps, error)
+    if (allocated(error)) call die(program_name, error%message, 2)
+    call stage%init(2, .true., eps, error)
+    if (allocated(error)) call die(program_name, error%message, 2)
+    ! the pieces in order: 1 assembly, 2 lubrication blocks, 3 K x, 4 solve pair, 5 6N Cholesky,
+    ! 6 'iterative' GMRES calls, 7 'iterative' factorising calls, 8 'stage' calls
+    best = huge(1.0_wp)
+    do what = 1, 8
+      select case (what)
+      case (3)
+        allocate (x(sys%unknowns()), y(sys%unknowns()))
+        x = 1.0_wp
+      case (4)
+        call sys%factorise(r, error)
+      case (5)
+        call sys%grand_friction(zeta, error)
+        if (.not. allocated(error)) call blocks%add_friction(zeta)
+      case (6)
+        call iter%setup(2, .true., eps, error)
+        if (.not. allocated(error)) call iter%velocities(r, f, u, error, e)
+        s0 = iter%statistics()
+      end select
+      if (allocated(error)) call die(program_name, error%message, 2)
+      do rep = 1, reps(what)
+        if (what == 4) x = 1.0_wp
+        if (what == 5) pre = zeta
+        if (what == 7) then
+          call iter%setup(2, .true., eps, error)
+          if (allocated(error)) call die(program_name, error%message, 2)
+        end if
+        call cpu_time(c0)
+        select case (what)
+        case (1)
+          call sys%assemble(r, error)
+        case (2)
+          call lub%pair_blocks(r, blocks)
+        case (3)
+          call sys%apply(x, y)
+        case (4)
+          call sys%forward(x)
+          call sys%backward(x)
+        case (5)
+          call cholesky_factor(pre, error, 'lubrication-corrected friction')
+        case (6, 7)
+          call iter%velocities(r2, f, u, error, e)
+        case default
+          call stage%velocities(r2, f, u, error, e)
+        end select
+        call cpu_time(c1)
+        if (allocated(error)) call die(program_name, error%message, 2)
+        best(what) = min(best(what), c1 - c0)
+      end do
+      if (what == 6) s1 = iter%statistics()
+    end do
+    write (output_unit, '(a)') 'lubrication_pairs = '//to_str(blocks%n_pairs())
+    write (output_unit, '(a)') 'assembly_ms = '//to_str(1.0e3_wp*best(1), '(f0.3)')
+    write (output_unit, '(a)') 'lubrication_blocks_ms = '//to_str(1.0e3_wp*best(2), '(f0.3)')
+    write (output_unit, '(a)') 'product_k_ms = '//to_str(1.0e3_wp*best(3), '(f0.3)')
+    write (output_unit, '(a)') 'solve_pair_k_ms = '//to_str(1.0e3_wp*best(4), '(f0.3)')
+    write (output_unit, '(a)') 'friction_cholesky_6n_ms = '//to_str(1.0e3_wp*best(5), '(f0.3)')
+    write (output_unit, '(a)') 'iterative_reused_ms = '//to_str(1.0e3_wp*best(6), '(f0.3)')
+    write (output_unit, '(a)') 'iterative_reused_iterations = '// &
+      to_str(real(s1%cg_iterations - s0%cg_iterations, wp)/real(max(1_i8, s1%reused - s0%reused), wp), '(f0.2)')
+    write (output_unit, '(a)') 'iterative_reused_rest_ms = '// &
+      to_str(1.0e3_wp*(best(6) - best(1) - best(2) - best(5)), '(f0.3)')
+    write (output_unit, '(a)') 'iterative_refresh_ms = '//to_str(1.0e3_wp*best(7), '(f0.3)')
+    write (output_unit, '(a)') 'stage_ms = '//to_str(1.0e3_wp*best(8), '(f0.3)')
+    write (output_unit, '(a)') 'loadavg_end = '//loadavg()
+  end subroutine run_evaluation
 
   !> Processor time (all threads; cpu_time) of the factorisation of the L = 2 system at r: the
   !> best of 5 factorise calls (assembly + factorisation) less the best of 5 assemblies. Time

@@ -120,14 +120,24 @@ contains
   end function rows
 
   !> y = y + (sum of the pair blocks) x for 6N vectors x, y.
+  !> Each block by columns into a local 12-vector (no vector-subscript temporaries).
   subroutine apply(this, x, y)
     class(pair_blocks_t), intent(in) :: this
     real(wp), intent(in) :: x(:)
     real(wp), intent(inout) :: y(:)
-    integer :: k, ii(12)
+    integer :: k, c, i0, j0
+    real(wp) :: xl(12), yl(12)
     do k = 1, this%count
-      ii = rows(this, k)
-      y(ii) = y(ii) + matmul(this%zeta(:, :, k), x(ii))
+      i0 = 6*(this%ij(1, k) - 1)
+      j0 = 6*(this%ij(2, k) - 1)
+      xl(1:6) = x(i0 + 1:i0 + 6)
+      xl(7:12) = x(j0 + 1:j0 + 6)
+      yl = 0.0_wp
+      do c = 1, 12
+        yl = yl + this%zeta(:, c, k)*xl(c)
+      end do
+      y(i0 + 1:i0 + 6) = y(i0 + 1:i0 + 6) + yl(1:6)
+      y(j0 + 1:j0 + 6) = y(j0 + 1:j0 + 6) + yl(7:12)
     end do
   end subroutine apply
 

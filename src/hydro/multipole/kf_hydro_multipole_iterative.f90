@@ -281,8 +281,8 @@ contains
   !> y = A x, the system at the current configuration (module header).
   subroutine operator_apply(this, x, y)
     class(multipole_iterative_t), intent(inout) :: this
-    real(wp), intent(in) :: x(:)
-    real(wp), intent(out) :: y(:)
+    real(wp), intent(in), contiguous :: x(:)
+    real(wp), intent(out), contiguous :: y(:)
     integer :: nr, i, c, k, j
     real(wp) :: s
     nr = this%nr

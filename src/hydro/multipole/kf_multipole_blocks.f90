@@ -41,6 +41,14 @@ module kf_multipole_blocks
     !> terms term_ptr(e) .. term_ptr(e+1)-1, value = sum coef * y(slot), y = [x, |d|^2 x].
     integer, allocatable :: term_ptr(:), term_slot(:)
     real(wp), allocatable :: term_coef(:)
+    !> The terms evaluated per pair (`pair_block_grouped`): entry u = 1..nhalf is element
+    !> (half_row(u), half_col(u)) with terms half_ptr(u) .. half_ptr(u+1)-1 (those of term_ptr,
+    !> same order); with half_sign(u) = +-1 the mirror element (half_col(u), half_row(u)) is
+    !> half_sign(u) times it (K is symmetric and I_lambda^mu(-d) = (-1)^lambda I_lambda^mu(d),
+    !> so the block of -d is the transpose: each entry of the lower triangle gives its mirror).
+    integer :: nhalf = 0
+    integer, allocatable :: half_row(:), half_col(:), half_ptr(:), half_slot(:)
+    real(wp), allocatable :: half_coef(:), half_sign(:)
   contains
     procedure :: init => layout_init
     procedure :: index => layout_index
@@ -62,7 +70,9 @@ contains
     if (allocated(this%rank_n)) deallocate (this%rank_n, this%fam, this%m_of, this%sigma, &
                                             this%sigma_real, this%cn, this%widx, this%wval, &
                                             this%c1, this%c1d, this%c2, this%k1, this%k2, &
-                                            this%grp, this%term_ptr, this%term_slot, this%term_coef)
+                                            this%grp, this%term_ptr, this%term_slot, this%term_coef, &
+                                            this%half_row, this%half_col, this%half_ptr, this%half_slot, &
+                                            this%half_coef, this%half_sign)
     allocate (this%rank_n(this%nb), this%fam(this%nb), this%m_of(this%nb), this%sigma(this%nb))
     allocate (this%sigma_real(this%nb))
     allocate (this%cn(order), this%widx(2, this%nb), this%wval(2, this%nb))
@@ -118,6 +128,7 @@ contains
     end do
     call build_grouped(this)
     call build_real_terms(this)
+    call build_half_terms(this)
   end subroutine layout_init
 
   !> Local (1-based) index of rank n, family s, component q.
@@ -259,15 +270,87 @@ contains
     this%term_coef = coefs(1:nterm)
   end subroutine build_real_terms
 
+  !> The entries evaluated per pair (layout components half_*): every element (p, q), p >= q,
+  !> of the grouped block with terms, and its mirror (q, p) as +-(p, q) where the mirror's
+  !> terms are the same slots with coefficients sign times (p, q)'s (checked to 1e-12 of the
+  !> largest, sign from the first term); a mirror that does not match is evaluated on its own.
+  subroutine build_half_terms(this)
+    class(multipole_layout_t), intent(inout) :: this
+    integer :: p, q, e, em, ne, nem, k, u, nt
+    real(wp) :: sg, big
+    logical :: same
+    integer, allocatable :: row(:), col(:), ptr(:), slot(:)
+    real(wp), allocatable :: coef(:), mirror(:)
+
+    allocate (row(this%nb*this%nb), col(this%nb*this%nb), mirror(this%nb*this%nb), ptr(this%nb*this%nb + 1))
+    allocate (slot(size(this%term_slot)), coef(size(this%term_coef)))
+    u = 0
+    nt = 0
+    do q = 1, this%nb
+      do p = q, this%nb
+        e = p + this%nb*(q - 1)
+        em = q + this%nb*(p - 1)
+        ne = this%term_ptr(e + 1) - this%term_ptr(e)
+        nem = this%term_ptr(em + 1) - this%term_ptr(em)
+        sg = 0.0_wp
+        same = .false.
+        if (p /= q .and. ne == nem .and. ne > 0) then
+          sg = sign(1.0_wp, this%term_coef(this%term_ptr(em))*this%term_coef(this%term_ptr(e)))
+          big = maxval(abs(this%term_coef(this%term_ptr(e):this%term_ptr(e + 1) - 1)))
+          same = .true.
+          do k = 0, ne - 1
+            if (this%term_slot(this%term_ptr(e) + k) /= this%term_slot(this%term_ptr(em) + k) .or. &
+                abs(this%term_coef(this%term_ptr(em) + k) - sg*this%term_coef(this%term_ptr(e) + k)) > 1.0e-12_wp*big) &
+              same = .false.
+          end do
+        end if
+        if (ne > 0) call add(p, q, e, merge(sg, 0.0_wp, same))
+        if (p /= q .and. nem > 0 .and. .not. same) call add(q, p, em, 0.0_wp)
+      end do
+    end do
+    ptr(u + 1) = nt + 1
+    this%nhalf = u
+    this%half_row = row(1:u)
+    this%half_col = col(1:u)
+    this%half_sign = mirror(1:u)
+    this%half_ptr = ptr(1:u + 1)
+    this%half_slot = slot(1:nt)
+    this%half_coef = coef(1:nt)
+
+  contains
+
+    !> Entry (pr, pc) with the terms of element ee, mirror sign sm (0: none).
+    subroutine add(pr, pc, ee, sm)
+      integer, intent(in) :: pr, pc, ee
+      real(wp), intent(in) :: sm
+      integer :: kk
+      u = u + 1
+      row(u) = pr
+      col(u) = pc
+      mirror(u) = sm
+      ptr(u) = nt + 1
+      do kk = this%term_ptr(ee), this%term_ptr(ee + 1) - 1
+        nt = nt + 1
+        slot(nt) = this%term_slot(kk)
+        coef(nt) = this%term_coef(kk)
+      end do
+    end subroutine add
+
+  end subroutine build_half_terms
+
   !> Scaled real translation block in grouped order for displacement d (receiver - source):
   !> ihf = irregular harmonics of d (shape (0:2L, -2L:2L), passed whole), y = work of size
-  !> 2*nslot, gr(nb, nb) the block.
-  pure subroutine pair_block_grouped(lay, d, ihf, y, gr)
+  !> 2*nslot, gr(nb, nb) the block. The entries of the lower triangle with terms are summed and
+  !> each gives its mirror by the parity sign (half_*), so about half the entries are summed.
+  !> With `zeroed` true, gr holds a block of an earlier call (or zeros): the entries without
+  !> terms, zero in every block, are not written again.
+  pure subroutine pair_block_grouped(lay, d, ihf, y, gr, zeroed)
     type(multipole_layout_t), intent(in) :: lay
     real(wp), intent(in) :: d(3)
     complex(wp), intent(in) :: ihf(0:2*lay%order, -2*lay%order:2*lay%order)
     real(wp), intent(out) :: y(:)
-    real(wp), intent(out) :: gr(:, :)
+    real(wp), intent(inout) :: gr(:, :)
+    logical, intent(in), optional :: zeroed
     integer :: lambda, mu, s, e, p, q, k
     real(wp) :: d2, v
 
@@ -280,16 +363,20 @@ contains
       end do
     end do
     y(lay%nslot + 1:2*lay%nslot) = d2*y(1:lay%nslot)
-    e = 0
-    do q = 1, lay%nb
-      do p = 1, lay%nb
-        e = e + 1
-        v = 0.0_wp
-        do k = lay%term_ptr(e), lay%term_ptr(e + 1) - 1
-          v = v + lay%term_coef(k)*y(lay%term_slot(k))
-        end do
-        gr(p, q) = v
+    if (present(zeroed)) then
+      if (.not. zeroed) gr(1:lay%nb, 1:lay%nb) = 0.0_wp
+    else
+      gr(1:lay%nb, 1:lay%nb) = 0.0_wp
+    end if
+    do e = 1, lay%nhalf
+      v = 0.0_wp
+      do k = lay%half_ptr(e), lay%half_ptr(e + 1) - 1
+        v = v + lay%half_coef(k)*y(lay%half_slot(k))
       end do
+      p = lay%half_row(e)
+      q = lay%half_col(e)
+      gr(p, q) = v
+      if (lay%half_sign(e) /= 0.0_wp) gr(q, p) = lay%half_sign(e)*v
     end do
   end subroutine pair_block_grouped
 

@@ -35,6 +35,10 @@ module kf_multipole_system
 
   !> The highest truncation order L the system takes (the scene allows less: kf_scene_hydro).
   integer, parameter, public :: max_multipole_order = 20
+  !> Spheres per tile side in the pair loop of `assemble` (cache blocking of the writes).
+  integer, parameter :: assembly_tile = 8
+  !> Columns of B per panel in `apply` (a panel of 16 N rows: 200 kB at N = 99, L = 2).
+  integer, parameter :: apply_panel = 32
 
   !> The factorised N-sphere system.
   !> Work arrays and sizes are private; `n_clamped` and `seconds` report on the last factorise.
@@ -134,7 +138,7 @@ contains
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
-    integer :: nsph, h, i, j, x, yr, n, q, t, pc, n_over, n_clamp
+    integer :: nsph, h, i, j, x, yr, n, q, t, pc, n_over, n_clamp, a, b, ti, tj, ntile
     integer :: lo(5), hi(5), ks(4, 2), bs(4, 2), ps(2)
     integer, allocatable :: first_coincident(:)
     integer(8) :: c0, c1, crate
@@ -194,52 +198,68 @@ contains
       ! The pair blocks: each pair (i, j) is computed and written by one thread into its own
       ! rows and columns of K and B (no sums across pairs), so K and B are the same, bit for
       ! bit, for any number of OpenMP threads (kf_blas_threads sets the count); the counters
-      ! are integer sums.
+      ! are integer sums. The pairs go by tiles of assembly_tile x assembly_tile spheres (a
+      ! tile row per task, j increasing for each i), so that the short runs a tile writes into
+      ! each column of K and B fill whole cache lines while they are in cache.
       n_over = 0
       n_clamp = 0
       first_coincident = 0
-      !$omp parallel default(none) shared(this, r, nsph, lo, hi, h, first_coincident) &
-      !$omp private(i, j, x, yr, ks, bs, ps, d, dist, ih, yw, gr) reduction(+:n_over, n_clamp)
+      ntile = (nsph + assembly_tile - 1)/assembly_tile
+      !$omp parallel default(none) shared(this, r, nsph, lo, hi, h, first_coincident, ntile) &
+      !$omp private(ti, tj, i, j, x, yr, a, b, ks, bs, ps, d, dist, ih, yw, gr) reduction(+:n_over, n_clamp)
       allocate (ih(0:2*this%lay%order, -2*this%lay%order:2*this%lay%order), yw(2*this%lay%nslot), &
                 gr(this%lay%nb, this%lay%nb))
+      gr = 0.0_wp
       !$omp do schedule(dynamic)
-      do i = 1, nsph
-        call starts(i, ks(:, 1), bs(:, 1), ps(1))
-        do j = i + 1, nsph
-          call starts(j, ks(:, 2), bs(:, 2), ps(2))
-          ! Receiver j (rows), source i (columns).
-          d = r(:, j) - r(:, i)
-          dist = norm2(d)
-          if (dist <= 0.0_wp) then
-            if (first_coincident(i) == 0) first_coincident(i) = j
-            cycle
-          end if
-          if (dist <= 1.0_wp) n_over = n_over + 1
-          if (dist < this%min_distance) then
-            d = d*(this%min_distance/dist)
-            n_clamp = n_clamp + 1
-          end if
-          call irregular_harmonics(d, 2*this%lay%order, ih)
-          call pair_block_grouped(this%lay, d, ih, yw, gr)
-          do x = 1, 4
-            if (hi(x) < lo(x)) cycle
-            do yr = 1, 4
-              if (hi(yr) < lo(yr)) cycle
-              if (yr >= x) then
-                this%k(ks(yr, 2):ks(yr, 2) + hi(yr) - lo(yr), ks(x, 1):ks(x, 1) + hi(x) - lo(x)) = &
-                  gr(lo(yr):hi(yr), lo(x):hi(x))
-              else
-                this%k(ks(x, 1):ks(x, 1) + hi(x) - lo(x), ks(yr, 2):ks(yr, 2) + hi(yr) - lo(yr)) = &
-                  transpose(gr(lo(yr):hi(yr), lo(x):hi(x)))
+      do ti = 1, ntile
+        do tj = ti, ntile
+          do i = (ti - 1)*assembly_tile + 1, min(ti*assembly_tile, nsph)
+            call starts(i, ks(:, 1), bs(:, 1), ps(1))
+            do j = max(i + 1, (tj - 1)*assembly_tile + 1), min(tj*assembly_tile, nsph)
+              call starts(j, ks(:, 2), bs(:, 2), ps(2))
+              ! Receiver j (rows), source i (columns).
+              d = r(:, j) - r(:, i)
+              dist = norm2(d)
+              if (dist <= 0.0_wp) then
+                if (first_coincident(i) == 0) first_coincident(i) = j
+                cycle
               end if
+              if (dist <= 1.0_wp) n_over = n_over + 1
+              if (dist < this%min_distance) then
+                d = d*(this%min_distance/dist)
+                n_clamp = n_clamp + 1
+              end if
+              call irregular_harmonics(d, 2*this%lay%order, ih)
+              call pair_block_grouped(this%lay, d, ih, yw, gr, zeroed=.true.)
+              ! Column by column, each a contiguous run of K or B: the blocks below the diagonal
+              ! runs (yr >= x) from the columns of gr, the others (rows of sphere i) from its rows.
+              do x = 1, 4
+                if (hi(x) < lo(x)) cycle
+                do yr = 1, 4
+                  if (hi(yr) < lo(yr)) cycle
+                  if (yr >= x) then
+                    do b = 0, hi(x) - lo(x)
+                      this%k(ks(yr, 2):ks(yr, 2) + hi(yr) - lo(yr), ks(x, 1) + b) = gr(lo(yr):hi(yr), lo(x) + b)
+                    end do
+                  else
+                    do b = 0, hi(yr) - lo(yr)
+                      do a = 0, hi(x) - lo(x)
+                        this%k(ks(x, 1) + a, ks(yr, 2) + b) = gr(lo(yr) + b, lo(x) + a)
+                      end do
+                    end do
+                  end if
+                end do
+              end do
+              do x = 1, 3, 2
+                if (hi(x) < lo(x)) cycle
+                do b = 0, h - 1
+                  this%bp(bs(x, 2):bs(x, 2) + hi(x) - lo(x), ps(1) + b) = gr(lo(x):hi(x), lo(5) + b)
+                  do a = 0, hi(x) - lo(x)
+                    this%bp(bs(x, 1) + a, ps(2) + b) = gr(lo(5) + b, lo(x) + a)
+                  end do
+                end do
+              end do
             end do
-          end do
-          do x = 1, 3, 2
-            if (hi(x) < lo(x)) cycle
-            this%bp(bs(x, 2):bs(x, 2) + hi(x) - lo(x), ps(1):ps(1) + h - 1) = &
-              gr(lo(x):hi(x), lo(5):hi(5))
-            this%bp(bs(x, 1):bs(x, 1) + hi(x) - lo(x), ps(2):ps(2) + h - 1) = &
-              transpose(gr(lo(5):hi(5), lo(x):hi(x)))
           end do
         end do
       end do
@@ -343,7 +363,7 @@ contains
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(in), contiguous :: x(:)
     real(wp), intent(out), contiguous :: y(:)
-    integer :: na, nc, nphi, np, cs
+    integer :: na, nc, nphi, np, cs, c0, w
     real(wp) :: t(this%lay%h*this%n)
     na = (this%lay%h - 3)*this%n
     nc = 3*this%n
@@ -351,11 +371,16 @@ contains
     np = nphi
     cs = 2*na + 1
     call dsymv('L', this%nr, 1.0_wp, this%k, this%nr, x, 1, 0.0_wp, y, 1)
-    ! t = B^T x_phi; y_phi -= B t (rows of B: run 1 of K, then run 3 from cs)
-    call dgemv('T', nc, np, 1.0_wp, this%bp(na + 1, 1), nphi, x(cs:), 1, 0.0_wp, t, 1)
-    if (na > 0) call dgemv('T', na, np, 1.0_wp, this%bp, nphi, x, 1, 1.0_wp, t, 1)
-    call dgemv('N', nc, np, -1.0_wp, this%bp(na + 1, 1), nphi, t, 1, 1.0_wp, y(cs:), 1)
-    if (na > 0) call dgemv('N', na, np, -1.0_wp, this%bp, nphi, t, 1, 1.0_wp, y, 1)
+    ! t = B^T x_phi; y_phi -= B t (rows of B: run 1 of K, then run 3 from cs), by panels of
+    ! apply_panel columns of B: a panel's part of t needs only its own columns, so each panel
+    ! is read from memory once and again from cache for its share of B t.
+    do c0 = 1, np, apply_panel
+      w = min(apply_panel, np - c0 + 1)
+      call dgemv('T', nc, w, 1.0_wp, this%bp(na + 1, c0), nphi, x(cs:), 1, 0.0_wp, t(c0), 1)
+      if (na > 0) call dgemv('T', na, w, 1.0_wp, this%bp(1, c0), nphi, x, 1, 1.0_wp, t(c0), 1)
+      call dgemv('N', nc, w, -1.0_wp, this%bp(na + 1, c0), nphi, t(c0), 1, 1.0_wp, y(cs:), 1)
+      if (na > 0) call dgemv('N', na, w, -1.0_wp, this%bp(1, c0), nphi, t(c0), 1, 1.0_wp, y, 1)
+    end do
   end subroutine system_apply
 
   !> x = L^-1 x with the Cholesky factor K = L L^T of the last `factorise` (nr unknowns).
