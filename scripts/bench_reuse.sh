@@ -15,9 +15,12 @@
 #   compare: 'stage', 'adaptive' and 'iterative' in one run (t = 0-10) on the trefoil and on a
 #   random self-avoiding chain (N = 60, A = 1.3): docs/accuracy.md, "Exact at every stage by
 #   iteration" (about 25 min of one core)
-#   rosenbrock: the Rosenbrock-W stepper ros34pw2 against dopri45 (t = 0-10, tolerance 1e-4) on
-#   the trefoil with the study's model ('stage' and 'iterative') and with RPY: docs/accuracy.md,
-#   "A linearly implicit stepper" (about 30 min of one core)
+#   rosenbrock: the Rosenbrock-W steppers ros34pw2 and ros34pw3 against dopri45 (t = 0-10,
+#   tolerance 1e-4) on the trefoil and the random chain (N = 60, A = 1.3) with the study's model
+#   (dopri45 'stage', the reference, and 'iterative'; each Rosenbrock method 'iterative' with a new
+#   mobility every step and with it kept jacobian_steps = 4 steps) and on the trefoil with RPY:
+#   docs/accuracy.md, "A linearly implicit stepper" and "A fourth-order Rosenbrock-W method"
+#   (about 35 min of one core)
 #   case, case-candycane: a whole reference case on one core, the trefoil (N = 99, orientation
 #   c, A = 2.2, t_end = 1000) or the seeded candy-cane (N = 152, A = 1, t_end = 2000), with the
 #   path of KNOTFLOW_CASE_UPDATE and KNOTFLOW_CASE_METHOD (default 'iterative' and 'ros34pw2');
@@ -60,7 +63,8 @@ for part in "${parts[@]}"; do
     trajectory) bench trajectory_trefoil trajectory --config trefoil --t-end 10 ;;
     speed) bench speed_trefoil speed --config trefoil --t-end 50 ;;
     rosenbrock)
-      bench rosenbrock_trefoil rosenbrock --config trefoil --t-end 10
+      bench rosenbrock_trefoil rosenbrock --config trefoil --t-end 10 --rosenbrock-stage no
+      bench rosenbrock_random60 rosenbrock --config random60 --t-end 10 --rosenbrock-stage no
       bench rosenbrock_trefoil_rpy rosenbrock --config trefoil --t-end 10 --model rpy --overlap pair ;;
     compare)
       bench compare_trefoil compare --config trefoil --t-end 10

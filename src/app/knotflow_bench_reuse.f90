@@ -32,9 +32,12 @@
 !>              K x, one triangular-solve pair with the factor of K, and of whole 'iterative'
 !>              calls (at a configuration deformed by 0.003 d per bead from the reference: the
 !>              GMRES solve; and a factorising call) and 'stage' calls
-!>   rosenbrock [--config C] [--t-end T] [--model M] [--jacobian-steps K]: the Rosenbrock-W
-!>              stepper ros34pw2 against dopri45 in one run, tolerance 1e-4: with 'stage' and
-!>              'iterative' (multipole; rpy: the one exact path), ros34pw2 'iterative' also with
+!>   rosenbrock [--config C] [--t-end T] [--model M] [--jacobian-steps K] [--rosenbrock-stage
+!>              yes|no] [--steppers LIST] [--tolerance TOL]: the Rosenbrock-W steppers of LIST
+!>              (comma-separated, default ros34pw2,ros34pw3) at tolerance TOL (default 1e-4)
+!>              against dopri45 at tolerance 1e-4 in one run: with 'stage' (with the multipole model unless
+!>              --rosenbrock-stage no; dopri45 'stage' always, the reference) and 'iterative'
+!>              (multipole; rpy: the one exact path), each Rosenbrock 'iterative' also with
 !>              the mobility of its Jacobian kept for K steps (&integrator jacobian_steps,
 !>              default 4; after a 'stage' evaluation a new mobility costs nothing); per run wall time, steps, rejected,
 !>              velocity evaluations (per unit time), Jacobians, and the largest bead deviation
@@ -58,14 +61,14 @@ program knotflow_bench_reuse
   use kf_scene, only: scene_t
   use kf_scene_hydro, only: overlap_names, overlap_pair, overlap_relax, update_names, update_default, update_stage, &
     update_adaptive, update_iterative
-  use kf_scene_integrator, only: jacobian_steps_max
+  use kf_scene_integrator, only: jacobian_steps_max, method_dopri45, method_ros34pw2, method_ros34pw3
   use kf_scene_check, only: name_list
   use kf_hydro_limits, only: eps_lub_in_range, eps_lub_range_text
   use kf_chain_shapes, only: build_initial_chain
   use kf_dynamics, only: dynamics_t
   use kf_stepper, only: stepper_t
   use kf_stepper_factory, only: make_stepper
-  use kf_stepper_ros34pw2, only: ros34pw2_stepper_t
+  use kf_stepper_rosenbrock, only: rosenbrock_stepper_t
   use kf_hydro_model, only: hydro_stats_t
   use kf_hydro_multipole, only: multipole_model_t
   use kf_reuse_check, only: checked_dynamics_t
@@ -85,10 +88,10 @@ program knotflow_bench_reuse
 
   character(len=*), parameter :: program_name = 'knotflow-bench-reuse'
 
-  character(len=:), allocatable :: part, config, overlap, update, table, model
+  character(len=:), allocatable :: part, config, overlap, update, table, model, steppers
   real(wp) :: t_end, eps_lub, tolerance
   integer :: every, jacobian_steps
-  logical :: omp_set
+  logical :: omp_set, rosenbrock_stage
 
   ! The OpenMP pair loops get the BLAS's thread count (OPENBLAS_NUM_THREADS=1: one core; kf_blas_threads).
   call set_openmp_threads(blas_threads_in_use(), omp_set)
@@ -131,7 +134,8 @@ contains
     call standard_option(program_name, part, 'usage: knotflow-bench-reuse velocity|trajectory|speed|compare|'// &
       'overlaps|scaling|rigid|stiffness|threads|rosenbrock|evaluation [--config trefoil|random60|coil|FILE] [--t-end T] [--every K]'// &
       ' [--eps-lub E] [--overlap RULE (one of '//name_list(overlap_names)//')] [--update U] [--tolerance TOL]'// &
-      ' [--table FILE] [--model multipole|rpy] [--jacobian-steps K]'//new_line('a')// &
+      ' [--table FILE] [--model multipole|rpy] [--jacobian-steps K] [--rosenbrock-stage yes|no]'// &
+      ' [--steppers LIST]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
       'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).')
     config = 'trefoil'
@@ -144,6 +148,8 @@ contains
     tolerance = 1.0e-4_wp
     model = 'multipole'
     jacobian_steps = 4
+    rosenbrock_stage = .true.
+    steppers = method_ros34pw2//','//method_ros34pw3
     k = 2
     do while (k <= command_argument_count())
       arg = argument(k)
@@ -182,6 +188,13 @@ contains
         if (ios /= 0 .or. jacobian_steps < 1 .or. jacobian_steps > jacobian_steps_max) &
           call die(program_name, '--jacobian-steps '//trim(val)//': expected an integer in [1, '// &
                    to_str(jacobian_steps_max)//']', 2)
+      case ('--steppers')
+        steppers = trim(val)
+        call check_steppers(steppers)
+      case ('--rosenbrock-stage')
+        if (val /= 'yes' .and. val /= 'no') &
+          call die(program_name, '--rosenbrock-stage '//trim(val)//': allowed values are yes, no', 2)
+        rosenbrock_stage = val == 'yes'
       case ('--every')
         read (val, *, iostat=ios) every
         if (ios /= 0 .or. every < 1) call die(program_name, '--every '//trim(val)//': expected an integer >= 1', 2)
@@ -199,6 +212,49 @@ contains
       overlap = overlap_relax
     end if
   end subroutine parse_arguments
+
+  !> The comma-separated list of --steppers: each one of the Rosenbrock methods.
+  subroutine check_steppers(list)
+    character(len=*), intent(in) :: list
+    integer :: m
+    do m = 1, count_items(list)
+      if (item(list, m) /= method_ros34pw2 .and. item(list, m) /= method_ros34pw3) &
+        call die(program_name, '--steppers '//list//': '''//item(list, m)//''' is not allowed (each one of '// &
+                 method_ros34pw2//', '//method_ros34pw3//')', 2)
+    end do
+  end subroutine check_steppers
+
+  !> The number of comma-separated items of a list.
+  pure integer function count_items(list)
+    character(len=*), intent(in) :: list
+    integer :: k
+    count_items = 1
+    do k = 1, len(list)
+      if (list(k:k) == ',') count_items = count_items + 1
+    end do
+  end function count_items
+
+  !> Item m of a comma-separated list (blanks trimmed; '' past the end).
+  function item(list, m) result(name)
+    character(len=*), intent(in) :: list
+    integer, intent(in) :: m
+    character(len=:), allocatable :: name
+    integer :: k, first, last, seen
+    first = 1
+    last = len(list)
+    seen = 1
+    do k = 1, len(list)
+      if (list(k:k) /= ',') cycle
+      if (seen == m) then
+        last = k - 1
+        exit
+      end if
+      seen = seen + 1
+      first = k + 1
+    end do
+    name = ''
+    if (seen == m) name = trim(adjustl(list(first:last)))
+  end function item
 
   !> The study's model on configuration `name`, tolerance tol, with initial positions r.
   subroutine study_scene(name, tol, update, scene, r)
@@ -722,38 +778,46 @@ contains
     end do
   end subroutine run_overlaps
 
-  !> ros34pw2 against dopri45 (tolerance 1e-4) in one run: dopri45 'stage' first (the
-  !> reference), then ros34pw2 'stage', and with the multipole model dopri45 and ros34pw2
-  !> 'iterative'; ros34pw2 'iterative' also with the mobility of its Jacobian kept for
-  !> jacobian_steps steps (K > 1).
+  !> The Rosenbrock methods of --steppers (tolerance --tolerance) against dopri45 (tolerance
+  !> 1e-4) in one run: dopri45 'stage' first (the reference), then each Rosenbrock method
+  !> 'stage' (with the multipole model only when rosenbrock_stage), and with the multipole model
+  !> dopri45 and each Rosenbrock method 'iterative', also with the mobility of its Jacobian kept
+  !> for jacobian_steps steps (K > 1).
   subroutine run_rosenbrock()
     character(len=9), allocatable :: updates(:)
+    character(len=:), allocatable :: label, method
     real(wp), allocatable :: r_ref(:, :), r(:, :)
     real(wp) :: wall_ref, wall
-    integer :: k
+    integer :: k, m
     call header()
     write (output_unit, '(a)') 'model = '//model
     write (output_unit, '(a)') 'jacobian_steps = '//to_str(jacobian_steps)
+    write (output_unit, '(a)') 'rosenbrock_tolerance = '//to_str(tolerance, '(es10.3)')
     if (model == 'multipole') then
       updates = [character(len=9) :: update_stage, update_iterative]
     else
       updates = [character(len=9) :: update_stage]
     end if
     call jacobian_cost()
-    call run_method('dopri45.stage', 'dopri45', update_stage, 1, r_ref, wall_ref)
+    call run_method(method_dopri45//'.stage', method_dopri45, update_stage, 1, 1.0e-4_wp, r_ref, wall_ref)
     do k = 1, size(updates)
       if (k > 1) then
-        call run_method('dopri45.'//trim(updates(k)), 'dopri45', trim(updates(k)), 1, r, wall)
-        call compare_with_reference('dopri45.'//trim(updates(k)), r, wall, r_ref, wall_ref)
+        label = method_dopri45//'.'//trim(updates(k))
+        call run_method(label, method_dopri45, trim(updates(k)), 1, 1.0e-4_wp, r, wall)
+        call compare_with_reference(label, r, wall, r_ref, wall_ref)
       end if
-      call run_method('ros34pw2.'//trim(updates(k)), 'ros34pw2', trim(updates(k)), 1, r, wall)
-      call compare_with_reference('ros34pw2.'//trim(updates(k)), r, wall, r_ref, wall_ref)
-      if (jacobian_steps > 1 .and. trim(updates(k)) /= update_stage) then
-        call run_method('ros34pw2_mobility'//to_str(jacobian_steps)//'.'//trim(updates(k)), 'ros34pw2', &
-                        trim(updates(k)), jacobian_steps, r, wall)
-        call compare_with_reference('ros34pw2_mobility'//to_str(jacobian_steps)//'.'//trim(updates(k)), &
-                                    r, wall, r_ref, wall_ref)
-      end if
+      if (trim(updates(k)) == update_stage .and. model == 'multipole' .and. .not. rosenbrock_stage) cycle
+      do m = 1, count_items(steppers)
+        method = item(steppers, m)
+        label = method//'.'//trim(updates(k))
+        call run_method(label, method, trim(updates(k)), 1, tolerance, r, wall)
+        call compare_with_reference(label, r, wall, r_ref, wall_ref)
+        if (jacobian_steps > 1 .and. trim(updates(k)) /= update_stage) then
+          label = method//'_mobility'//to_str(jacobian_steps)//'.'//trim(updates(k))
+          call run_method(label, method, trim(updates(k)), jacobian_steps, tolerance, r, wall)
+          call compare_with_reference(label, r, wall, r_ref, wall_ref)
+        end if
+      end do
     end do
     write (output_unit, '(a)') 'loadavg_end = '//loadavg()
   end subroutine run_rosenbrock
@@ -766,11 +830,12 @@ contains
     write (output_unit, '(a)') label//'.deviation_vs_dopri45_stage = '//to_str(max_bead_deviation(r, r_ref), '(es10.3)')
   end subroutine compare_with_reference
 
-  !> One integration of the configuration to t_end (tolerance 1e-4) with `method` and `upd`:
-  !> its figures under `label`; r the final positions.
-  subroutine run_method(label, method, upd, keep, r, wall)
+  !> One integration of the configuration to t_end (tolerance tol; eps_lub 1e-4 unless
+  !> --eps-lub) with `method` and `upd`: its figures under `label`; r the final positions.
+  subroutine run_method(label, method, upd, keep, tol, r, wall)
     character(len=*), intent(in) :: label, method, upd
     integer, intent(in) :: keep
+    real(wp), intent(in) :: tol
     real(wp), allocatable, intent(out) :: r(:, :)
     real(wp), intent(out) :: wall
     type(scene_t) :: scene
@@ -778,7 +843,7 @@ contains
     class(stepper_t), allocatable :: integ
     type(error_t), allocatable :: error
     real(wp) :: t, w0
-    call study_scene(config, 1.0e-4_wp, upd, scene, r)
+    call study_scene(config, tol, upd, scene, r)
     if (eps_lub < 0.0_wp) scene%hydro%eps_lub = 1.0e-4_wp
     scene%integrator%method = method
     scene%integrator%jacobian_steps = keep
@@ -799,7 +864,7 @@ contains
       to_str(real(dyn%evaluations, wp)/t_end, '(f10.2)')
     write (output_unit, '(a)') label//'.mean_dt = '//to_str(t_end/real(max(1_i8, integ%steps()), wp), '(es10.3)')
     select type (integ)
-    type is (ros34pw2_stepper_t)
+    type is (rosenbrock_stepper_t)
       write (output_unit, '(a)') label//'.jacobians = '//to_str(integ%jacobians())
     end select
     if (upd /= update_stage) call print_stats(label//'.', dyn%hydro_statistics())

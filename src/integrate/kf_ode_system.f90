@@ -12,7 +12,7 @@
 !> A step abandoned with an error (of the system, non-finite values in rk4) gets neither
 !> `step_accepted` nor `step_rejected`. The defaults do nothing.
 !>
-!> The linearly implicit steppers (kf_stepper_ros34pw2) also ask for `jacobian(t, y, jac,
+!> The linearly implicit steppers (kf_stepper_rosenbrock) also ask for `jacobian(t, y, jac,
 !> evaluations, error)`: an approximation of df/dy at (t, y) as a dense n x n matrix, n =
 !> size(y), the entries of y taken column by column (y(a, i) is entry 3(i - 1) + a for 3-row
 !> states). Any approximation keeps a W-method's order; how well it captures the stiff part

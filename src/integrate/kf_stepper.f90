@@ -1,7 +1,7 @@
 !> The time steppers for y(3, N) (kf_ode_system): an abstract type with one `advance` and the
 !> bookkeeping every method shares. The concrete methods are kf_stepper_rk4,
-!> kf_stepper_dopri45 and kf_stepper_ros34pw2; kf_stepper_factory builds one from the &integrator parameters and alone
-!> knows their names.
+!> kf_stepper_dopri45 and kf_stepper_rosenbrock (ros34pw2, ros34pw3); kf_stepper_factory builds
+!> one from the &integrator parameters and alone knows their names.
 !>
 !> Contract of `advance(sys, t, y, t_target, error, monitor)`: integrate y from t exactly to
 !> t_target (t is updated); the last step is clipped to hit t_target, and the step size proposed

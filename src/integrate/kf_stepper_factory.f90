@@ -4,11 +4,11 @@
 module kf_stepper_factory
   use kf_error, only: error_t
   use kf_scene_integrator, only: integrator_params_t, stepper_names => method_names, method_dopri45, &
-                                 method_rk4, method_ros34pw2, check_integrator
+                                 method_rk4, method_ros34pw2, method_ros34pw3, check_integrator
   use kf_stepper, only: stepper_t
   use kf_stepper_rk4, only: rk4_stepper_t
   use kf_stepper_dopri45, only: dopri45_stepper_t
-  use kf_stepper_ros34pw2, only: ros34pw2_stepper_t
+  use kf_stepper_rosenbrock, only: rosenbrock_stepper_t, ros34pw2_tableau, ros34pw3_tableau
   implicit none
   private
 
@@ -24,7 +24,7 @@ contains
     type(error_t), allocatable, intent(out) :: error
     type(rk4_stepper_t), allocatable :: rk4
     type(dopri45_stepper_t), allocatable :: dopri45
-    type(ros34pw2_stepper_t), allocatable :: ros
+    type(rosenbrock_stepper_t), allocatable :: ros
     call check_integrator(params, '', error)
     if (allocated(error)) return
     select case (trim(params%method))
@@ -34,7 +34,13 @@ contains
       call move_alloc(dopri45, stepper)
     case (method_ros34pw2)
       allocate (ros)
-      call ros%init(params%tolerance, params%dt_initial, params%dt_min, params%dt_max, params%max_steps)
+      call ros%init(ros34pw2_tableau(), params%tolerance, params%dt_initial, params%dt_min, params%dt_max, &
+                    params%max_steps)
+      call move_alloc(ros, stepper)
+    case (method_ros34pw3)
+      allocate (ros)
+      call ros%init(ros34pw3_tableau(), params%tolerance, params%dt_initial, params%dt_min, params%dt_max, &
+                    params%max_steps)
       call move_alloc(ros, stepper)
     case (method_rk4)
       allocate (rk4)

@@ -186,7 +186,7 @@ CORPUS = [
      "&hydro: update = 'sometimes' is not allowed (one of stage, adaptive, iterative)"),
     ('method',
      "&integrator method = 'euler' /",
-     "&integrator: method = 'euler' is not allowed (one of dopri45, rk4, ros34pw2)"),
+     "&integrator: method = 'euler' is not allowed (one of dopri45, rk4, ros34pw2, ros34pw3)"),
     ('t_end_zero',
      '&integrator t_end = 0.0 /',
      '&integrator: t_end = 0.0 is not allowed (a number > 0)'),
