@@ -23,7 +23,8 @@ module kf_capi_names
 contains
 
   !> Write the names of list `kind` (1: hydrodynamic models, 2: overlap rules, 3: knot types in
-  !> the order of the spectrum, 4: the case statuses of knotflow_run_scene from 0), separated by single blanks, into buf(buflen). Returns kf_ok, or
+  !> the order of the spectrum, 4: the case statuses of knotflow_run_scene from 0), separated
+  !> by single blanks, into buf(buflen). Returns kf_ok, or
   !> kf_invalid_argument for an unknown kind or a buffer too short (the message is then in buf).
   integer(c_int) function knotflow_names(kind, buf, buflen) bind(c, name='knotflow_names') result(status)
     integer(c_int), value, intent(in) :: kind
