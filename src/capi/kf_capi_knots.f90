@@ -40,11 +40,7 @@ contains
     type(error_t), allocatable :: error
     type(knot_stats_t) :: st
     integer(i8) :: start
-    kf = 0.0_c_double
-    spectrum = 0.0_c_double
-    dominant = 0
-    per_closure = 0
-    seconds = 0.0_c_double
+    call clear_knot_outputs(kf, spectrum, dominant, per_closure, seconds)
     status = kf_invalid_argument
     ! the numbers of beads and closures are checked by analyse_closures (its limits, its message)
     call check_positions('knotflow_knots', n, 0, r, error)
@@ -86,11 +82,7 @@ contains
     type(error_t), allocatable :: error
     type(knot_stats_t) :: st
     integer(i8) :: start
-    kf = 0.0_c_double
-    spectrum = 0.0_c_double
-    dominant = 0
-    per_closure = 0
-    seconds = 0.0_c_double
+    call clear_knot_outputs(kf, spectrum, dominant, per_closure, seconds)
     status = kf_invalid_argument
     call check_positions('knotflow_knots_at_points', n, 2, r, error)
     if (.not. allocated(error) .and. npoints < 1) &
@@ -118,6 +110,18 @@ contains
     per_closure = st%per_closure
     status = kf_ok
   end function knotflow_knots_at_points
+
+  !> The outputs of knotflow_knots and knotflow_knots_at_points before anything is computed
+  !> (what a refused call leaves).
+  subroutine clear_knot_outputs(kf, spectrum, dominant, per_closure, seconds)
+    real(c_double), intent(out) :: kf, spectrum(:), seconds
+    integer(c_int), intent(out) :: dominant, per_closure(:)
+    kf = 0.0_c_double
+    spectrum = 0.0_c_double
+    dominant = 0
+    per_closure = 0
+    seconds = 0.0_c_double
+  end subroutine clear_knot_outputs
 
   !> The knot matrix of the chain of n >= 2 beads at r[3N] (knotflow-analyze --matrix): kmat
   !> [N*N], column-major (Fortran order: kmat[i + N j] is K(i, j), 0-based), K(i, j) the k_f of

@@ -154,8 +154,9 @@ def run_scene(scene: str | os.PathLike[str], output_dir: str | os.PathLike[str] 
             raise
         check(done[0], buf)
     texts = messages.value.decode(errors="replace").split("\n")
+    words = names(4)   # the library's case statuses, by code
     return Run(scene=Path(os.fsdecode(scene_b)), case_files=files,
-               statuses=tuple(names(4)[s] for s in statuses.tolist()),
+               statuses=tuple(words[s] for s in statuses.tolist()),
                messages=tuple(texts + [""] * (n - len(texts))))
 
 

@@ -56,6 +56,12 @@ def run_reporting_errors(prog: str, body: Callable[[Argv], int], argv: Argv = No
         return error_line(prog, exc)
 
 
+def add_seed_option(p) -> None:
+    """--seed of the random closures, defaulting to the library's seed (knotflow-analyze's)."""
+    p.add_argument("--seed", type=int, default=knotflow.default_seed(),
+                   help="seed of the random closures (default %(default)s, knotflow-analyze's)")
+
+
 # ------------------------------------------------------------------------------ knotflow-kf
 
 def _kf_parser():
@@ -66,8 +72,7 @@ def _kf_parser():
     p.add_argument("--frame", type=int, default=-1,
                    help="frame of a .h5 case file (0-based; negative from the end; default last)")
     p.add_argument("--closures", type=int, default=1000, help="number of random closures")
-    p.add_argument("--seed", type=int, default=knotflow.default_seed(),
-                   help="seed of the random closures (default %(default)s, knotflow-analyze's)")
+    add_seed_option(p)
     p.add_argument("--matrix", action="store_true", help="compute the knot matrix")
     p.add_argument("--min-length", type=int, default=10,
                    help="shortest subchain of the knot matrix (beads)")
@@ -156,8 +161,7 @@ def _plot(argv: Argv) -> int:
                    help="closures per frame when k_f is computed (no /analysis)")
     p.add_argument("--stride", type=int, default=0,
                    help="analyse every stride-th frame (0: automatic, at most 100 frames)")
-    p.add_argument("--seed", type=int, default=knotflow.default_seed(),
-                   help="seed of the random closures (default %(default)s, knotflow-analyze's)")
+    add_seed_option(p)
     p.add_argument("--matrix-frames", type=int, nargs="*", default=[],
                    help="frames whose knot matrix is computed (if not stored)")
     p.add_argument("--matrix-closures", type=int, default=50)
@@ -199,8 +203,7 @@ def _report(argv: Argv) -> int:
     p.add_argument("--closures", type=int, default=200)
     p.add_argument("--stride", type=int, default=0,
                    help="analyse every stride-th frame (0: automatic, at most 100 frames)")
-    p.add_argument("--seed", type=int, default=knotflow.default_seed(),
-                   help="seed of the random closures (default %(default)s, knotflow-analyze's)")
+    add_seed_option(p)
     p.add_argument("--movie", action="store_true",
                    help="(default) a movie of each case, linked from the report")
     p.add_argument("--no-movie", action="store_true", help="no movies")
