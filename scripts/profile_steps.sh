@@ -3,7 +3,11 @@
 # of `knotflow` on the study's model (multipole L = 2 + lubrication, overlap 'relax', dopri45 at
 # tolerance 1e-4, shear) at N = 99 (the trefoil, orientation c, A = 2.2, from t = 0) and N = 152
 # (the collapsed candy-cane of inputs/configs/candycane_A1_multipole_t800.xyz, A = 1), with
-# update 'stage' and 'iterative', one thread (OPENBLAS_NUM_THREADS = OMP_NUM_THREADS = 1).
+# update 'stage' and 'iterative', one thread (OPENBLAS_NUM_THREADS = OMP_NUM_THREADS = 1); and
+# trefoil_case: the path of a whole case (`bash scripts/bench_reuse.sh case`: 'iterative' with
+# ros34pw2, a frame with its knot analysis every unit time) over t = 0-10, where the phases of
+# a whole step show: the Rosenbrock Jacobian (the mobility kept jacobian_steps = 4 steps), the
+# stepper's LU and the frames.
 # For each run: the samples grouped by the phase of the evaluation they fall in (from the call
 # chains, perf --call-graph dwarf: the first phase routine found walking from the caller end),
 # the self time grouped by kind of code, the 25 hottest symbols, the wall time and the load
@@ -11,10 +15,11 @@
 # A science command (about 3 min of one core on a quiet machine), not a test.
 #
 #   bash scripts/profile_steps.sh [run ...]     runs: trefoil_stage trefoil_iterative
-#                                               candycane_stage candycane_iterative (default: all)
+#                                               candycane_stage candycane_iterative trefoil_case
+#                                               (default: all but trefoil_case)
 # Output: $KNOTFLOW_PROFILE_OUT (default build/profile)/<run>.txt; the perf data beside it.
 # Environment: KNOTFLOW_PROFILE_T (simulated time per run; default 1 for the trefoil, 0.2 for the
-# candy-cane), KNOTFLOW_PERF (default perf).
+# candy-cane, 10 for trefoil_case), KNOTFLOW_PERF (default perf).
 set -euo pipefail
 # shellcheck source=scripts/lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
@@ -29,6 +34,7 @@ out="${KNOTFLOW_PROFILE_OUT:-$KF_ROOT/build/profile}"
 mkdir -p "$out"
 runs=("$@")
 [ "${#runs[@]}" -eq 0 ] && runs=(trefoil_stage trefoil_iterative candycane_stage candycane_iterative)
+allowed="trefoil_stage trefoil_iterative candycane_stage candycane_iterative trefoil_case"
 export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
 
 # The samples of `perf script` (one block per sample: the frames from the sampled one to main)
@@ -39,7 +45,13 @@ phases() {
   awk '
     BEGIN {
       RS = ""
-      n = split("assemble|gmres|factorise|lubrication|friction|forces|stepper", key, "|")
+      n = split("frames|jacobian|wmatrix|assemble|gmres|factorise|lubrication|friction|forces|stepper", key, "|")
+      pat["frames"] = "kf_frame_records|kf_case_file|kf_case_checkpoint|kf_run_diagnostics|kf_knot_|kf_shape_MOD|H5"
+      name["frames"] = "frames: shape, knots, diagnostics, output, checkpoints"
+      pat["jacobian"] = "dynamics_jacobian"
+      name["jacobian"] = "Rosenbrock Jacobian: the mobility (a factorisation) and mu dF/dr"
+      pat["wmatrix"] = "kf_lapack_MOD_lu_"
+      name["wmatrix"] = "Rosenbrock LU of I/(h gamma) - J and its solves"
       pat["factorise"] = "system_factorise"
       name["factorise"] = "factorisation of K: p-moment elimination + dpotrf (nr = 16 N at L = 2)"
       pat["gmres"] = "_MOD_gmres|operator_apply|_MOD_precondition"
@@ -121,13 +133,18 @@ categorise() {
 }
 
 for run in "${runs[@]}"; do
+  method=dopri45 update="${run#*_}"
   case "$run" in
-    trefoil_*) shape="shape = 'trefoil', orientation = 'c'"; a=2.2; t_end="${KNOTFLOW_PROFILE_T:-1.0}" ;;
-    candycane_*) shape="shape = 'file', coordinate_file = '$KF_ROOT/inputs/configs/candycane_A1_multipole_t800.xyz'"
-                 a=1.0; t_end="${KNOTFLOW_PROFILE_T:-0.2}" ;;
-    *) kf_die "unknown run '$run' (trefoil_stage trefoil_iterative candycane_stage candycane_iterative)" ;;
+    trefoil_case) shape="shape = 'trefoil', orientation = 'c'"; a=2.2; t_end="${KNOTFLOW_PROFILE_T:-10.0}"
+                  method=ros34pw2 update=iterative ;;
+    trefoil_stage | trefoil_iterative) shape="shape = 'trefoil', orientation = 'c'"; a=2.2; t_end="${KNOTFLOW_PROFILE_T:-1.0}" ;;
+    candycane_stage | candycane_iterative)
+      shape="shape = 'file', coordinate_file = '$KF_ROOT/inputs/configs/candycane_A1_multipole_t800.xyz'"
+      a=1.0; t_end="${KNOTFLOW_PROFILE_T:-0.2}" ;;
+    *) kf_die "unknown run '$run' ($allowed)" ;;
   esac
-  update="${run#*_}"
+  frames="$t_end"
+  [ "$run" = trefoil_case ] && frames=1.0
   dir="$out/$run"
   rm -rf "$dir"; mkdir -p "$dir"
   cat > "$dir/scene.nml" <<NML
@@ -144,10 +161,10 @@ for run in "${runs[@]}"; do
   model = 'multipole', order = 2, lubrication = .true., update = '$update', overlap = 'relax'
 /
 &integrator
-  method = 'dopri45', t_end = $t_end, tolerance = 1.0e-4
+  method = '$method', t_end = $t_end, tolerance = 1.0e-4
 /
 &output
-  directory = '$dir/case', frame_interval = $t_end, progress_interval = 0.0
+  directory = '$dir/case', frame_interval = $frames, progress_interval = 0.0
 /
 NML
   kf_log "perf record: knotflow $dir/scene.nml (t = 0-$t_end)"
