@@ -39,7 +39,8 @@
 !>
 !> Checkpoint: the reference and the last solution are not in the checkpoint; the reference is
 !> rebuilt (a direct solve) at the first call after a resume, so a resumed run agrees with an
-!> uninterrupted one to the solver tolerance (not bit for bit). Frames, the stresslet and `prepare` use the exact model's routes (the parent type).
+!> uninterrupted one to the solver tolerance (not bit for bit). Frames, the stresslet and
+!> `prepare` use the exact model's routes (the parent type).
 module kf_hydro_multipole_iterative
   use kf_kinds, only: wp, sp, i8
   use kf_strings, only: to_str
