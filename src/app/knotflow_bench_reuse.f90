@@ -29,9 +29,12 @@
 !>   evaluation [--config C]: the cost of one evaluation of the study's model, split: processor
 !>              seconds (cpu_time, best of 5-20 repetitions) of the assembly of K, the
 !>              lubrication blocks, the 6N friction Cholesky of an 'iterative' call, one product
-!>              K x, one triangular-solve pair with the factor of K, and of whole 'iterative'
-!>              calls (at a configuration deformed by 0.003 d per bead from the reference: the
-!>              GMRES solve; and a factorising call) and 'stage' calls
+!>              K x, one triangular-solve pair with the factor of K and with its single-precision
+!>              copy, and of whole 'iterative' calls (at a configuration deformed by 0.003 d per
+!>              bead from the reference: the GMRES solve from zero, the forces and strain
+!>              changing sign between repetitions so that the last solution is no start; the
+!>              GMRES solve from the last call's solution, the configuration alternating with
+!>              one 0.001 d further; and a factorising call) and 'stage' calls
 !>   rosenbrock [--config C] [--t-end T] [--model M] [--jacobian-steps K] [--rosenbrock-stage
 !>              yes|no] [--steppers LIST] [--tolerance TOL]: the Rosenbrock-W steppers of LIST
 !>              (comma-separated, default ros34pw2,ros34pw3) at tolerance TOL (default 1e-4)
@@ -55,7 +58,7 @@
 !> (read by knotflow-accuracy-report --reuse).
 program knotflow_bench_reuse
   use, intrinsic :: iso_fortran_env, only: output_unit
-  use kf_kinds, only: wp, i8
+  use kf_kinds, only: wp, sp, i8
   use kf_strings, only: to_str
   use kf_error, only: error_t
   use kf_scene, only: scene_t
@@ -543,63 +546,69 @@ contains
   !> (module header, part evaluation); processor seconds, so that the time the process waits
   !> for a CPU on a shared machine does not count.
   subroutine run_evaluation()
-    integer, parameter :: reps(8) = [7, 7, 20, 20, 7, 5, 3, 3]
+    integer, parameter :: reps(10) = [7, 7, 20, 20, 7, 5, 3, 3, 20, 6]
     type(scene_t) :: scene
     type(multipole_system_t) :: sys
     type(lubrication_t) :: lub
     type(pair_blocks_t) :: blocks
     type(multipole_iterative_t) :: iter
     type(multipole_model_t) :: stage
-    type(hydro_stats_t) :: s0, s1
+    type(hydro_stats_t) :: s0, s1, s2, s3
     type(error_t), allocatable :: error
-    real(wp), allocatable :: r(:, :), r2(:, :), f(:, :), u(:, :), zeta(:, :), pre(:, :), x(:), y(:)
-    real(wp) :: e(3, 3), eps, best(8), c0, c1
+    real(wp), allocatable :: r(:, :), r2(:, :), r3(:, :), f(:, :), u(:, :), zeta(:, :), pre(:, :), x(:), y(:)
+    real(sp), allocatable :: xs(:)
+    real(wp) :: e(3, 3), eps, best(10), c0, c1, sgn
     integer :: n, i, rep, what
     call header()
     call study_scene(config, 1.0e-4_wp, update_stage, scene, r)
     eps = merge(eps_lub, 1.0e-4_wp, eps_lub > 0.0_wp)
     n = size(r, 2)
-    allocate (f(3, n), u(3, n), r2(3, n), zeta(6*n, 6*n), pre(6*n, 6*n))
+    allocate (f(3, n), u(3, n), r2(3, n), r3(3, n), zeta(6*n, 6*n), pre(6*n, 6*n))
     do i = 1, n
       f(:, i) = [sin(1.7_wp*i), cos(2.3_wp*i), 0.5_wp*sin(0.9_wp*i)]
       r2(:, i) = r(:, i) + 0.003_wp*[sin(3.1_wp*i), cos(1.3_wp*i), sin(0.7_wp*i)]
+      r3(:, i) = r2(:, i) + 0.001_wp*[cos(2.9_wp*i), sin(1.1_wp*i), cos(0.3_wp*i)]
     end do
     e = 0.0_wp
     e(1, 3) = 0.5_wp
     e(3, 1) = 0.5_wp
     write (output_unit, '(a)') 'n_beads = '//to_str(n)
-    call sys%init(2, 1.0_wp + eps, error)
+    call sys%init(2, 1.0_wp + eps, error, single_copy=.true.)
     if (allocated(error)) call die(program_name, error%message, 2)
     call lub%init(2, eps, error)
     if (allocated(error)) call die(program_name, error%message, 2)
     call stage%init(2, .true., eps, error)
     if (allocated(error)) call die(program_name, error%message, 2)
     ! the pieces in order: 1 assembly, 2 lubrication blocks, 3 K x, 4 solve pair, 5 6N Cholesky,
-    ! 6 'iterative' GMRES calls, 7 'iterative' factorising calls, 8 'stage' calls
+    ! 6 'iterative' GMRES calls from zero, 7 'iterative' factorising calls, 8 'stage' calls,
+    ! 9 'iterative' GMRES calls from the last solution, 10 single-precision solve pair
     best = huge(1.0_wp)
-    do what = 1, 8
+    do what = 1, 10
       select case (what)
       case (3)
-        allocate (x(sys%unknowns()), y(sys%unknowns()))
+        allocate (x(sys%unknowns()), y(sys%unknowns()), xs(sys%unknowns()))
         x = 1.0_wp
       case (4)
         call sys%factorise(r, error)
       case (5)
         call sys%grand_friction(zeta, error)
         if (.not. allocated(error)) call blocks%add_friction(zeta)
-      case (6)
+      case (6, 9)
         call iter%setup(2, .true., eps, error)
         if (.not. allocated(error)) call iter%velocities(r, f, u, error, e)
-        s0 = iter%statistics()
+        if (what == 6) s0 = iter%statistics()
+        if (what == 9) s2 = iter%statistics()
       end select
       if (allocated(error)) call die(program_name, error%message, 2)
       do rep = 1, reps(what)
         if (what == 4) x = 1.0_wp
+        if (what == 10) xs = 1.0_sp
         if (what == 5) pre = zeta
         if (what == 7) then
           call iter%setup(2, .true., eps, error)
           if (allocated(error)) call die(program_name, error%message, 2)
         end if
+        sgn = real(1 - 2*mod(rep, 2), wp)
         call cpu_time(c0)
         select case (what)
         case (1)
@@ -613,8 +622,20 @@ contains
           call sys%backward(x)
         case (5)
           call cholesky_factor(pre, error, 'lubrication-corrected friction')
-        case (6, 7)
+        case (6)
+          ! the system is linear in (f, e): the last solution, negated, has twice the residual
+          call iter%velocities(r2, sgn*f, u, error, sgn*e)
+        case (7)
           call iter%velocities(r2, f, u, error, e)
+        case (9)
+          if (mod(rep, 2) == 1) then
+            call iter%velocities(r2, f, u, error, e)
+          else
+            call iter%velocities(r3, f, u, error, e)
+          end if
+        case (10)
+          call sys%forward_single(xs)
+          call sys%backward_single(xs)
         case default
           call stage%velocities(r2, f, u, error, e)
         end select
@@ -623,18 +644,23 @@ contains
         best(what) = min(best(what), c1 - c0)
       end do
       if (what == 6) s1 = iter%statistics()
+      if (what == 9) s3 = iter%statistics()
     end do
     write (output_unit, '(a)') 'lubrication_pairs = '//to_str(blocks%n_pairs())
     write (output_unit, '(a)') 'assembly_ms = '//to_str(1.0e3_wp*best(1), '(f0.3)')
     write (output_unit, '(a)') 'lubrication_blocks_ms = '//to_str(1.0e3_wp*best(2), '(f0.3)')
     write (output_unit, '(a)') 'product_k_ms = '//to_str(1.0e3_wp*best(3), '(f0.3)')
     write (output_unit, '(a)') 'solve_pair_k_ms = '//to_str(1.0e3_wp*best(4), '(f0.3)')
+    write (output_unit, '(a)') 'solve_pair_k_single_ms = '//to_str(1.0e3_wp*best(10), '(f0.3)')
     write (output_unit, '(a)') 'friction_cholesky_6n_ms = '//to_str(1.0e3_wp*best(5), '(f0.3)')
     write (output_unit, '(a)') 'iterative_reused_ms = '//to_str(1.0e3_wp*best(6), '(f0.3)')
     write (output_unit, '(a)') 'iterative_reused_iterations = '// &
       to_str(real(s1%cg_iterations - s0%cg_iterations, wp)/real(max(1_i8, s1%reused - s0%reused), wp), '(f0.2)')
     write (output_unit, '(a)') 'iterative_reused_rest_ms = '// &
       to_str(1.0e3_wp*(best(6) - best(1) - best(2) - best(5)), '(f0.3)')
+    write (output_unit, '(a)') 'iterative_warm_ms = '//to_str(1.0e3_wp*best(9), '(f0.3)')
+    write (output_unit, '(a)') 'iterative_warm_iterations = '// &
+      to_str(real(s3%cg_iterations - s2%cg_iterations, wp)/real(max(1_i8, s3%reused - s2%reused), wp), '(f0.2)')
     write (output_unit, '(a)') 'iterative_refresh_ms = '//to_str(1.0e3_wp*best(7), '(f0.3)')
     write (output_unit, '(a)') 'stage_ms = '//to_str(1.0e3_wp*best(8), '(f0.3)')
     write (output_unit, '(a)') 'loadavg_end = '//loadavg()

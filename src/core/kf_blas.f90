@@ -1,11 +1,11 @@
 !> Explicit interfaces of the external BLAS and LAPACK routines the project calls, declared
 !> once. Code that wants errors as values should use the wrappers in kf_lapack instead.
 module kf_blas
-  use kf_kinds, only: wp
+  use kf_kinds, only: wp, sp
   implicit none
   private
 
-  public :: dpotrf, dpotrs, dpotri, dsyev, dtrsm, dtrsv, dgemm, dsyrk, dgemv, dsymv, dgetrf, dgetrs
+  public :: dpotrf, dpotrs, dpotri, dsyev, dtrsm, dtrsv, stpsv, dgemm, dsyrk, dgemv, dsymv, dgetrf, dgetrs
 
   interface
     subroutine dpotrf(uplo, n, a, lda, info)
@@ -54,6 +54,13 @@ module kf_blas
       real(wp), intent(in) :: a(lda, *)
       real(wp), intent(inout) :: x(*)
     end subroutine dtrsv
+    subroutine stpsv(uplo, trans, diag, n, ap, x, incx)
+      import :: sp
+      character(len=1), intent(in) :: uplo, trans, diag
+      integer, intent(in) :: n, incx
+      real(sp), intent(in) :: ap(*)
+      real(sp), intent(inout) :: x(*)
+    end subroutine stpsv
     subroutine dgemm(transa, transb, m, n, k, alpha, a, lda, b, ldb, beta, c, ldc)
       import :: wp
       character(len=1), intent(in) :: transa, transb

@@ -13,11 +13,18 @@
 !> At every call the system is assembled (K0 and B, no p-moment update, no factorisation) at
 !> the configuration rotated onto the reference (best rigid rotation Q, kf_rigid_fit; Stokes
 !> flow is covariant), with the lubrication blocks of the rotated pairs, forces and strain
-!> rotated with it and the velocities back. It is solved by GMRES, left-preconditioned with
-!> the exact inverse of the same system at the reference (the Cholesky factor of K_ref and of
+!> rotated with it and the velocities back. It is solved by flexible GMRES, right-preconditioned
+!> with the inverse of the same system at the reference (the Cholesky factor of K_ref and of
 !> zeta_L(ref) + dzeta, the lubrication blocks of the call): one triangular-solve pair with K_ref
 !> and one with the 6N factor per iteration (the 6N factor is refactorised at every call with
-!> lubrication: the blocks change fast near contact, the many-body part slowly).
+!> lubrication: the blocks change fast near contact, the many-body part slowly). The solves
+!> with K_ref use a single-precision copy of its factor (half the memory traffic of the
+!> iteration's largest part); flexible GMRES keeps the preconditioned basis, so the operator,
+!> applied in double to it, alone decides the solution: the preconditioner's rounding costs at
+!> most iterations, not accuracy (a left-preconditioned GMRES would stall at the single
+!> precision's level). The iteration starts from the last call's solution (the moments and the
+!> velocities of every call are in the reference frame, so it is a guess in the right frame),
+!> or from zero when that has the smaller residual.
 !> GMRES, not CG: the system is symmetric but indefinite (its Schur complement onto U is
 !> negative definite). One system, not nested solves (CG on the 6N friction, each product an
 !> inner solve with K preconditioned by K_ref): an inner solve alone needs as many iterations,
@@ -28,13 +35,14 @@
 !> rule: a call that needs more than refactor_iterations iterations makes the next call
 !> factorise at its configuration (the new reference); a call that does not converge in
 !> max_iterations factorises at once. The first call and a change of bead number factorise.
-!> A factorising call solves directly (the preconditioner is the exact inverse there).
+!> A factorising call solves directly with the double factors (the exact inverse there).
 !>
-!> Checkpoint: the reference is not in the checkpoint; it is rebuilt at the first call after a
-!> resume, so a resumed run agrees with an uninterrupted one to the solver tolerance (not bit
-!> for bit). Frames, the stresslet and `prepare` use the exact model's routes (the parent type).
+!> Checkpoint: the reference and the last solution are not in the checkpoint; the reference is
+!> rebuilt (a direct solve) at the first call after a resume, so a resumed run agrees with an
+!> uninterrupted one to the solver tolerance (not bit for bit). Frames, the stresslet and
+!> `prepare` use the exact model's routes (the parent type).
 module kf_hydro_multipole_iterative
-  use kf_kinds, only: wp, i8
+  use kf_kinds, only: wp, sp, i8
   use kf_strings, only: to_str
   use kf_constants, only: pi
   use kf_lapack, only: cholesky_factor
@@ -67,6 +75,7 @@ module kf_hydro_multipole_iterative
     type(pair_blocks_t), private :: blocks     !< lubrication blocks of the current call
     logical, private :: ready = .false.
     logical, private :: refactor_next = .false.
+    logical, private :: have_x = .false.       !< xs holds the last call's solution
     integer, private :: nr = 0                 !< unknowns of K
     real(wp), private :: cen_ref(3) = 0.0_wp
     real(wp), allocatable, private :: pos_ref(:, :), rp(:, :), frot(:, :)
@@ -74,7 +83,10 @@ module kf_hydro_multipole_iterative
     real(wp), allocatable, private :: pre(:, :)     !< Cholesky factor of zeta_L(ref) + dzeta
     real(wp), allocatable, private :: v(:, :)      !< Krylov basis
     real(wp), allocatable, private :: hm(:, :)     !< Hessenberg matrix (Givens-rotated)
-    real(wp), allocatable, private :: rhs(:), wk(:), m0(:), s6(:), uk(:), uprev(:)
+    real(wp), allocatable, private :: rhs(:), wk(:), m0(:), s6(:), uk(:), uprev(:), u0(:)
+    real(wp), allocatable, private :: zb(:, :)     !< preconditioned basis (flexible GMRES)
+    real(wp), allocatable, private :: xs(:)        !< the last call's solution (reference frame)
+    real(sp), allocatable, private :: zs(:), ms(:) !< single-precision work of the preconditioner
     type(hydro_stats_t), private :: istats
   contains
     procedure :: setup => iterative_setup
@@ -87,7 +99,8 @@ contains
 
   !> The model's dense arrays for n beads (bytes; a lower bound): the exact model's and one
   !> more 6N x 6N matrix (288 N^2), the preconditioner's friction factor; its two many-body
-  !> systems (the reference factor and the assembled one) come on top.
+  !> systems (the reference factor with its single-precision copy, and the assembled one) and
+  !> the Krylov bases come on top.
   pure integer(i8) function iterative_memory_bytes(n, stresslet_lubrication) result(bytes)
     integer(i8), intent(in) :: n
     logical, intent(in) :: stresslet_lubrication
@@ -130,9 +143,10 @@ contains
     min_distance = merge(0.0_wp, 1.0_wp + eps_lub, this%literal_bwe)
     call this%cur%init(order, min_distance, error)
     if (allocated(error)) return
-    call this%ref%init(order, min_distance, error)
+    call this%ref%init(order, min_distance, error, single_copy=.true.)
     if (allocated(error)) return
     this%ready = .false.
+    this%have_x = .false.
     this%refactor_next = .false.
     this%istats = hydro_stats_t()
   end subroutine iterative_setup
@@ -220,6 +234,7 @@ contains
     integer :: nb, i
     nb = size(r, 2)
     this%ready = .false.
+    this%have_x = .false.
     call this%ref%factorise(r, error)
     if (allocated(error)) return
     this%n_overlaps = this%ref%n_clamped
@@ -237,9 +252,10 @@ contains
     this%pos_ref = r
     this%cen_ref = centroid(r)
     call right_hand_side(this, f, e)
-    call precondition(this, this%rhs, this%wk)
+    call precondition(this, this%rhs, this%xs, exact=.true.)
+    this%have_x = .true.
     do i = 1, nb
-      u(:, i) = this%wk(this%nr + 6*i - 5:this%nr + 6*i - 3)
+      u(:, i) = this%xs(this%nr + 6*i - 5:this%nr + 6*i - 3)
     end do
     this%ready = .true.
     this%refactor_next = .false.
@@ -256,12 +272,13 @@ contains
     if (allocated(this%rhs)) then
       if (size(this%rhs) == nt .and. size(this%rp, 2) == nb) return
       deallocate (this%pos_ref, this%rp, this%frot, this%pre, this%zref, this%v, this%hm, this%rhs, this%wk, &
-                  this%m0, this%s6, this%uk, this%uprev)
+                  this%m0, this%s6, this%uk, this%uprev, this%u0, this%zb, this%xs, this%zs, this%ms)
     end if
     allocate (this%pos_ref(3, nb), this%rp(3, nb), this%frot(3, nb), this%pre(6*nb, 6*nb), &
               this%zref(6*nb, 6*nb))
     allocate (this%v(nt, max_iterations + 1), this%hm(max_iterations + 1, max_iterations + 2))
-    allocate (this%rhs(nt), this%wk(nt), this%m0(6*nb), this%s6(6*nb), this%uk(6*nb), this%uprev(6*nb))
+    allocate (this%rhs(nt), this%wk(nt), this%m0(6*nb), this%s6(6*nb), this%uk(6*nb), this%uprev(6*nb), &
+              this%u0(6*nb), this%zb(nt, max_iterations), this%xs(nt), this%zs(this%nr), this%ms(6*nb))
   end subroutine ensure_work
 
   !> b = [rhs_Q(e); 0; f, torques 0, + dx : e] (lubrication blocks of the current call).
@@ -299,22 +316,32 @@ contains
     if (this%lubrication) call this%blocks%apply(x(nr + 1:), y(nr + 1:))
   end subroutine operator_apply
 
-  !> z = P^-1 g, the exact inverse of the system at the reference, with one forward and one
-  !> backward solve of K_ref = L L^T (P last, so L^-1 E v = [0; L_PP^-1 v] and
+  !> z = P^-1 g, the inverse of the system at the reference (`exact`: with the double factor;
+  !> otherwise its single-precision copy), with one forward and one backward solve of
+  !> K_ref = L L^T (P last, so L^-1 E v = [0; L_PP^-1 v] and
   !> (K_ref^-1 g)_P = L_PP^-T (L^-1 g)_P):
   !>   y = L^-1 g_m, U = (zeta_L(ref) + dzeta)^-1 (g_U - S^-1 L_PP^-T y_P / pi),
   !>   m = L^-T (y + [0; L_PP^-1 S^-1 U]) = K_ref^-1 (g_m + E S^-1 U).
-  subroutine precondition(this, g, z)
+  subroutine precondition(this, g, z, exact)
     class(multipole_iterative_t), intent(inout) :: this
     real(wp), intent(in) :: g(:)
     real(wp), intent(out), contiguous :: z(:)
+    logical, intent(in) :: exact
     integer :: nr, nq, i, c, j, n6
     nr = this%nr
     nq = nr - size(this%s6)
-    z(1:nr) = g(1:nr)
-    call this%ref%forward(z(1:nr))
-    this%m0 = z(nq + 1:nr)
-    call this%ref%backward_p(this%m0)
+    if (exact) then
+      z(1:nr) = g(1:nr)
+      call this%ref%forward(z(1:nr))
+      this%m0 = z(nq + 1:nr)
+      call this%ref%backward_p(this%m0)
+    else
+      this%zs = real(g(1:nr), sp)
+      call this%ref%forward_single(this%zs)
+      this%ms = this%zs(nq + 1:nr)
+      call this%ref%backward_p_single(this%ms)
+      this%m0 = real(this%ms, wp)
+    end if
     do i = 1, size(this%rp, 2)
       do c = 1, 6
         j = 6*(i - 1) + c
@@ -329,15 +356,27 @@ contains
         this%m0(this%ref%p_row(i, c) - nq) = this%s6(6*(i - 1) + c)/this%ref%moment_scale(c)
       end do
     end do
-    call this%ref%forward_p(this%m0)
-    z(nq + 1:nr) = z(nq + 1:nr) + this%m0
-    call this%ref%backward(z(1:nr))
+    if (exact) then
+      call this%ref%forward_p(this%m0)
+      z(nq + 1:nr) = z(nq + 1:nr) + this%m0
+      call this%ref%backward(z(1:nr))
+    else
+      this%ms = real(this%m0, sp)
+      call this%ref%forward_p_single(this%ms)
+      this%zs(nq + 1:nr) = this%zs(nq + 1:nr) + this%ms
+      call this%ref%backward_single(this%zs)
+      z(1:nr) = real(this%zs, wp)
+    end if
     z(nr + 1:) = this%s6
   end subroutine precondition
 
-  !> Left-preconditioned GMRES from zero on A x = b (no restart, at most max_iterations);
-  !> uk = the velocity part of the last iterate, `its` the iterations done, `converged` by the
-  !> stopping rule of the module header.
+  !> Flexible GMRES (right-preconditioned, the preconditioned basis kept) on A x = b from the
+  !> last call's solution xs, or from zero when that has the larger residual (no restart, at
+  !> most max_iterations); uk = the velocity part of the last iterate, `its` the iterations
+  !> done, `converged` by the stopping rule of the module header; xs = the solution when
+  !> converged. With the basis z_k = P^-1 v_k kept, A Z_k = V_k+1 H_k holds with the double
+  !> operator whatever rounding the single-precision preconditioner adds, so the iterates
+  !> converge to the exact solution.
   subroutine gmres(this, its, converged)
     class(multipole_iterative_t), intent(inout) :: this
     integer, intent(out) :: its
@@ -351,11 +390,26 @@ contains
     nb = size(this%rp, 2)
     converged = .false.
     its = 0
-    call precondition(this, this%rhs, this%v(:, 1))
+    ! the start: the last call's solution (the same reference frame) or zero, the smaller residual
+    this%v(:, 1) = this%rhs
+    if (this%have_x) then
+      call operator_apply(this, this%xs, this%wk)
+      this%wk = this%rhs - this%wk
+      if (norm2(this%wk) < norm2(this%rhs)) then
+        this%v(:, 1) = this%wk
+      else
+        this%xs = 0.0_wp
+      end if
+    else
+      this%xs = 0.0_wp
+    end if
+    this%have_x = .false.
     beta = norm2(this%v(:, 1))
-    this%uk = 0.0_wp
+    this%u0 = this%xs(nr + 1:nt)
+    this%uk = this%u0
     if (beta == 0.0_wp) then
       converged = .true.
+      this%have_x = .true.
       return
     end if
     this%v(:, 1) = this%v(:, 1)/beta
@@ -363,8 +417,8 @@ contains
     gv(1) = beta
     do k = 1, max_iterations
       its = k
-      call operator_apply(this, this%v(:, k), this%wk)
-      call precondition(this, this%wk, this%v(:, k + 1))
+      call precondition(this, this%v(:, k), this%zb(:, k), exact=.false.)
+      call operator_apply(this, this%zb(:, k), this%v(:, k + 1))
       ! modified Gram-Schmidt
       do j = 1, k
         this%hm(j, k) = dot_product(this%v(:, j), this%v(:, k + 1))
@@ -385,25 +439,28 @@ contains
       this%hm(k + 1, k) = 0.0_wp
       gv(k + 1) = -sn(k)*gv(k)
       gv(k) = cs(k)*gv(k)
-      ! y = R^-1 g, and the velocity part of the iterate
+      ! y = R^-1 g, and the velocity part of the iterate x0 + Z y
       do j = k, 1, -1
         y(j) = (gv(j) - dot_product(this%hm(j, j + 1:k), y(j + 1:k)))/this%hm(j, j)
       end do
       this%uprev = this%uk
-      this%uk = matmul(this%v(nr + 1:nt, 1:k), y(1:k))
+      this%uk = this%u0 + matmul(this%zb(nr + 1:nt, 1:k), y(1:k))
       if (gv(k + 1) == 0.0_wp) then
         converged = .true.
-        return
+        exit
       end if
       if (k >= 2) then
         change = largest_velocity(this%uk - this%uprev, nb)
         scale = largest_velocity(this%uk, nb)
         if (change <= this%solver_tolerance*scale) then
           converged = .true.
-          return
+          exit
         end if
       end if
     end do
+    if (.not. converged) return
+    this%xs = this%xs + matmul(this%zb(:, 1:its), y(1:its))
+    this%have_x = .true.
   end subroutine gmres
 
   !> Its calls never prepare, so a mobility costs a factorisation; its reference is rebuilt after

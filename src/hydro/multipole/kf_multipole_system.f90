@@ -19,10 +19,15 @@
 !> kf_lubrication's clamp evaluates that pair's correction, so the pair part of the corrected
 !> friction is continuous. With min_distance <= 0 (the literal BWE rule, 'bwe') nothing is
 !> clamped: the system of the real positions, whose loss of positive definiteness is reported.
+!>
+!> Single-precision copy (init's `single_copy`): `factorise` also keeps the factor's lower
+!> triangle in single precision, packed by columns (half the bytes of the double lower triangle),
+!> for the approximate triangular solves `forward_single` ... `backward_p_single` (single
+!> arithmetic, BLAS stpsv) of a preconditioner; the exact solves keep the double factor.
 module kf_multipole_system
-  use kf_kinds, only: wp
+  use kf_kinds, only: wp, sp
   use kf_strings, only: to_str
-  use kf_blas, only: dpotrf, dpotri, dtrsm, dtrsv, dgemm, dsyrk, dgemv, dsymv
+  use kf_blas, only: dpotrf, dpotri, dtrsm, dtrsv, stpsv, dgemm, dsyrk, dgemv, dsymv
   use kf_lapack, only: symmetric_eigenvalues
   use kf_constants, only: pi
   use kf_error, only: error_t, fatal_error
@@ -47,6 +52,7 @@ module kf_multipole_system
     type(multipole_layout_t) :: lay
     type(multipole_index_t) :: idx   !< where the unknowns sit in K, B and P
     real(wp) :: min_distance = 1.0_wp   !< pairs with |d| < min_distance are evaluated there
+    logical :: single_copy = .false.    !< factorise keeps k32 (module header)
     integer :: n = 0        !< number of spheres
     integer :: nr = 0       !< size of K (phi and chi unknowns), 2 N L(L+2)
     integer :: nqt = 0      !< unknowns of K outside P (they come first)
@@ -55,6 +61,7 @@ module kf_multipole_system
     integer, public :: n_overlapping = 0 !< pairs at r <= 1 at the last factorise (clamped or not)
     real(wp) :: scal(6) = 0.0_wp !< moment_hat = scal(c) * Cartesian force/torque component c
     real(wp), allocatable :: k(:, :)     !< K, then its Cholesky factor (lower triangle)
+    real(sp), allocatable :: k32(:)      !< the factor in single precision, packed by columns
     real(wp), allocatable :: bp(:, :)    !< phi <- p couplings (rows phi, columns p)
     real(wp), allocatable :: w6(:, :)    !< 6N x 6N work
     real(wp), allocatable :: bq(:, :)    !< nqt x 5 work
@@ -72,6 +79,10 @@ module kf_multipole_system
     procedure :: backward => system_backward
     procedure :: forward_p => system_forward_p
     procedure :: backward_p => system_backward_p
+    procedure :: forward_single => system_forward_single
+    procedure :: backward_single => system_backward_single
+    procedure :: forward_p_single => system_forward_p_single
+    procedure :: backward_p_single => system_backward_p_single
     procedure :: unknowns => system_unknowns
     procedure :: p_row => system_p_row
     procedure :: moment_scale => system_moment_scale
@@ -89,11 +100,14 @@ contains
 
   !> Truncation order L (1..max_multipole_order) and the distance min_distance (1 + eps_lub) at which closer
   !> (overlapping) pairs are evaluated; min_distance <= 0 disables the overlap treatment.
-  subroutine system_init(this, order, min_distance, error)
+  !> `single_copy` (default .false.): factorise keeps the single-precision copy of the factor
+  !> (module header).
+  subroutine system_init(this, order, min_distance, error, single_copy)
     class(multipole_system_t), intent(inout) :: this
     integer, intent(in) :: order
     real(wp), intent(in) :: min_distance
     type(error_t), allocatable, intent(out) :: error
+    logical, intent(in), optional :: single_copy
     integer :: c, s
 
     if (order < 1 .or. order > max_multipole_order) then
@@ -103,6 +117,8 @@ contains
     end if
     call this%lay%init(order)
     this%min_distance = min_distance
+    this%single_copy = .false.
+    if (present(single_copy)) this%single_copy = single_copy
     this%n = 0
     associate (lay => this%lay)
       do s = 0, 1
@@ -299,7 +315,8 @@ contains
   end subroutine system_assemble
 
   !> Assemble the scaled real system for centres r(3, N), eliminate the p-moments and
-  !> factorise (Cholesky); with `spectrum`: its eigenvalues instead of the factorisation.
+  !> factorise (Cholesky), with the single-precision copy when init asked for it; with
+  !> `spectrum`: its eigenvalues instead of the factorisation.
   subroutine system_factorise(this, r, error, spectrum)
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
@@ -334,6 +351,7 @@ contains
       return
     end if
     call dpotrf('L', this%nr, this%k, this%nr, info)
+    if (info == 0 .and. this%single_copy) call copy_single(this)
     call system_clock(c2)
     this%t_factor = real(c2 - c1, wp)/real(crate, wp)
     if (info /= 0) then
@@ -411,6 +429,59 @@ contains
     real(wp), intent(inout), contiguous :: v(:)
     call dtrsv('L', 'T', 'N', this%n6, this%k(this%nqt + 1, this%nqt + 1), this%nr, v, 1)
   end subroutine system_backward_p
+
+  !> k32 = the factor's lower triangle in single precision, packed by columns.
+  subroutine copy_single(this)
+    class(multipole_system_t), intent(inout) :: this
+    integer :: j, off, nr
+    nr = this%nr
+    if (allocated(this%k32)) then
+      if (size(this%k32) /= nr*(nr + 1)/2) deallocate (this%k32)
+    end if
+    if (.not. allocated(this%k32)) allocate (this%k32(nr*(nr + 1)/2))
+    off = 0
+    do j = 1, nr
+      this%k32(off + 1:off + nr - j + 1) = real(this%k(j:nr, j), sp)
+      off = off + nr - j + 1
+    end do
+  end subroutine copy_single
+
+  !> Position in k32 of the diagonal element of column j: the columns before hold
+  !> nr + (nr - 1) + ... + (nr - j + 2) values.
+  pure integer function packed_start(this, j) result(p)
+    class(multipole_system_t), intent(in) :: this
+    integer, intent(in) :: j
+    p = (j - 1)*(this%nr + 1) - ((j - 1)*j)/2 + 1
+  end function packed_start
+
+  !> `forward` in single precision with the copy of the factor (init's `single_copy`).
+  subroutine system_forward_single(this, x)
+    class(multipole_system_t), intent(in) :: this
+    real(sp), intent(inout), contiguous :: x(:)
+    call stpsv('L', 'N', 'N', this%nr, this%k32, x, 1)
+  end subroutine system_forward_single
+
+  !> `backward` in single precision with the copy of the factor.
+  subroutine system_backward_single(this, x)
+    class(multipole_system_t), intent(in) :: this
+    real(sp), intent(inout), contiguous :: x(:)
+    call stpsv('L', 'T', 'N', this%nr, this%k32, x, 1)
+  end subroutine system_backward_single
+
+  !> `forward_p` in single precision: the trailing columns of a packed lower triangle are the
+  !> packed trailing block, so L_PP starts at the diagonal element of column nqt + 1.
+  subroutine system_forward_p_single(this, v)
+    class(multipole_system_t), intent(in) :: this
+    real(sp), intent(inout), contiguous :: v(:)
+    call stpsv('L', 'N', 'N', this%n6, this%k32(packed_start(this, this%nqt + 1)), v, 1)
+  end subroutine system_forward_p_single
+
+  !> `backward_p` in single precision.
+  subroutine system_backward_p_single(this, v)
+    class(multipole_system_t), intent(in) :: this
+    real(sp), intent(inout), contiguous :: v(:)
+    call stpsv('L', 'T', 'N', this%n6, this%k32(packed_start(this, this%nqt + 1)), v, 1)
+  end subroutine system_backward_p_single
 
   !> The number nr of (phi, chi) unknowns of K (2 N L(L+2)) at the last assembly.
   pure integer function system_unknowns(this) result(nr)
