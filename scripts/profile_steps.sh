@@ -54,7 +54,7 @@ phases() {
       name["wmatrix"] = "Rosenbrock LU of I/(h gamma) - J and its solves"
       pat["factorise"] = "system_factorise"
       name["factorise"] = "factorisation of K: p-moment elimination + dpotrf (nr = 16 N at L = 2)"
-      pat["gmres"] = "_MOD_gmres|operator_apply|_MOD_precondition"
+      pat["gmres"] = "_MOD_gmres|operator_apply|_MOD_precondition|stpsv|dtrsv|dsymv|system_apply"
       name["gmres"] = "GMRES: products with K and the pair blocks, triangular solves"
       pat["assemble"] = "system_assemble|pair_block_grouped|irregular_harmonics"
       name["assemble"] = "assembly of K (pair blocks)"
