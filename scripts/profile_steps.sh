@@ -32,9 +32,10 @@ perf="${KNOTFLOW_PERF:-perf}"
 command -v "$perf" >/dev/null 2>&1 || kf_die "perf not found (Debian: linux-perf); set KNOTFLOW_PERF"
 out="${KNOTFLOW_PROFILE_OUT:-$KF_ROOT/build/profile}"
 mkdir -p "$out"
+default_runs=(trefoil_stage trefoil_iterative candycane_stage candycane_iterative)
+allowed="${default_runs[*]} trefoil_case"
 runs=("$@")
-[ "${#runs[@]}" -eq 0 ] && runs=(trefoil_stage trefoil_iterative candycane_stage candycane_iterative)
-allowed="trefoil_stage trefoil_iterative candycane_stage candycane_iterative trefoil_case"
+[ "${#runs[@]}" -eq 0 ] && runs=("${default_runs[@]}")
 export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
 
 # The samples of `perf script` (one block per sample: the frames from the sampled one to main)
