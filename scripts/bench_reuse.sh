@@ -101,7 +101,10 @@ for part in "${parts[@]}"; do
       # A = 2.2, t_end = 1000) or the seeded candy-cane (A = 1, t_end = 2000); the study's model
       # (L = 2 + lubrication, overlap 'relax' as the study inputs, tolerance 1e-4). Wall and
       # processor seconds and the load average at both ends into $out/<name>.txt.
+      # KNOTFLOW_CASE_JACOBIAN_ORDER and KNOTFLOW_CASE_JACOBIAN_STEPS (default 0 and 4, the
+      # scene defaults): &hydro jacobian_order and &integrator jacobian_steps.
       update="${KNOTFLOW_CASE_UPDATE:-iterative}" method="${KNOTFLOW_CASE_METHOD:-ros34pw2}"
+      jorder="${KNOTFLOW_CASE_JACOBIAN_ORDER:-0}" jsteps="${KNOTFLOW_CASE_JACOBIAN_STEPS:-4}"
       if [ "$part" = case ]; then
         name="case_trefoil_${update}_${method}"
         chain="shape = 'trefoil', orientation = 'c'" a=2.2 t_end=1000.0
@@ -109,6 +112,7 @@ for part in "${parts[@]}"; do
         name="case_candycane_${update}_${method}"
         chain="shape = 'candycane', seed = 20150509" a=1.0 t_end=2000.0
       fi
+      if [ "$jorder" != 0 ] || [ "$jsteps" != 4 ]; then name="${name}_jorder${jorder}_jsteps${jsteps}"; fi
       dir="$out/$name"
       rm -rf "$dir"; mkdir -p "$dir"
       cat > "$dir/case.nml" <<NML
@@ -119,10 +123,11 @@ for part in "${parts[@]}"; do
   bending_a = $a
 /
 &hydro
-  model = 'multipole', order = 2, lubrication = .true., update = '$update', overlap = 'relax'
+  model = 'multipole', order = 2, lubrication = .true., update = '$update', overlap = 'relax',
+  jacobian_order = $jorder
 /
 &integrator
-  method = '$method', t_end = $t_end, tolerance = 1.0e-4
+  method = '$method', t_end = $t_end, tolerance = 1.0e-4, jacobian_steps = $jsteps
 /
 &output
   directory = '$dir', case_name = '$name', progress_interval = 300
@@ -135,6 +140,7 @@ NML
         taskset -c 0 "$KF_ROOT/build/bin/knotflow" "$dir/case.nml" > "$dir/log.txt" 2>&1 \
         || status=failed
       { echo "part = $part"; echo "update = $update"; echo "method = $method"; echo "t_end = $t_end";
+        echo "jacobian_order = $jorder"; echo "jacobian_steps = $jsteps";
         echo "overlap = relax"; echo "loadavg_start = $load0"; cat "$dir/time.txt";
         echo "loadavg_end = $(cat /proc/loadavg)";
         echo "status = $status (see $dir/log.txt)"; } > "$out/$name.txt"

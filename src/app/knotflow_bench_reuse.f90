@@ -45,7 +45,9 @@
 !>              default 4; after a 'stage' evaluation a new mobility costs nothing); per run wall time, steps, rejected,
 !>              velocity evaluations (per unit time), Jacobians, and the largest bead deviation
 !>              at T from dopri45 'stage'; the cost of one Jacobian (after an evaluation at its
-!>              positions, and cold). M: multipole (the study's model, default) or rpy
+!>              positions, and cold). M: multipole (the study's model, default) or rpy.
+!>              --jacobian-order J: each Rosenbrock 'iterative' run also with the Jacobian's
+!>              mobility of order J (&hydro jacobian_order; labels <method>_jorder<J>...)
 !>   rigid      [--config C]: the reused part at rigidly moved and at deformed configurations
 !>              (overlap rule pair only: the model's reused part against its exact one, both
 !>              without the dynamics' configuration rules separate and relax)
@@ -93,7 +95,7 @@ program knotflow_bench_reuse
 
   character(len=:), allocatable :: part, config, overlap, update, table, model, steppers
   real(wp) :: t_end, eps_lub, tolerance
-  integer :: every, jacobian_steps
+  integer :: every, jacobian_steps, jacobian_order
   logical :: omp_set, rosenbrock_stage
 
   ! The OpenMP pair loops get the BLAS's thread count (OPENBLAS_NUM_THREADS=1: one core; kf_blas_threads).
@@ -137,7 +139,7 @@ contains
     call standard_option(program_name, part, 'usage: knotflow-bench-reuse velocity|trajectory|speed|compare|'// &
       'overlaps|scaling|rigid|stiffness|threads|rosenbrock|evaluation [--config trefoil|random60|coil|FILE] [--t-end T] [--every K]'// &
       ' [--eps-lub E] [--overlap RULE (one of '//name_list(overlap_names)//')] [--update U] [--tolerance TOL]'// &
-      ' [--table FILE] [--model multipole|rpy] [--jacobian-steps K] [--rosenbrock-stage yes|no]'// &
+      ' [--table FILE] [--model multipole|rpy] [--jacobian-steps K] [--jacobian-order J] [--rosenbrock-stage yes|no]'// &
       ' [--steppers LIST]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
       'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).')
@@ -151,6 +153,7 @@ contains
     tolerance = 1.0e-4_wp
     model = 'multipole'
     jacobian_steps = 4
+    jacobian_order = 0
     rosenbrock_stage = .true.
     steppers = method_ros34pw2//','//method_ros34pw3
     k = 2
@@ -191,6 +194,10 @@ contains
         if (ios /= 0 .or. jacobian_steps < 1 .or. jacobian_steps > jacobian_steps_max) &
           call die(program_name, '--jacobian-steps '//trim(val)//': expected an integer in [1, '// &
                    to_str(jacobian_steps_max)//']', 2)
+      case ('--jacobian-order')
+        read (val, *, iostat=ios) jacobian_order
+        if (ios /= 0 .or. jacobian_order < 1) &
+          call die(program_name, '--jacobian-order '//trim(val)//': expected an integer >= 1 (at most the order, 2)', 2)
       case ('--steppers')
         steppers = trim(val)
         call check_steppers(steppers)
@@ -818,6 +825,7 @@ contains
     call header()
     write (output_unit, '(a)') 'model = '//model
     write (output_unit, '(a)') 'jacobian_steps = '//to_str(jacobian_steps)
+    write (output_unit, '(a)') 'jacobian_order = '//to_str(jacobian_order)
     write (output_unit, '(a)') 'rosenbrock_tolerance = '//to_str(tolerance, '(es10.3)')
     if (model == 'multipole') then
       updates = [character(len=9) :: update_stage, update_iterative]
@@ -843,6 +851,16 @@ contains
           call run_method(label, method, trim(updates(k)), jacobian_steps, tolerance, r, wall)
           call compare_with_reference(label, r, wall, r_ref, wall_ref)
         end if
+        if (jacobian_order > 0 .and. trim(updates(k)) /= update_stage) then
+          label = method//'_jorder'//to_str(jacobian_order)//'.'//trim(updates(k))
+          call run_method(label, method, trim(updates(k)), 1, tolerance, r, wall, jacobian_order)
+          call compare_with_reference(label, r, wall, r_ref, wall_ref)
+          if (jacobian_steps > 1) then
+            label = method//'_jorder'//to_str(jacobian_order)//'_mobility'//to_str(jacobian_steps)//'.'//trim(updates(k))
+            call run_method(label, method, trim(updates(k)), jacobian_steps, tolerance, r, wall, jacobian_order)
+            call compare_with_reference(label, r, wall, r_ref, wall_ref)
+          end if
+        end if
       end do
     end do
     write (output_unit, '(a)') 'loadavg_end = '//loadavg()
@@ -858,12 +876,14 @@ contains
 
   !> One integration of the configuration to t_end (tolerance tol; eps_lub 1e-4 unless
   !> --eps-lub) with `method` and `upd`: its figures under `label`; r the final positions.
-  subroutine run_method(label, method, upd, keep, tol, r, wall)
+  !> `jorder` (optional): &hydro jacobian_order.
+  subroutine run_method(label, method, upd, keep, tol, r, wall, jorder)
     character(len=*), intent(in) :: label, method, upd
     integer, intent(in) :: keep
     real(wp), intent(in) :: tol
     real(wp), allocatable, intent(out) :: r(:, :)
     real(wp), intent(out) :: wall
+    integer, intent(in), optional :: jorder
     type(scene_t) :: scene
     type(dynamics_t) :: dyn
     class(stepper_t), allocatable :: integ
@@ -873,6 +893,7 @@ contains
     if (eps_lub < 0.0_wp) scene%hydro%eps_lub = 1.0e-4_wp
     scene%integrator%method = method
     scene%integrator%jacobian_steps = keep
+    if (present(jorder)) scene%hydro%jacobian_order = jorder
     call dyn%init(scene, size(r, 2), error)
     if (allocated(error)) call die(program_name, error%message, 2)
     call make_stepper(scene%integrator, integ, error)

@@ -39,6 +39,8 @@ module kf_scene_hydro
   ! from kf_hydro_limits: order_allowed, order_lubrication_allowed, eps_lub_allowed below).
   character(len=*), parameter :: overlap_time_allowed = 'a number > 0'
   character(len=*), parameter :: overlap_time_relax_allowed = "only with overlap = '"//overlap_relax//"'"
+  !> The default of &hydro jacobian_order: the model's own order.
+  integer, parameter :: jacobian_order_default = 0
 
   !> &hydro: the hydrodynamic model.
   type, public :: hydro_params_t
@@ -58,6 +60,9 @@ module kf_scene_hydro
     character(len=name_len) :: overlap = overlap_pair
     !> relax: the time over which an overlap is undone
     real(wp) :: overlap_time = overlap_time_default
+    !> The multipole order of the mobility in a linearly implicit stepper's Jacobian where the
+    !> model's own is not at hand (update adaptive or iterative); 0: the model's order
+    integer :: jacobian_order = jacobian_order_default
   end type hydro_params_t
 
   public :: read_hydro_group, hydro_items, check_hydro, resolve_hydro, effective_eps_lub
@@ -76,12 +81,13 @@ contains
     real(wp) :: eps_lub
     character(len=name_len) :: update, overlap
     real(wp) :: overlap_time
-    namelist /hydro/ model, order, lubrication, eps_lub, update, overlap, overlap_time
+    integer :: jacobian_order
+    namelist /hydro/ model, order, lubrication, eps_lub, update, overlap, overlap_time, jacobian_order
     model = p%model; order = p%order; lubrication = p%lubrication; eps_lub = p%eps_lub
-    update = p%update; overlap = p%overlap; overlap_time = p%overlap_time
+    update = p%update; overlap = p%overlap; overlap_time = p%overlap_time; jacobian_order = p%jacobian_order
     read (text, nml=hydro, iostat=ios, iomsg=msg)
     p%model = model; p%order = order; p%lubrication = lubrication; p%eps_lub = eps_lub
-    p%update = update; p%overlap = overlap; p%overlap_time = overlap_time
+    p%update = update; p%overlap = overlap; p%overlap_time = overlap_time; p%jacobian_order = jacobian_order
   end subroutine read_hydro_group
 
   !> The variables of &hydro, in namelist order, appended to `items`.
@@ -114,6 +120,11 @@ contains
       'overlap_time (docs/limitations.md says why the study inputs use it)')
     call add_r(items, 'hydro.overlap_time', p%overlap_time, overlap_time_allowed//', '//overlap_time_relax_allowed, &
       'relax: the time, in units of 1/shear rate, over which an overlap is undone')
+    call add_i(items, 'hydro.jacobian_order', int(p%jacobian_order, i8), jacobian_order_allowed(), &
+      'multipole, update adaptive or iterative: the order L of the mobility in the Jacobian of a linearly '// &
+      'implicit stepper (&integrator method ros34pw2, ros34pw3), made where the model''s own is not at hand '// &
+      '(same lubrication and overlap treatment); 0: the model''s order. A W-method keeps its order with any '// &
+      'Jacobian; 1 is much cheaper (docs/accuracy.md, "A cheaper Jacobian"); ignored by the other methods')
   end subroutine hydro_items
 
   !> Check &hydro (`file`: the scene file named in the messages, '' from code).
@@ -158,6 +169,12 @@ contains
         overlap_time_relax_allowed//' (it has no effect with overlap = '// &
         quoted(p%overlap)//')'); return
     end if
+    if (p%jacobian_order /= jacobian_order_default) then
+      if (p%model /= model_multipole .or. p%update == update_stage .or. p%jacobian_order < 0 .or. &
+          p%jacobian_order > p%order) then
+        call refuse(error, file, 'hydro', 'jacobian_order', to_str(p%jacobian_order), jacobian_order_allowed()); return
+      end if
+    end if
   end subroutine check_hydro
 
   !> The eps_lub a model uses: the given one, or the integration tolerance when not given (< 0).
@@ -182,6 +199,14 @@ contains
     end if
     p%eps_lub = effective_eps_lub(p, tolerance)
   end subroutine resolve_hydro
+
+  !> The allowed values of jacobian_order, in the words of the refusals and the reference.
+  function jacobian_order_allowed() result(text)
+    character(len=:), allocatable :: text
+    text = 'an integer from 0 to the order; '//to_str(jacobian_order_default)//' unless model = '// &
+      quoted(model_multipole)//' and update = '//quoted(update_adaptive)//' or '//quoted(update_iterative)// &
+      ' (with '//quoted(update_stage)//' the exact mobility is at hand)'
+  end function jacobian_order_allowed
 
   !> 'an integer from 1 to 8' (the allowed orders).
   function order_allowed() result(text)

@@ -32,7 +32,7 @@ contains
 
   !> The memory the model named by params%model keeps for `n_beads` beads (bytes), as each model
   !> module states it (`rpy_memory_bytes`, `multipole_memory_bytes`, `adaptive_memory_bytes`,
-  !> `iterative_memory_bytes`;
+  !> `iterative_memory_bytes`, plus a model of a lower &hydro jacobian_order;
   !> 'none' keeps nothing); `stresslet`: the case records the stresslet. A model name this
   !> factory cannot build gives -1 (kf_resources refuses it), never a silent 0.
   pure integer(i8) function hydro_memory_bytes(params, n_beads, stresslet) result(bytes)
@@ -57,6 +57,9 @@ contains
       case default
         bytes = -1
       end select
+      ! a lower jacobian_order: one more multipole model (without a stresslet)
+      if (bytes >= 0 .and. params%jacobian_order > 0 .and. params%jacobian_order < params%order) &
+        bytes = bytes + multipole_memory_bytes(n, .false.)
     case default
       bytes = -1
     end select
@@ -105,6 +108,8 @@ contains
         allocate (mp)
         call mp%init(params%order, params%lubrication, eps_lub, error, literal_bwe=literal_bwe)
         if (allocated(error)) return
+        if (params%jacobian_order > 0) call mp%set_jacobian_order(params%jacobian_order, error)
+        if (allocated(error)) return
         call move_alloc(mp, model)
       end block
     case (update_adaptive)
@@ -113,6 +118,8 @@ contains
         allocate (ma)
         call ma%setup(params%order, params%lubrication, eps_lub, tolerance, error, literal_bwe=literal_bwe)
         if (allocated(error)) return
+        if (params%jacobian_order > 0) call ma%set_jacobian_order(params%jacobian_order, error)
+        if (allocated(error)) return
         call move_alloc(ma, model)
       end block
     case (update_iterative)
@@ -120,6 +127,8 @@ contains
         type(multipole_iterative_t), allocatable :: mi
         allocate (mi)
         call mi%setup(params%order, params%lubrication, eps_lub, error, literal_bwe=literal_bwe)
+        if (allocated(error)) return
+        if (params%jacobian_order > 0) call mi%set_jacobian_order(params%jacobian_order, error)
         if (allocated(error)) return
         call move_alloc(mi, model)
       end block

@@ -51,6 +51,11 @@ module kf_hydro_multipole
     logical :: lubrication = .false.
     logical :: literal_bwe = .false.      !< overlap = 'bwe': no clamp of the many-body system
     real(wp) :: eps_lub = 0.0_wp         !< overlap shift (init sets it): overlapping pairs are evaluated at 1 + eps_lub
+    !> The order of the mobility `mobility_at` makes when it is not at hand (`set_jacobian_order`;
+    !> the model's own order unless a lower one was set)
+    integer :: jacobian_order = 0
+    !> the model of that order when it is lower (the same lubrication, eps_lub and overlap treatment)
+    class(hydro_model_t), allocatable, private :: jmodel
     type(multipole_system_t), private :: sys
     type(lubrication_t) :: lub
     integer :: n_lub_pairs = 0           !< pairs corrected at the last prepare
@@ -73,6 +78,7 @@ module kf_hydro_multipole
     procedure :: mobility_matrix => multipole_mobility_matrix
     procedure :: mobility_at => multipole_mobility_at
     procedure :: mobility_cached => multipole_mobility_cached
+    procedure :: set_jacobian_order => multipole_set_jacobian_order
     procedure :: friction_matrix => multipole_friction_matrix
     procedure :: velocities => multipole_velocities
     procedure :: pair_cutoff => multipole_pair_cutoff
@@ -117,6 +123,8 @@ contains
       if (allocated(error)) return
     end if
     this%order = order
+    this%jacobian_order = order
+    if (allocated(this%jmodel)) deallocate (this%jmodel)
     this%lubrication = lubrication
     this%eps_lub = eps_lub
     this%n = 0
@@ -280,18 +288,48 @@ contains
   end subroutine multipole_mobility_matrix
 
   !> The 3N x 3N mobility at r: the cached one when the last prepare was at exactly r (as after
-  !> a 'stage' evaluation there), else prepare at r first.
+  !> a 'stage' evaluation there); else, with a lower `jacobian_order`, the mobility of the model of
+  !> that order at r (for a linearly implicit stepper's Jacobian: cheaper, not this model's);
+  !> else prepare at r first.
   subroutine multipole_mobility_at(this, r, mu, error)
     class(multipole_model_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     real(wp), intent(out) :: mu(:, :)
     type(error_t), allocatable, intent(out) :: error
     if (.not. this%mobility_cached(r)) then
+      if (allocated(this%jmodel)) then
+        call this%jmodel%mobility_at(r, mu, error)
+        return
+      end if
       call this%prepare(r, error)
       if (allocated(error)) return
     end if
     mu = this%mu
   end subroutine multipole_mobility_at
+
+  !> The order (1..order) of the mobility `mobility_at` makes where this model's is not at hand
+  !> (after init: the model's order). A lower order builds a multipole model of that order with the
+  !> same lubrication, eps_lub and overlap treatment.
+  subroutine multipole_set_jacobian_order(this, jorder, error)
+    class(multipole_model_t), intent(inout) :: this
+    integer, intent(in) :: jorder
+    type(error_t), allocatable, intent(out) :: error
+    if (jorder < 1 .or. jorder > this%order) then
+      call fatal_error(error, 'multipole: jacobian order = '//to_str(jorder)//' not allowed (1 to the order L = '// &
+                       to_str(this%order)//')')
+      return
+    end if
+    if (allocated(this%jmodel)) deallocate (this%jmodel)
+    this%jacobian_order = jorder
+    if (jorder == this%order) return
+    block
+      type(multipole_model_t), allocatable :: low
+      allocate (low)
+      call low%init(jorder, this%lubrication, this%eps_lub, error, literal_bwe=this%literal_bwe)
+      if (allocated(error)) return
+      call move_alloc(low, this%jmodel)
+    end block
+  end subroutine multipole_set_jacobian_order
 
   !> Was the last prepare at exactly r (and is its mobility still held)?
   logical function multipole_mobility_cached(this, r) result(cached)
