@@ -25,15 +25,15 @@
 !> for the approximate triangular solves `forward_single` ... `backward_p_single` (single
 !> arithmetic, BLAS stpsv) of a preconditioner; the exact solves keep the double factor.
 module kf_multipole_system
+  use, intrinsic :: iso_fortran_env, only: int64
   use kf_kinds, only: wp, sp
   use kf_strings, only: to_str
   use kf_blas, only: dpotrf, dpotri, dtrsm, dtrsv, stpsv, dgemm, dsyrk, dgemv, dsymv
   use kf_lapack, only: symmetric_eigenvalues
   use kf_constants, only: pi
   use kf_error, only: error_t, fatal_error
-  use kf_multipole_blocks, only: multipole_layout_t, pair_block_grouped, fam_phi, fam_p
+  use kf_multipole_blocks, only: multipole_layout_t, pair_entries, fam_phi, fam_p
   use kf_multipole_index, only: multipole_index_t
-  use kf_solid_harmonics, only: irregular_harmonics
   use kf_strain_basis, only: strain_basis, strain_coefficients
   implicit none
   private
@@ -69,6 +69,13 @@ module kf_multipole_system
     !> Seconds spent in the last assembly of the pair blocks and in the factorisation
     !> (p-moment elimination and Cholesky).
     real(wp) :: t_assembly = 0.0_wp, t_factor = 0.0_wp
+    !> Where a pair's entries go (`build_scatter`): the places in K, as a flat array, come in
+    !> nk_seg runs of consecutive places; run s has sk_len(s) places from sk_pos(s) + kb(sk_cls(s))
+    !> (kb: the class bases of the pair, `scatter_bases`), and they get, in order, the values
+    !> v(sk_src(w)) of the pair's signed entries v (v(-u) = -v(u), v(0) = 0: no terms). The
+    !> same for B (sb_*, bb).
+    integer(int64), allocatable :: sk_pos(:), sb_pos(:)
+    integer, allocatable :: sk_cls(:), sk_len(:), sk_src(:), sb_cls(:), sb_len(:), sb_src(:)
   contains
     procedure :: init => system_init
     procedure :: assemble => system_assemble
@@ -154,13 +161,13 @@ contains
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
-    integer :: nsph, h, i, j, x, yr, n, q, t, pc, n_over, n_clamp, a, b, ti, tj, ntile
+    integer :: nsph, h, i, j, x, yr, n, q, t, pc, n_over, n_clamp, ti, tj, ntile
     integer :: lo(5), hi(5), ks(4, 2), bs(4, 2), ps(2)
     integer, allocatable :: first_coincident(:)
     integer(8) :: c0, c1, crate
+    integer(int64) :: kb(32), bb(4)
     real(wp) :: d(3), dist
-    real(wp), allocatable :: yw(:), gr(:, :)
-    complex(wp), allocatable :: ih(:, :)
+    real(wp), allocatable :: yw(:), vw(:)
 
     nsph = size(r, 2)
     if (nsph < 1) then
@@ -183,6 +190,7 @@ contains
       allocate (this%k(this%nr, this%nr), this%bp(this%idx%b_rows(), this%idx%p_unknowns()), &
                 this%w6(this%n6, this%n6))
       allocate (this%bq(max(1, this%nqt), 5), this%d6(this%n6, 5))
+      call build_scatter(this)
     end if
     associate (idx => this%idx)
       lo = idx%lo
@@ -216,16 +224,17 @@ contains
       ! bit, for any number of OpenMP threads (kf_blas_threads sets the count); the counters
       ! are integer sums. The pairs go by tiles of assembly_tile x assembly_tile spheres (a
       ! tile row per task, j increasing for each i), so that the short runs a tile writes into
-      ! each column of K and B fill whole cache lines while they are in cache.
+      ! each column of K and B fill whole cache lines while they are in cache. A pair's entries
+      ! (pair_entries) go straight to their places in the lower triangle of K and in B by the
+      ! scatter lists of `build_scatter`, in the order of the addresses.
       n_over = 0
       n_clamp = 0
       first_coincident = 0
       ntile = (nsph + assembly_tile - 1)/assembly_tile
-      !$omp parallel default(none) shared(this, r, nsph, lo, hi, h, first_coincident, ntile) &
-      !$omp private(ti, tj, i, j, x, yr, a, b, ks, bs, ps, d, dist, ih, yw, gr) reduction(+:n_over, n_clamp)
-      allocate (ih(0:2*this%lay%order, -2*this%lay%order:2*this%lay%order), yw(2*this%lay%nslot), &
-                gr(this%lay%nb, this%lay%nb))
-      gr = 0.0_wp
+      !$omp parallel default(none) shared(this, r, nsph, first_coincident, ntile) &
+      !$omp private(ti, tj, i, j, ks, bs, ps, d, dist, yw, vw, kb, bb) reduction(+:n_over, n_clamp)
+      allocate (yw(2*this%lay%nslot), vw(-this%lay%nhalf:this%lay%nhalf))
+      vw(0) = 0.0_wp
       !$omp do schedule(dynamic)
       do ti = 1, ntile
         do tj = ti, ntile
@@ -245,42 +254,17 @@ contains
                 d = d*(this%min_distance/dist)
                 n_clamp = n_clamp + 1
               end if
-              call irregular_harmonics(d, 2*this%lay%order, ih)
-              call pair_block_grouped(this%lay, d, ih, yw, gr, zeroed=.true.)
-              ! Column by column, each a contiguous run of K or B: the blocks below the diagonal
-              ! runs (yr >= x) from the columns of gr, the others (rows of sphere i) from its rows.
-              do x = 1, 4
-                if (hi(x) < lo(x)) cycle
-                do yr = 1, 4
-                  if (hi(yr) < lo(yr)) cycle
-                  if (yr >= x) then
-                    do b = 0, hi(x) - lo(x)
-                      this%k(ks(yr, 2):ks(yr, 2) + hi(yr) - lo(yr), ks(x, 1) + b) = gr(lo(yr):hi(yr), lo(x) + b)
-                    end do
-                  else
-                    do b = 0, hi(yr) - lo(yr)
-                      do a = 0, hi(x) - lo(x)
-                        this%k(ks(x, 1) + a, ks(yr, 2) + b) = gr(lo(yr) + b, lo(x) + a)
-                      end do
-                    end do
-                  end if
-                end do
-              end do
-              do x = 1, 3, 2
-                if (hi(x) < lo(x)) cycle
-                do b = 0, h - 1
-                  this%bp(bs(x, 2):bs(x, 2) + hi(x) - lo(x), ps(1) + b) = gr(lo(x):hi(x), lo(5) + b)
-                  do a = 0, hi(x) - lo(x)
-                    this%bp(bs(x, 1) + a, ps(2) + b) = gr(lo(5) + b, lo(x) + a)
-                  end do
-                end do
-              end do
+              call pair_entries(this%lay, d, yw, vw(1:))
+              vw(-this%lay%nhalf:-1) = -vw(this%lay%nhalf:1:-1)
+              call scatter_bases(this%nr, this%idx%b_rows(), ks, bs, ps, kb, bb)
+              call scatter(this%k, this%sk_pos, this%sk_cls, this%sk_len, this%sk_src, kb, this%lay%nhalf, vw)
+              call scatter(this%bp, this%sb_pos, this%sb_cls, this%sb_len, this%sb_src, bb, this%lay%nhalf, vw)
             end do
           end do
         end do
       end do
       !$omp end do
-      deallocate (ih, yw, gr)
+      deallocate (yw, vw)
       !$omp end parallel
       this%n_overlapping = n_over
       this%n_clamped = n_clamp
@@ -313,6 +297,157 @@ contains
     end subroutine starts
 
   end subroutine system_assemble
+
+  !> The scatter lists sk_*, sb_* (type components) for the present number of spheres. For a
+  !> pair (source i, receiver j > i) the block element G(p, q) (grouped local row p of j,
+  !> column q of i) sits in the lower triangle of K at (row of j's p, column of i's q) when
+  !> run(p) >= run(q), else at (row of i's q, column of j's p) (K is symmetric); the phi <- p
+  !> couplings at B(phi row of j's p, p column of i's q) and B(phi row of i's q, p column of
+  !> j's p). The places are listed column by column of K and B (class 1..32 of K: row run rr,
+  !> column run rc, o = 0 for the columns of i and 1 for those of j; 1..4 of B: phi run 1 or
+  !> 3, o), each as an offset within its class: row a + nr * column b, both counted from the
+  !> runs' starts for the pair.
+  subroutine build_scatter(this)
+    class(multipole_system_t), intent(inout) :: this
+    integer, allocatable :: src(:, :), cls(:)
+    integer(int64), allocatable :: pos(:)
+    integer :: lo(5), len(5), nb, h, u, m, rc, rr, o, a, b, p, q, w, nbr
+
+    nb = this%lay%nb
+    h = this%lay%h
+    lo = this%idx%lo
+    len = this%idx%hi - this%idx%lo + 1
+    nbr = this%idx%b_rows()
+    allocate (src(nb, nb))
+    src = 0
+    associate (lay => this%lay)
+      do u = 1, lay%nhalf
+        src(lay%fast_row(u), lay%fast_col(u)) = u
+      end do
+      do m = 1, lay%nmirror
+        u = lay%fast_mirror(m)
+        src(lay%fast_col(u), lay%fast_row(u)) = nint(lay%fast_msign(m))*u
+      end do
+    end associate
+    if (allocated(this%sk_pos)) deallocate (this%sk_pos, this%sk_cls, this%sk_len, this%sk_src, &
+                                            this%sb_pos, this%sb_cls, this%sb_len, this%sb_src)
+    allocate (pos(4*h*h), cls(4*h*h), this%sk_src(4*h*h))
+    w = 0
+    do rc = 1, 4
+      do o = 0, 1
+        do b = 0, len(rc) - 1
+          do rr = rc + o, 4
+            do a = 0, len(rr) - 1
+              if (o == 0) then
+                p = lo(rr) + a   ! row: receiver j
+                q = lo(rc) + b   ! column: source i
+              else
+                p = lo(rc) + b   ! column: receiver j
+                q = lo(rr) + a   ! row: source i
+              end if
+              w = w + 1
+              pos(w) = int(a, int64) + int(this%nr, int64)*int(b, int64)
+              cls(w) = rr + 4*(rc - 1) + 16*o
+              this%sk_src(w) = src(p, q)
+            end do
+          end do
+        end do
+      end do
+    end do
+    call runs_of(pos(1:w), cls(1:w), this%sk_pos, this%sk_cls, this%sk_len)
+    deallocate (pos, cls)
+    allocate (pos(2*h*h), cls(2*h*h), this%sb_src(2*h*h))
+    w = 0
+    do o = 0, 1
+      do b = 0, h - 1
+        do rr = 1, 3, 2
+          do a = 0, len(rr) - 1
+            if (o == 0) then
+              p = lo(rr) + a   ! phi row of receiver j
+              q = lo(5) + b    ! p column of source i
+            else
+              p = lo(5) + b    ! p column of receiver j
+              q = lo(rr) + a   ! phi row of source i
+            end if
+            w = w + 1
+            pos(w) = int(a, int64) + int(nbr, int64)*int(b, int64)
+            cls(w) = (rr + 1)/2 + 2*o
+            this%sb_src(w) = src(p, q)
+          end do
+        end do
+      end do
+    end do
+    call runs_of(pos(1:w), cls(1:w), this%sb_pos, this%sb_cls, this%sb_len)
+
+  contains
+
+    !> The runs of consecutive places (same class, offsets increasing by one) of a list.
+    subroutine runs_of(lpos, lcls, rpos, rcls, rlen)
+      integer(int64), intent(in) :: lpos(:)
+      integer, intent(in) :: lcls(:)
+      integer(int64), allocatable, intent(out) :: rpos(:)
+      integer, allocatable, intent(out) :: rcls(:), rlen(:)
+      integer :: k, nrun
+      integer(int64), allocatable :: tpos(:)
+      integer, allocatable :: tcls(:), tlen(:)
+      allocate (tpos(size(lpos)), tcls(size(lpos)), tlen(size(lpos)))
+      nrun = 0
+      do k = 1, size(lpos)
+        if (nrun > 0) then
+          if (lcls(k) == tcls(nrun) .and. lpos(k) == tpos(nrun) + tlen(nrun)) then
+            tlen(nrun) = tlen(nrun) + 1
+            cycle
+          end if
+        end if
+        nrun = nrun + 1
+        tpos(nrun) = lpos(k)
+        tcls(nrun) = lcls(k)
+        tlen(nrun) = 1
+      end do
+      rpos = tpos(1:nrun)
+      rcls = tcls(1:nrun)
+      rlen = tlen(1:nrun)
+    end subroutine runs_of
+
+  end subroutine build_scatter
+
+  !> The class bases of the scatter lists for a pair: ks(run, 1|2), bs(run, 1|2), ps(1|2) the
+  !> starts of source i (1) and receiver j (2) in K, in the rows and in the columns of B;
+  !> kb(rr + 4(rc - 1) + 16 o) = flat place of the runs' first element, with the rows of j and
+  !> columns of i for o = 0, the rows of i and columns of j for o = 1; bb the same for B.
+  pure subroutine scatter_bases(nr, nbr, ks, bs, ps, kb, bb)
+    integer, intent(in) :: nr, nbr, ks(4, 2), bs(4, 2), ps(2)
+    integer(int64), intent(out) :: kb(32), bb(4)
+    integer :: rr, rc, o
+    do o = 0, 1
+      do rc = 1, 4
+        do rr = 1, 4
+          kb(rr + 4*(rc - 1) + 16*o) = int(ks(rr, 2 - o), int64) + int(nr, int64)*int(ks(rc, 1 + o) - 1, int64)
+        end do
+      end do
+      bb(1 + 2*o) = int(bs(1, 2 - o), int64) + int(nbr, int64)*int(ps(1 + o) - 1, int64)
+      bb(2 + 2*o) = int(bs(3, 2 - o), int64) + int(nbr, int64)*int(ps(1 + o) - 1, int64)
+    end do
+  end subroutine scatter_bases
+
+  !> The places of a scatter list's runs get, in order, the signed entries v(src(w)) (a: K or
+  !> B as a flat array; run s from pos(s) + base(cls(s)), rlen(s) places; v(-nh:nh)).
+  pure subroutine scatter(a, pos, cls, rlen, src, base, nh, v)
+    real(wp), intent(inout) :: a(*)
+    integer(int64), intent(in) :: pos(:), base(:)
+    integer, intent(in) :: cls(:), rlen(:), src(:), nh
+    real(wp), intent(in) :: v(-nh:nh)
+    integer :: s, w, k
+    integer(int64) :: a0
+    w = 0
+    do s = 1, size(pos)
+      a0 = pos(s) + base(cls(s))
+      do k = 0, rlen(s) - 1
+        a(a0 + k) = v(src(w + k + 1))
+      end do
+      w = w + rlen(s)
+    end do
+  end subroutine scatter
 
   !> Assemble the scaled real system for centres r(3, N), eliminate the p-moments and
   !> factorise (Cholesky), with the single-precision copy when init asked for it; with
