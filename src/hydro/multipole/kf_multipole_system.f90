@@ -25,7 +25,6 @@
 !> for the approximate triangular solves `forward_single` ... `backward_p_single` (single
 !> arithmetic, BLAS stpsv) of a preconditioner; the exact solves keep the double factor.
 module kf_multipole_system
-  use, intrinsic :: iso_fortran_env, only: int64
   use kf_kinds, only: wp, sp
   use kf_strings, only: to_str
   use kf_blas, only: dpotrf, dpotri, dtrsm, dtrsv, stpsv, dgemm, dsyrk, dgemv, dsymv
@@ -40,8 +39,9 @@ module kf_multipole_system
 
   !> The highest truncation order L the system takes (the scene allows less: kf_scene_hydro).
   integer, parameter, public :: max_multipole_order = 20
-  !> Spheres per tile side in the pair loop of `assemble` (cache blocking of the writes).
-  integer, parameter :: assembly_tile = 8
+  !> Pairs per chunk in `assemble`: their entries are computed, then transposed into the
+  !> owner's table by whole cache lines.
+  integer, parameter :: assembly_chunk = 8
   !> Columns of B per panel in `apply` (a panel of 16 N rows: 200 kB at N = 99, L = 2).
   integer, parameter :: apply_panel = 32
 
@@ -69,13 +69,10 @@ module kf_multipole_system
     !> Seconds spent in the last assembly of the pair blocks and in the factorisation
     !> (p-moment elimination and Cholesky).
     real(wp) :: t_assembly = 0.0_wp, t_factor = 0.0_wp
-    !> Where a pair's entries go (`build_scatter`): the places in K, as a flat array, come in
-    !> nk_seg runs of consecutive places; run s has sk_len(s) places from sk_pos(s) + kb(sk_cls(s))
-    !> (kb: the class bases of the pair, `scatter_bases`), and they get, in order, the values
-    !> v(sk_src(w)) of the pair's signed entries v (v(-u) = -v(u), v(0) = 0: no terms). The
-    !> same for B (sb_*, bb).
-    integer(int64), allocatable :: sk_pos(:), sb_pos(:)
-    integer, allocatable :: sk_cls(:), sk_len(:), sk_src(:), sb_cls(:), sb_len(:), sb_src(:)
+    !> Element G(p, q) (grouped local row p, column q) of a pair block is elem_sgn(p, q) times
+    !> entry elem_src(p, q) of `pair_entries` (0: no terms, zero in every block).
+    integer, allocatable :: elem_src(:, :)
+    real(wp), allocatable :: elem_sgn(:, :)
   contains
     procedure :: init => system_init
     procedure :: assemble => system_assemble
@@ -161,13 +158,12 @@ contains
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
-    integer :: nsph, h, i, j, x, yr, n, q, t, pc, n_over, n_clamp, ti, tj, ntile
+    integer :: nsph, h, i, x, yr, n, q, t, s, t0, nt, pc, n_over, n_clamp
     integer :: lo(5), hi(5), ks(4, 2), bs(4, 2), ps(2)
     integer, allocatable :: first_coincident(:)
     integer(8) :: c0, c1, crate
-    integer(int64) :: kb(32), bb(4)
     real(wp) :: d(3), dist
-    real(wp), allocatable :: yw(:), vw(:)
+    real(wp), allocatable :: yw(:), vw(:, :), vt(:, :)
 
     nsph = size(r, 2)
     if (nsph < 1) then
@@ -190,7 +186,7 @@ contains
       allocate (this%k(this%nr, this%nr), this%bp(this%idx%b_rows(), this%idx%p_unknowns()), &
                 this%w6(this%n6, this%n6))
       allocate (this%bq(max(1, this%nqt), 5), this%d6(this%n6, 5))
-      call build_scatter(this)
+      call build_elements(this)
     end if
     associate (idx => this%idx)
       lo = idx%lo
@@ -219,52 +215,55 @@ contains
         end do
       end do
 
-      ! The pair blocks: each pair (i, j) is computed and written by one thread into its own
-      ! rows and columns of K and B (no sums across pairs), so K and B are the same, bit for
-      ! bit, for any number of OpenMP threads (kf_blas_threads sets the count); the counters
-      ! are integer sums. The pairs go by tiles of assembly_tile x assembly_tile spheres (a
-      ! tile row per task, j increasing for each i), so that the short runs a tile writes into
-      ! each column of K and B fill whole cache lines while they are in cache. A pair's entries
-      ! (pair_entries) go straight to their places in the lower triangle of K and in B by the
-      ! scatter lists of `build_scatter`, in the order of the addresses.
+      ! The pair blocks, by the sphere s that owns the columns: the columns of s in the lower
+      ! triangle of K (rows of the spheres t > s in its runs, and of every t /= s in the later
+      ! runs) and its p columns of B (phi rows of every t /= s) are written whole, each column
+      ! from top to bottom, by one thread; the entries of every pair (s, t) are computed first
+      ! (`pair_entries` of the pair (min(s,t), max(s,t)), so twice per pair: once for each
+      ! owner) into vt(t, :). K and B are the same, bit for bit, for any number of OpenMP
+      ! threads (kf_blas_threads sets the count); the counters are integer sums over t > s.
       n_over = 0
       n_clamp = 0
       first_coincident = 0
-      ntile = (nsph + assembly_tile - 1)/assembly_tile
-      !$omp parallel default(none) shared(this, r, nsph, first_coincident, ntile) &
-      !$omp private(ti, tj, i, j, ks, bs, ps, d, dist, yw, vw, kb, bb) reduction(+:n_over, n_clamp)
-      allocate (yw(2*this%lay%nslot), vw(-this%lay%nhalf:this%lay%nhalf))
-      vw(0) = 0.0_wp
+      !$omp parallel default(none) shared(this, r, nsph, first_coincident, lo, hi) &
+      !$omp private(s, t, t0, nt, d, dist, yw, vw, vt) reduction(+:n_over, n_clamp)
+      allocate (yw(2*this%lay%nslot), vw(this%lay%nhalf, assembly_chunk), vt(nsph, 0:this%lay%nhalf))
+      vt(:, 0) = 0.0_wp
       !$omp do schedule(dynamic)
-      do ti = 1, ntile
-        do tj = ti, ntile
-          do i = (ti - 1)*assembly_tile + 1, min(ti*assembly_tile, nsph)
-            call starts(i, ks(:, 1), bs(:, 1), ps(1))
-            do j = max(i + 1, (tj - 1)*assembly_tile + 1), min(tj*assembly_tile, nsph)
-              call starts(j, ks(:, 2), bs(:, 2), ps(2))
-              ! Receiver j (rows), source i (columns).
-              d = r(:, j) - r(:, i)
-              dist = norm2(d)
-              if (dist <= 0.0_wp) then
-                if (first_coincident(i) == 0) first_coincident(i) = j
-                cycle
-              end if
-              if (dist <= 1.0_wp) n_over = n_over + 1
-              if (dist < this%min_distance) then
-                d = d*(this%min_distance/dist)
-                n_clamp = n_clamp + 1
-              end if
-              call pair_entries(this%lay, d, yw, vw(1:))
-              vw(-this%lay%nhalf:-1) = -vw(this%lay%nhalf:1:-1)
-              call scatter_bases(this%nr, this%idx%b_rows(), ks, bs, ps, kb, bb)
-              call scatter(this%k, this%sk_pos, this%sk_cls, this%sk_len, this%sk_src, kb, this%lay%nhalf, vw)
-              call scatter(this%bp, this%sb_pos, this%sb_cls, this%sb_len, this%sb_src, bb, this%lay%nhalf, vw)
-            end do
+      do s = 1, nsph
+        ! the spheres t by chunks: the entries of a chunk of pairs, then their transpose
+        do t0 = 1, nsph, assembly_chunk
+          nt = min(assembly_chunk, nsph - t0 + 1)
+          do t = t0, t0 + nt - 1
+            if (t == s) then
+              vw(:, t - t0 + 1) = 0.0_wp
+              cycle
+            end if
+            ! the pair (i, j) = (min(s, t), max(s, t)): receiver j (rows), source i (columns)
+            if (t > s) then
+              d = r(:, t) - r(:, s)
+            else
+              d = r(:, s) - r(:, t)
+            end if
+            dist = norm2(d)
+            if (dist <= 0.0_wp) then
+              if (t > s .and. first_coincident(s) == 0) first_coincident(s) = t
+              vw(:, t - t0 + 1) = 0.0_wp
+              cycle
+            end if
+            if (t > s .and. dist <= 1.0_wp) n_over = n_over + 1
+            if (dist < this%min_distance) then
+              d = d*(this%min_distance/dist)
+              if (t > s) n_clamp = n_clamp + 1
+            end if
+            call pair_entries(this%lay, d, yw, vw(:, t - t0 + 1))
           end do
+          vt(t0:t0 + nt - 1, 1:) = transpose(vw(:, 1:nt))
         end do
+        call write_columns(s, vt)
       end do
       !$omp end do
-      deallocate (yw, vw)
+      deallocate (yw, vw, vt)
       !$omp end parallel
       this%n_overlapping = n_over
       this%n_clamped = n_clamp
@@ -282,6 +281,64 @@ contains
 
   contains
 
+    !> The columns of sphere so in K (lower triangle, its own diagonal blocks excepted) and
+    !> in B from the entries vt(t, :) of the pairs (so, t). Row t of a run holds element
+    !> G(row of t, column of so) of the block with receiver t and source so: for t > so the
+    !> pair's element (row, column), for t < so (the pair (t, so)) its element (column, row).
+    subroutine write_columns(so, vt)
+      integer, intent(in) :: so
+      real(wp), intent(in) :: vt(:, 0:)
+      integer :: rc, rr, b, a, c, g, col, ln, k0, e, tt
+      real(wp) :: sg
+      associate (idx => this%idx, src => this%elem_src, sgn => this%elem_sgn)
+        do rc = 1, 4
+          do b = 0, idx%hi(rc) - idx%lo(rc)
+            c = idx%lo(rc) + b
+            col = idx%k_start(rc, so) + b
+            do rr = rc, 4
+              ln = idx%hi(rr) - idx%lo(rr) + 1
+              k0 = idx%k_start(rr, 1)
+              do a = 0, ln - 1
+                g = idx%lo(rr) + a
+                e = src(g, c)
+                sg = sgn(g, c)
+                do tt = so + 1, nsph
+                  this%k(k0 + ln*(tt - 1) + a, col) = sg*vt(tt, e)
+                end do
+                if (rr == rc) cycle
+                e = src(c, g)
+                sg = sgn(c, g)
+                do tt = 1, so - 1
+                  this%k(k0 + ln*(tt - 1) + a, col) = sg*vt(tt, e)
+                end do
+              end do
+            end do
+          end do
+        end do
+        do b = 0, h - 1
+          c = idx%lo(5) + b
+          col = idx%p_start(so) + b
+          do rr = 1, 3, 2
+            ln = idx%hi(rr) - idx%lo(rr) + 1
+            k0 = idx%b_start(rr, 1)
+            do a = 0, ln - 1
+              g = idx%lo(rr) + a
+              e = src(g, c)
+              sg = sgn(g, c)
+              do tt = so + 1, nsph
+                this%bp(k0 + ln*(tt - 1) + a, col) = sg*vt(tt, e)
+              end do
+              e = src(c, g)
+              sg = sgn(c, g)
+              do tt = 1, so - 1
+                this%bp(k0 + ln*(tt - 1) + a, col) = sg*vt(tt, e)
+              end do
+            end do
+          end do
+        end do
+      end associate
+    end subroutine write_columns
+
     !> Starts of the runs of sphere s in K (ksv), in the rows of B (bsv) and its p column (psv).
     pure subroutine starts(s, ksv, bsv, psv)
       integer, intent(in) :: s
@@ -298,156 +355,25 @@ contains
 
   end subroutine system_assemble
 
-  !> The scatter lists sk_*, sb_* (type components) for the present number of spheres. For a
-  !> pair (source i, receiver j > i) the block element G(p, q) (grouped local row p of j,
-  !> column q of i) sits in the lower triangle of K at (row of j's p, column of i's q) when
-  !> run(p) >= run(q), else at (row of i's q, column of j's p) (K is symmetric); the phi <- p
-  !> couplings at B(phi row of j's p, p column of i's q) and B(phi row of i's q, p column of
-  !> j's p). The places are listed column by column of K and B (class 1..32 of K: row run rr,
-  !> column run rc, o = 0 for the columns of i and 1 for those of j; 1..4 of B: phi run 1 or
-  !> 3, o), each as an offset within its class: row a + nr * column b, both counted from the
-  !> runs' starts for the pair.
-  subroutine build_scatter(this)
+  !> elem_src, elem_sgn (type components) from the layout's entries and mirrors.
+  subroutine build_elements(this)
     class(multipole_system_t), intent(inout) :: this
-    integer, allocatable :: src(:, :), cls(:)
-    integer(int64), allocatable :: pos(:)
-    integer :: lo(5), len(5), nb, h, u, m, rc, rr, o, a, b, p, q, w, nbr
-
-    nb = this%lay%nb
-    h = this%lay%h
-    lo = this%idx%lo
-    len = this%idx%hi - this%idx%lo + 1
-    nbr = this%idx%b_rows()
-    allocate (src(nb, nb))
-    src = 0
+    integer :: u, m
     associate (lay => this%lay)
+      if (allocated(this%elem_src)) deallocate (this%elem_src, this%elem_sgn)
+      allocate (this%elem_src(lay%nb, lay%nb), this%elem_sgn(lay%nb, lay%nb))
+      this%elem_src = 0
+      this%elem_sgn = 1.0_wp
       do u = 1, lay%nhalf
-        src(lay%fast_row(u), lay%fast_col(u)) = u
+        this%elem_src(lay%fast_row(u), lay%fast_col(u)) = u
       end do
       do m = 1, lay%nmirror
         u = lay%fast_mirror(m)
-        src(lay%fast_col(u), lay%fast_row(u)) = nint(lay%fast_msign(m))*u
+        this%elem_src(lay%fast_col(u), lay%fast_row(u)) = u
+        this%elem_sgn(lay%fast_col(u), lay%fast_row(u)) = lay%fast_msign(m)
       end do
     end associate
-    if (allocated(this%sk_pos)) deallocate (this%sk_pos, this%sk_cls, this%sk_len, this%sk_src, &
-                                            this%sb_pos, this%sb_cls, this%sb_len, this%sb_src)
-    allocate (pos(4*h*h), cls(4*h*h), this%sk_src(4*h*h))
-    w = 0
-    do rc = 1, 4
-      do o = 0, 1
-        do b = 0, len(rc) - 1
-          do rr = rc + o, 4
-            do a = 0, len(rr) - 1
-              if (o == 0) then
-                p = lo(rr) + a   ! row: receiver j
-                q = lo(rc) + b   ! column: source i
-              else
-                p = lo(rc) + b   ! column: receiver j
-                q = lo(rr) + a   ! row: source i
-              end if
-              w = w + 1
-              pos(w) = int(a, int64) + int(this%nr, int64)*int(b, int64)
-              cls(w) = rr + 4*(rc - 1) + 16*o
-              this%sk_src(w) = src(p, q)
-            end do
-          end do
-        end do
-      end do
-    end do
-    call runs_of(pos(1:w), cls(1:w), this%sk_pos, this%sk_cls, this%sk_len)
-    deallocate (pos, cls)
-    allocate (pos(2*h*h), cls(2*h*h), this%sb_src(2*h*h))
-    w = 0
-    do o = 0, 1
-      do b = 0, h - 1
-        do rr = 1, 3, 2
-          do a = 0, len(rr) - 1
-            if (o == 0) then
-              p = lo(rr) + a   ! phi row of receiver j
-              q = lo(5) + b    ! p column of source i
-            else
-              p = lo(5) + b    ! p column of receiver j
-              q = lo(rr) + a   ! phi row of source i
-            end if
-            w = w + 1
-            pos(w) = int(a, int64) + int(nbr, int64)*int(b, int64)
-            cls(w) = (rr + 1)/2 + 2*o
-            this%sb_src(w) = src(p, q)
-          end do
-        end do
-      end do
-    end do
-    call runs_of(pos(1:w), cls(1:w), this%sb_pos, this%sb_cls, this%sb_len)
-
-  contains
-
-    !> The runs of consecutive places (same class, offsets increasing by one) of a list.
-    subroutine runs_of(lpos, lcls, rpos, rcls, rlen)
-      integer(int64), intent(in) :: lpos(:)
-      integer, intent(in) :: lcls(:)
-      integer(int64), allocatable, intent(out) :: rpos(:)
-      integer, allocatable, intent(out) :: rcls(:), rlen(:)
-      integer :: k, nrun
-      integer(int64), allocatable :: tpos(:)
-      integer, allocatable :: tcls(:), tlen(:)
-      allocate (tpos(size(lpos)), tcls(size(lpos)), tlen(size(lpos)))
-      nrun = 0
-      do k = 1, size(lpos)
-        if (nrun > 0) then
-          if (lcls(k) == tcls(nrun) .and. lpos(k) == tpos(nrun) + tlen(nrun)) then
-            tlen(nrun) = tlen(nrun) + 1
-            cycle
-          end if
-        end if
-        nrun = nrun + 1
-        tpos(nrun) = lpos(k)
-        tcls(nrun) = lcls(k)
-        tlen(nrun) = 1
-      end do
-      rpos = tpos(1:nrun)
-      rcls = tcls(1:nrun)
-      rlen = tlen(1:nrun)
-    end subroutine runs_of
-
-  end subroutine build_scatter
-
-  !> The class bases of the scatter lists for a pair: ks(run, 1|2), bs(run, 1|2), ps(1|2) the
-  !> starts of source i (1) and receiver j (2) in K, in the rows and in the columns of B;
-  !> kb(rr + 4(rc - 1) + 16 o) = flat place of the runs' first element, with the rows of j and
-  !> columns of i for o = 0, the rows of i and columns of j for o = 1; bb the same for B.
-  pure subroutine scatter_bases(nr, nbr, ks, bs, ps, kb, bb)
-    integer, intent(in) :: nr, nbr, ks(4, 2), bs(4, 2), ps(2)
-    integer(int64), intent(out) :: kb(32), bb(4)
-    integer :: rr, rc, o
-    do o = 0, 1
-      do rc = 1, 4
-        do rr = 1, 4
-          kb(rr + 4*(rc - 1) + 16*o) = int(ks(rr, 2 - o), int64) + int(nr, int64)*int(ks(rc, 1 + o) - 1, int64)
-        end do
-      end do
-      bb(1 + 2*o) = int(bs(1, 2 - o), int64) + int(nbr, int64)*int(ps(1 + o) - 1, int64)
-      bb(2 + 2*o) = int(bs(3, 2 - o), int64) + int(nbr, int64)*int(ps(1 + o) - 1, int64)
-    end do
-  end subroutine scatter_bases
-
-  !> The places of a scatter list's runs get, in order, the signed entries v(src(w)) (a: K or
-  !> B as a flat array; run s from pos(s) + base(cls(s)), rlen(s) places; v(-nh:nh)).
-  pure subroutine scatter(a, pos, cls, rlen, src, base, nh, v)
-    real(wp), intent(inout) :: a(*)
-    integer(int64), intent(in) :: pos(:), base(:)
-    integer, intent(in) :: cls(:), rlen(:), src(:), nh
-    real(wp), intent(in) :: v(-nh:nh)
-    integer :: s, w, k
-    integer(int64) :: a0
-    w = 0
-    do s = 1, size(pos)
-      a0 = pos(s) + base(cls(s))
-      do k = 0, rlen(s) - 1
-        a(a0 + k) = v(src(w + k + 1))
-      end do
-      w = w + rlen(s)
-    end do
-  end subroutine scatter
+  end subroutine build_elements
 
   !> Assemble the scaled real system for centres r(3, N), eliminate the p-moments and
   !> factorise (Cholesky), with the single-precision copy when init asked for it; with
