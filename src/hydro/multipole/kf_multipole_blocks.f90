@@ -393,68 +393,68 @@ contains
     this%fast_first(this%nterm_max + 2) = e + 1
   end subroutine build_fast_terms
 
-  !> The entries of the scaled real translation block in grouped order for displacement d
-  !> (receiver - source): v(u), u = 1..nhalf, is the element (fast_row(u), fast_col(u)), and
-  !> for fast_mirror(m) = u the element (fast_col(u), fast_row(u)) is fast_msign(m) v(u); all
-  !> other elements are zero for every d. y: work of size 2*nslot (the real slots Re, Im of
-  !> I_lambda^mu(d), mu >= 0, lambda <= 2L, then the same times |d|^2).
-  pure subroutine pair_entries(lay, d, y, v)
+  !> The entries of the scaled real translation blocks in grouped order for nd displacements
+  !> d(:, i) (receiver - source): v(i, u), u = 1..nhalf, is element (fast_row(u), fast_col(u))
+  !> of block i, and for fast_mirror(m) = u its element (fast_col(u), fast_row(u)) is
+  !> fast_msign(m) v(i, u); all other elements are zero for every d. y: work (nd, 2*nslot), the
+  !> real slots Re, Im of I_lambda^mu(d), mu >= 0, lambda <= 2L, then the same times |d|^2.
+  !> The sums go by groups of entries with the same number of terms (fixed-length sums, the
+  !> terms in the order of half_*, from zero), the loops over the displacements innermost.
+  pure subroutine pair_entries(lay, nd, d, y, v)
     type(multipole_layout_t), intent(in) :: lay
-    real(wp), intent(in) :: d(3)
-    real(wp), intent(out) :: y(2*lay%nslot), v(lay%nhalf)
-
-    call irregular_harmonics_real(d, 2*lay%order, y)
-    y(lay%nslot + 1:2*lay%nslot) = sum(d**2)*y(1:lay%nslot)
-    call entry_sums(lay, y, v)
-  end subroutine pair_entries
-
-  !> v(u) = the value of entry u (fast order) of the block from the slots y: the sums by
-  !> groups of equal length (terms summed in the order of half_*, from zero).
-  pure subroutine entry_sums(lay, y, v)
-    type(multipole_layout_t), intent(in) :: lay
-    real(wp), intent(in) :: y(2*lay%nslot)
-    real(wp), intent(out) :: v(lay%nhalf)
-    integer :: c, u, k, j, u0
+    integer, intent(in) :: nd
+    real(wp), intent(in) :: d(3, nd)
+    real(wp), intent(out) :: y(nd, 2*lay%nslot)
+    real(wp), intent(inout) :: v(:, :)
+    integer :: c, u, k, j, i, s
     real(wp) :: acc
 
-    do c = 1, lay%nterm_max
-      u0 = lay%fast_first(c)
-      k = lay%fast_tfirst(c)
-      select case (c)
-      case (1)
-        do u = u0, lay%fast_first(c + 1) - 1
-          v(u) = lay%fast_coef(k)*y(lay%fast_slot(k))
-          k = k + 1
-        end do
-      case (2)
-        do u = u0, lay%fast_first(c + 1) - 1
-          v(u) = lay%fast_coef(k)*y(lay%fast_slot(k)) + lay%fast_coef(k + 1)*y(lay%fast_slot(k + 1))
-          k = k + 2
-        end do
-      case (3)
-        do u = u0, lay%fast_first(c + 1) - 1
-          v(u) = lay%fast_coef(k)*y(lay%fast_slot(k)) + lay%fast_coef(k + 1)*y(lay%fast_slot(k + 1)) &
-                 + lay%fast_coef(k + 2)*y(lay%fast_slot(k + 2))
-          k = k + 3
-        end do
-      case (4)
-        do u = u0, lay%fast_first(c + 1) - 1
-          v(u) = lay%fast_coef(k)*y(lay%fast_slot(k)) + lay%fast_coef(k + 1)*y(lay%fast_slot(k + 1)) &
-                 + lay%fast_coef(k + 2)*y(lay%fast_slot(k + 2)) + lay%fast_coef(k + 3)*y(lay%fast_slot(k + 3))
-          k = k + 4
-        end do
-      case default
-        do u = u0, lay%fast_first(c + 1) - 1
-          acc = 0.0_wp
-          do j = 0, c - 1
-            acc = acc + lay%fast_coef(k + j)*y(lay%fast_slot(k + j))
-          end do
-          v(u) = acc
-          k = k + c
-        end do
-      end select
+    call irregular_harmonics_real(nd, d, 2*lay%order, y)
+    do s = 1, lay%nslot
+      do i = 1, nd
+        y(i, lay%nslot + s) = sum(d(:, i)**2)*y(i, s)
+      end do
     end do
-  end subroutine entry_sums
+    do c = 1, lay%nterm_max
+      k = lay%fast_tfirst(c)
+      associate (cf => lay%fast_coef, sl => lay%fast_slot)
+        select case (c)
+        case (1)
+          do u = lay%fast_first(c), lay%fast_first(c + 1) - 1
+            v(1:nd, u) = cf(k)*y(:, sl(k))
+            k = k + 1
+          end do
+        case (2)
+          do u = lay%fast_first(c), lay%fast_first(c + 1) - 1
+            v(1:nd, u) = cf(k)*y(:, sl(k)) + cf(k + 1)*y(:, sl(k + 1))
+            k = k + 2
+          end do
+        case (3)
+          do u = lay%fast_first(c), lay%fast_first(c + 1) - 1
+            v(1:nd, u) = cf(k)*y(:, sl(k)) + cf(k + 1)*y(:, sl(k + 1)) + cf(k + 2)*y(:, sl(k + 2))
+            k = k + 3
+          end do
+        case (4)
+          do u = lay%fast_first(c), lay%fast_first(c + 1) - 1
+            v(1:nd, u) = cf(k)*y(:, sl(k)) + cf(k + 1)*y(:, sl(k + 1)) + cf(k + 2)*y(:, sl(k + 2)) &
+                         + cf(k + 3)*y(:, sl(k + 3))
+            k = k + 4
+          end do
+        case default
+          do u = lay%fast_first(c), lay%fast_first(c + 1) - 1
+            do i = 1, nd
+              acc = 0.0_wp
+              do j = 0, c - 1
+                acc = acc + cf(k + j)*y(i, sl(k + j))
+              end do
+              v(i, u) = acc
+            end do
+            k = k + c
+          end do
+        end select
+      end associate
+    end do
+  end subroutine pair_entries
 
   !> Unscaled single-sphere inverse operator Z0^-1 at rank n, order m, radius a (section 5.1):
   !> zinv = [phi-phi, phi-p, p-p, chi-chi].

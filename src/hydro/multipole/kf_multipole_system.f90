@@ -39,8 +39,8 @@ module kf_multipole_system
 
   !> The highest truncation order L the system takes (the scene allows less: kf_scene_hydro).
   integer, parameter, public :: max_multipole_order = 20
-  !> Pairs per chunk in `assemble`: their entries are computed, then transposed into the
-  !> owner's table by whole cache lines.
+  !> Pairs per chunk in `assemble`: their entries are computed at once (loops over the chunk
+  !> innermost, whole cache lines of the owner's table).
   integer, parameter :: assembly_chunk = 8
   !> Columns of B per panel in `apply` (a panel of 16 N rows: 200 kB at N = 99, L = 2).
   integer, parameter :: apply_panel = 32
@@ -162,8 +162,8 @@ contains
     integer :: lo(5), hi(5), ks(4, 2), bs(4, 2), ps(2)
     integer, allocatable :: first_coincident(:)
     integer(8) :: c0, c1, crate
-    real(wp) :: d(3), dist
-    real(wp), allocatable :: yw(:), vw(:, :), vt(:, :)
+    real(wp) :: d(3), dist, dd(3, assembly_chunk)
+    real(wp), allocatable :: yw(:, :), vt(:, :)
 
     nsph = size(r, 2)
     if (nsph < 1) then
@@ -226,19 +226,18 @@ contains
       n_clamp = 0
       first_coincident = 0
       !$omp parallel default(none) shared(this, r, nsph, first_coincident, lo, hi) &
-      !$omp private(s, t, t0, nt, d, dist, yw, vw, vt) reduction(+:n_over, n_clamp)
-      allocate (yw(2*this%lay%nslot), vw(this%lay%nhalf, assembly_chunk), vt(nsph, 0:this%lay%nhalf))
+      !$omp private(s, t, t0, nt, d, dist, dd, yw, vt) reduction(+:n_over, n_clamp)
+      allocate (yw(assembly_chunk, 2*this%lay%nslot), vt(nsph, 0:this%lay%nhalf))
       vt(:, 0) = 0.0_wp
       !$omp do schedule(dynamic)
       do s = 1, nsph
-        ! the spheres t by chunks: the entries of a chunk of pairs, then their transpose
+        ! the spheres t by chunks, the entries of a chunk's pairs at once (t = s, not read, and
+        ! coincident spheres, an error below: a stand-in displacement)
         do t0 = 1, nsph, assembly_chunk
           nt = min(assembly_chunk, nsph - t0 + 1)
           do t = t0, t0 + nt - 1
-            if (t == s) then
-              vw(:, t - t0 + 1) = 0.0_wp
-              cycle
-            end if
+            dd(:, t - t0 + 1) = [0.0_wp, 0.0_wp, 1.0_wp]
+            if (t == s) cycle
             ! the pair (i, j) = (min(s, t), max(s, t)): receiver j (rows), source i (columns)
             if (t > s) then
               d = r(:, t) - r(:, s)
@@ -248,7 +247,6 @@ contains
             dist = norm2(d)
             if (dist <= 0.0_wp) then
               if (t > s .and. first_coincident(s) == 0) first_coincident(s) = t
-              vw(:, t - t0 + 1) = 0.0_wp
               cycle
             end if
             if (t > s .and. dist <= 1.0_wp) n_over = n_over + 1
@@ -256,14 +254,14 @@ contains
               d = d*(this%min_distance/dist)
               if (t > s) n_clamp = n_clamp + 1
             end if
-            call pair_entries(this%lay, d, yw, vw(:, t - t0 + 1))
+            dd(:, t - t0 + 1) = d
           end do
-          vt(t0:t0 + nt - 1, 1:) = transpose(vw(:, 1:nt))
+          call pair_entries(this%lay, nt, dd, yw, vt(t0:t0 + nt - 1, 1:))
         end do
         call write_columns(s, vt)
       end do
       !$omp end do
-      deallocate (yw, vw, vt)
+      deallocate (yw, vt)
       !$omp end parallel
       this%n_overlapping = n_over
       this%n_clamped = n_clamp

@@ -73,44 +73,51 @@ contains
     call fill_negative(nmax, ih)
   end subroutine irregular_harmonics
 
-  !> The irregular solid harmonics of non-negative order in real arithmetic, packed:
-  !> y(2 k + 1) = Re I_n^m(r), y(2 k + 2) = Im I_n^m(r) with k = n(n+1)/2 + m, 0 <= m <= n <= nmax
-  !> (r /= 0; y needs (nmax+1)(nmax+2) entries). The same recurrences as `irregular_harmonics`,
-  !> without the complex array, its zero fill and the negative orders.
-  pure subroutine irregular_harmonics_real(r, nmax, y)
-    real(wp), intent(in) :: r(3)
-    integer, intent(in) :: nmax
-    real(wp), intent(out) :: y(:)
-    real(wp) :: x1, x2, z, r2, rinv2, t1, t2, c
-    integer :: n, m, k, k1, k2
+  !> The irregular solid harmonics of non-negative order in real arithmetic, packed, for nd
+  !> points r(:, i) at once: y(i, 2 k + 1) = Re I_n^m(r(:, i)), y(i, 2 k + 2) = Im I_n^m(r(:, i))
+  !> with k = n(n+1)/2 + m, 0 <= m <= n <= nmax (r /= 0). The same recurrences as
+  !> `irregular_harmonics`, without the complex array, its zero fill and the negative orders;
+  !> the loops over the points are innermost (they vectorise).
+  pure subroutine irregular_harmonics_real(nd, r, nmax, y)
+    integer, intent(in) :: nd, nmax
+    real(wp), intent(in) :: r(3, nd)
+    real(wp), intent(out) :: y(nd, (nmax + 1)*(nmax + 2))
+    real(wp) :: rinv2(nd), t1, t2, c, w
+    integer :: n, m, k, k1, k2, i
 
-    x1 = r(1)
-    x2 = r(2)
-    z = r(3)
-    r2 = sum(r**2)
-    rinv2 = 1.0_wp/r2
-    y(1) = 1.0_wp/sqrt(r2)
-    y(2) = 0.0_wp
+    do i = 1, nd
+      rinv2(i) = 1.0_wp/sum(r(:, i)**2)
+      y(i, 1) = 1.0_wp/sqrt(sum(r(:, i)**2))
+      y(i, 2) = 0.0_wp
+    end do
     do m = 1, nmax   ! the diagonal: I_m^m = -(2m-1) (x + iy)/r^2 I_{m-1}^{m-1}
       k = 2*(m*(m + 1)/2 + m) + 1
       k1 = 2*((m - 1)*m/2 + m - 1) + 1
-      t1 = -real(2*m - 1, wp)*x1*rinv2
-      t2 = -real(2*m - 1, wp)*x2*rinv2
-      y(k) = t1*y(k1) - t2*y(k1 + 1)
-      y(k + 1) = t1*y(k1 + 1) + t2*y(k1)
+      do i = 1, nd
+        t1 = -real(2*m - 1, wp)*r(1, i)*rinv2(i)
+        t2 = -real(2*m - 1, wp)*r(2, i)*rinv2(i)
+        y(i, k) = t1*y(i, k1) - t2*y(i, k1 + 1)
+        y(i, k + 1) = t1*y(i, k1 + 1) + t2*y(i, k1)
+      end do
     end do
     do n = 1, nmax   ! down each column: n from m + 1
-      c = real(2*n - 1, wp)*z
       do m = 0, n - 1
         k = 2*(n*(n + 1)/2 + m) + 1
         k1 = 2*((n - 1)*n/2 + m) + 1
         if (n - 2 >= m) then
           k2 = 2*((n - 2)*(n - 1)/2 + m) + 1
-          y(k) = (c*y(k1) - real((n - 1)**2 - m*m, wp)*y(k2))*rinv2
-          y(k + 1) = (c*y(k1 + 1) - real((n - 1)**2 - m*m, wp)*y(k2 + 1))*rinv2
+          w = real((n - 1)**2 - m*m, wp)
+          do i = 1, nd
+            c = real(2*n - 1, wp)*r(3, i)
+            y(i, k) = (c*y(i, k1) - w*y(i, k2))*rinv2(i)
+            y(i, k + 1) = (c*y(i, k1 + 1) - w*y(i, k2 + 1))*rinv2(i)
+          end do
         else
-          y(k) = c*y(k1)*rinv2
-          y(k + 1) = c*y(k1 + 1)*rinv2
+          do i = 1, nd
+            c = real(2*n - 1, wp)*r(3, i)
+            y(i, k) = c*y(i, k1)*rinv2(i)
+            y(i, k + 1) = c*y(i, k1 + 1)*rinv2(i)
+          end do
         end if
       end do
     end do
