@@ -41,7 +41,7 @@ module kf_multipole_system
   integer, parameter, public :: max_multipole_order = 20
   !> Pairs per chunk in `assemble`: their entries are computed at once (loops over the chunk
   !> innermost, whole cache lines of the owner's table).
-  integer, parameter :: assembly_chunk = 8
+  integer, parameter :: assembly_chunk = 16
   !> Columns of B per panel in `apply` (a panel of 16 N rows: 200 kB at N = 99, L = 2).
   integer, parameter :: apply_panel = 32
 
@@ -225,7 +225,7 @@ contains
       n_over = 0
       n_clamp = 0
       first_coincident = 0
-      !$omp parallel default(none) shared(this, r, nsph, first_coincident, lo, hi) &
+      !$omp parallel default(none) shared(this, r, nsph, first_coincident) &
       !$omp private(s, t, t0, nt, d, dist, dd, yw, vt) reduction(+:n_over, n_clamp)
       allocate (yw(assembly_chunk, 2*this%lay%nslot), vt(nsph, 0:this%lay%nhalf))
       vt(:, 0) = 0.0_wp
