@@ -12,6 +12,7 @@ module kf_multipole_blocks
   use kf_kinds, only: wp
   use kf_vector_ops, only: sort_small
   use kf_constants, only: pi
+  use kf_solid_harmonics, only: irregular_harmonics_real
   implicit none
   private
 
@@ -41,7 +42,7 @@ module kf_multipole_blocks
     !> terms term_ptr(e) .. term_ptr(e+1)-1, value = sum coef * y(slot), y = [x, |d|^2 x].
     integer, allocatable :: term_ptr(:), term_slot(:)
     real(wp), allocatable :: term_coef(:)
-    !> The terms evaluated per pair (`pair_block_grouped`): entry u = 1..nhalf is element
+    !> The terms evaluated per pair (`pair_entries`): entry u = 1..nhalf is element
     !> (half_row(u), half_col(u)) with terms half_ptr(u) .. half_ptr(u+1)-1 (those of term_ptr,
     !> same order); with half_sign(u) = +-1 the mirror element (half_col(u), half_row(u)) is
     !> half_sign(u) times it (K is symmetric and I_lambda^mu(-d) = (-1)^lambda I_lambda^mu(d),
@@ -49,12 +50,21 @@ module kf_multipole_blocks
     integer :: nhalf = 0
     integer, allocatable :: half_row(:), half_col(:), half_ptr(:), half_slot(:)
     real(wp), allocatable :: half_coef(:), half_sign(:)
+    !> The same entries as evaluated (`pair_entries`), ordered by their number of terms c
+    !> so that each inner sum has a fixed length: entries fast_first(c) .. fast_first(c+1)-1
+    !> have c terms each, entry u's terms at fast_tfirst(c) + c (u - fast_first(c)) + 0..c-1
+    !> (slots fast_slot, coefficients fast_coef, in the order of half_*); fast_row/fast_col as
+    !> half_row/half_col; the entries with a mirror are fast_mirror(1..nmirror), signs fast_msign.
+    integer :: nterm_max = 0, nmirror = 0
+    integer, allocatable :: fast_first(:), fast_tfirst(:), fast_row(:), fast_col(:), fast_slot(:)
+    integer, allocatable :: fast_mirror(:)
+    real(wp), allocatable :: fast_coef(:), fast_msign(:)
   contains
     procedure :: init => layout_init
     procedure :: index => layout_index
   end type multipole_layout_t
 
-  public :: pair_block_complex, pair_block_real, pair_block_grouped, z0_inverse
+  public :: pair_block_complex, pair_block_real, pair_entries, z0_inverse
 
 contains
 
@@ -72,7 +82,9 @@ contains
                                             this%c1, this%c1d, this%c2, this%k1, this%k2, &
                                             this%grp, this%term_ptr, this%term_slot, this%term_coef, &
                                             this%half_row, this%half_col, this%half_ptr, this%half_slot, &
-                                            this%half_coef, this%half_sign)
+                                            this%half_coef, this%half_sign, this%fast_first, this%fast_tfirst, &
+                                            this%fast_row, this%fast_col, this%fast_slot, this%fast_mirror, &
+                                            this%fast_coef, this%fast_msign)
     allocate (this%rank_n(this%nb), this%fam(this%nb), this%m_of(this%nb), this%sigma(this%nb))
     allocate (this%sigma_real(this%nb))
     allocate (this%cn(order), this%widx(2, this%nb), this%wval(2, this%nb))
@@ -129,6 +141,7 @@ contains
     call build_grouped(this)
     call build_real_terms(this)
     call build_half_terms(this)
+    call build_fast_terms(this)
   end subroutine layout_init
 
   !> Local (1-based) index of rank n, family s, component q.
@@ -338,47 +351,110 @@ contains
 
   end subroutine build_half_terms
 
-  !> Scaled real translation block in grouped order for displacement d (receiver - source):
-  !> ihf = irregular harmonics of d (shape (0:2L, -2L:2L), passed whole), y = work of size
-  !> 2*nslot, gr(nb, nb) the block. The entries of the lower triangle with terms are summed and
-  !> each gives its mirror by the parity sign (half_*), so about half the entries are summed.
-  !> With `zeroed` true, gr holds a block of an earlier call (or zeros): the entries without
-  !> terms, zero in every block, are not written again.
-  pure subroutine pair_block_grouped(lay, d, ihf, y, gr, zeroed)
-    type(multipole_layout_t), intent(in) :: lay
-    real(wp), intent(in) :: d(3)
-    complex(wp), intent(in) :: ihf(0:2*lay%order, -2*lay%order:2*lay%order)
-    real(wp), intent(out) :: y(:)
-    real(wp), intent(inout) :: gr(:, :)
-    logical, intent(in), optional :: zeroed
-    integer :: lambda, mu, s, e, p, q, k
-    real(wp) :: d2, v
+  !> The entries half_* reordered by their number of terms (layout components fast_*).
+  subroutine build_fast_terms(this)
+    class(multipole_layout_t), intent(inout) :: this
+    integer :: c, u, e, nt, k
+    integer, allocatable :: cnt(:)
 
-    d2 = sum(d**2)
-    do lambda = 0, 2*lay%order
-      do mu = 0, lambda
-        s = slot_of(lambda, mu, 0)
-        y(s) = real(ihf(lambda, mu), wp)
-        y(s + 1) = aimag(ihf(lambda, mu))
+    allocate (cnt(this%nhalf))
+    do u = 1, this%nhalf
+      cnt(u) = this%half_ptr(u + 1) - this%half_ptr(u)
+    end do
+    this%nterm_max = 0
+    if (this%nhalf > 0) this%nterm_max = maxval(cnt)
+    allocate (this%fast_first(this%nterm_max + 2), this%fast_tfirst(this%nterm_max + 1))
+    allocate (this%fast_row(this%nhalf), this%fast_col(this%nhalf), this%fast_slot(size(this%half_slot)))
+    allocate (this%fast_coef(size(this%half_coef)), this%fast_mirror(this%nhalf), this%fast_msign(this%nhalf))
+    e = 0
+    nt = 0
+    this%nmirror = 0
+    do c = 1, this%nterm_max + 1
+      this%fast_first(c) = e + 1
+      if (c > this%nterm_max) exit
+      this%fast_tfirst(c) = nt + 1
+      do u = 1, this%nhalf
+        if (cnt(u) /= c) cycle
+        e = e + 1
+        this%fast_row(e) = this%half_row(u)
+        this%fast_col(e) = this%half_col(u)
+        do k = 0, c - 1
+          this%fast_slot(nt + k + 1) = this%half_slot(this%half_ptr(u) + k)
+          this%fast_coef(nt + k + 1) = this%half_coef(this%half_ptr(u) + k)
+        end do
+        nt = nt + c
+        if (this%half_sign(u) /= 0.0_wp) then
+          this%nmirror = this%nmirror + 1
+          this%fast_mirror(this%nmirror) = e
+          this%fast_msign(this%nmirror) = this%half_sign(u)
+        end if
       end do
     end do
-    y(lay%nslot + 1:2*lay%nslot) = d2*y(1:lay%nslot)
-    if (present(zeroed)) then
-      if (.not. zeroed) gr(1:lay%nb, 1:lay%nb) = 0.0_wp
-    else
-      gr(1:lay%nb, 1:lay%nb) = 0.0_wp
-    end if
-    do e = 1, lay%nhalf
-      v = 0.0_wp
-      do k = lay%half_ptr(e), lay%half_ptr(e + 1) - 1
-        v = v + lay%half_coef(k)*y(lay%half_slot(k))
+    this%fast_first(this%nterm_max + 2) = e + 1
+  end subroutine build_fast_terms
+
+  !> The entries of the scaled real translation blocks in grouped order for nd displacements
+  !> d(:, i) (receiver - source): v(i, u), u = 1..nhalf, is element (fast_row(u), fast_col(u))
+  !> of block i, and for fast_mirror(m) = u its element (fast_col(u), fast_row(u)) is
+  !> fast_msign(m) v(i, u); all other elements are zero for every d. y: work (nd, 2*nslot), the
+  !> real slots Re, Im of I_lambda^mu(d), mu >= 0, lambda <= 2L, then the same times |d|^2.
+  !> The sums go by groups of entries with the same number of terms (fixed-length sums, the
+  !> terms in the order of half_*, from zero), the loops over the displacements innermost.
+  pure subroutine pair_entries(lay, nd, d, y, v)
+    type(multipole_layout_t), intent(in) :: lay
+    integer, intent(in) :: nd
+    real(wp), intent(in) :: d(3, nd)
+    real(wp), intent(out) :: y(nd, 2*lay%nslot)
+    real(wp), intent(inout) :: v(:, :)
+    integer :: c, u, k, j, i, s
+    real(wp) :: acc
+
+    call irregular_harmonics_real(nd, d, 2*lay%order, y)
+    do s = 1, lay%nslot
+      do i = 1, nd
+        y(i, lay%nslot + s) = sum(d(:, i)**2)*y(i, s)
       end do
-      p = lay%half_row(e)
-      q = lay%half_col(e)
-      gr(p, q) = v
-      if (lay%half_sign(e) /= 0.0_wp) gr(q, p) = lay%half_sign(e)*v
     end do
-  end subroutine pair_block_grouped
+    do c = 1, lay%nterm_max
+      k = lay%fast_tfirst(c)
+      associate (cf => lay%fast_coef, sl => lay%fast_slot)
+        select case (c)
+        case (1)
+          do u = lay%fast_first(c), lay%fast_first(c + 1) - 1
+            v(1:nd, u) = cf(k)*y(:, sl(k))
+            k = k + 1
+          end do
+        case (2)
+          do u = lay%fast_first(c), lay%fast_first(c + 1) - 1
+            v(1:nd, u) = cf(k)*y(:, sl(k)) + cf(k + 1)*y(:, sl(k + 1))
+            k = k + 2
+          end do
+        case (3)
+          do u = lay%fast_first(c), lay%fast_first(c + 1) - 1
+            v(1:nd, u) = cf(k)*y(:, sl(k)) + cf(k + 1)*y(:, sl(k + 1)) + cf(k + 2)*y(:, sl(k + 2))
+            k = k + 3
+          end do
+        case (4)
+          do u = lay%fast_first(c), lay%fast_first(c + 1) - 1
+            v(1:nd, u) = cf(k)*y(:, sl(k)) + cf(k + 1)*y(:, sl(k + 1)) + cf(k + 2)*y(:, sl(k + 2)) &
+                         + cf(k + 3)*y(:, sl(k + 3))
+            k = k + 4
+          end do
+        case default
+          do u = lay%fast_first(c), lay%fast_first(c + 1) - 1
+            do i = 1, nd
+              acc = 0.0_wp
+              do j = 0, c - 1
+                acc = acc + cf(k + j)*y(i, sl(k + j))
+              end do
+              v(i, u) = acc
+            end do
+            k = k + c
+          end do
+        end select
+      end associate
+    end do
+  end subroutine pair_entries
 
   !> Unscaled single-sphere inverse operator Z0^-1 at rank n, order m, radius a (section 5.1):
   !> zinv = [phi-phi, phi-p, p-p, chi-chi].

@@ -31,17 +31,17 @@ module kf_multipole_system
   use kf_lapack, only: symmetric_eigenvalues
   use kf_constants, only: pi
   use kf_error, only: error_t, fatal_error
-  use kf_multipole_blocks, only: multipole_layout_t, pair_block_grouped, fam_phi, fam_p
+  use kf_multipole_blocks, only: multipole_layout_t, pair_entries, fam_phi, fam_p
   use kf_multipole_index, only: multipole_index_t
-  use kf_solid_harmonics, only: irregular_harmonics
   use kf_strain_basis, only: strain_basis, strain_coefficients
   implicit none
   private
 
   !> The highest truncation order L the system takes (the scene allows less: kf_scene_hydro).
   integer, parameter, public :: max_multipole_order = 20
-  !> Spheres per tile side in the pair loop of `assemble` (cache blocking of the writes).
-  integer, parameter :: assembly_tile = 8
+  !> Pairs per chunk in `assemble`: their entries are computed at once (loops over the chunk
+  !> innermost, whole cache lines of the owner's table).
+  integer, parameter :: assembly_chunk = 16
   !> Columns of B per panel in `apply` (a panel of 16 N rows: 200 kB at N = 99, L = 2).
   integer, parameter :: apply_panel = 32
 
@@ -69,6 +69,10 @@ module kf_multipole_system
     !> Seconds spent in the last assembly of the pair blocks and in the factorisation
     !> (p-moment elimination and Cholesky).
     real(wp) :: t_assembly = 0.0_wp, t_factor = 0.0_wp
+    !> Element G(p, q) (grouped local row p, column q) of a pair block is elem_sgn(p, q) times
+    !> entry elem_src(p, q) of `pair_entries` (0: no terms, zero in every block).
+    integer, allocatable :: elem_src(:, :)
+    real(wp), allocatable :: elem_sgn(:, :)
   contains
     procedure :: init => system_init
     procedure :: assemble => system_assemble
@@ -154,13 +158,12 @@ contains
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
-    integer :: nsph, h, i, j, x, yr, n, q, t, pc, n_over, n_clamp, a, b, ti, tj, ntile
+    integer :: nsph, h, i, x, yr, n, q, t, s, t0, nt, pc, n_over, n_clamp
     integer :: lo(5), hi(5), ks(4, 2), bs(4, 2), ps(2)
     integer, allocatable :: first_coincident(:)
     integer(8) :: c0, c1, crate
-    real(wp) :: d(3), dist
-    real(wp), allocatable :: yw(:), gr(:, :)
-    complex(wp), allocatable :: ih(:, :)
+    real(wp) :: d(3), dist, dd(3, assembly_chunk)
+    real(wp), allocatable :: yw(:, :), vt(:, :)
 
     nsph = size(r, 2)
     if (nsph < 1) then
@@ -183,6 +186,7 @@ contains
       allocate (this%k(this%nr, this%nr), this%bp(this%idx%b_rows(), this%idx%p_unknowns()), &
                 this%w6(this%n6, this%n6))
       allocate (this%bq(max(1, this%nqt), 5), this%d6(this%n6, 5))
+      call build_elements(this)
     end if
     associate (idx => this%idx)
       lo = idx%lo
@@ -211,76 +215,53 @@ contains
         end do
       end do
 
-      ! The pair blocks: each pair (i, j) is computed and written by one thread into its own
-      ! rows and columns of K and B (no sums across pairs), so K and B are the same, bit for
-      ! bit, for any number of OpenMP threads (kf_blas_threads sets the count); the counters
-      ! are integer sums. The pairs go by tiles of assembly_tile x assembly_tile spheres (a
-      ! tile row per task, j increasing for each i), so that the short runs a tile writes into
-      ! each column of K and B fill whole cache lines while they are in cache.
+      ! The pair blocks, by the sphere s that owns the columns: the columns of s in the lower
+      ! triangle of K (rows of the spheres t > s in its runs, and of every t /= s in the later
+      ! runs) and its p columns of B (phi rows of every t /= s) are written whole, each column
+      ! from top to bottom, by one thread; the entries of every pair (s, t) are computed first
+      ! (`pair_entries` of the pair (min(s,t), max(s,t)), so twice per pair: once for each
+      ! owner) into vt(t, :). K and B are the same, bit for bit, for any number of OpenMP
+      ! threads (kf_blas_threads sets the count); the counters are integer sums over t > s.
       n_over = 0
       n_clamp = 0
       first_coincident = 0
-      ntile = (nsph + assembly_tile - 1)/assembly_tile
-      !$omp parallel default(none) shared(this, r, nsph, lo, hi, h, first_coincident, ntile) &
-      !$omp private(ti, tj, i, j, x, yr, a, b, ks, bs, ps, d, dist, ih, yw, gr) reduction(+:n_over, n_clamp)
-      allocate (ih(0:2*this%lay%order, -2*this%lay%order:2*this%lay%order), yw(2*this%lay%nslot), &
-                gr(this%lay%nb, this%lay%nb))
-      gr = 0.0_wp
+      !$omp parallel default(none) shared(this, r, nsph, first_coincident) &
+      !$omp private(s, t, t0, nt, d, dist, dd, yw, vt) reduction(+:n_over, n_clamp)
+      allocate (yw(assembly_chunk, 2*this%lay%nslot), vt(nsph, 0:this%lay%nhalf))
+      vt(:, 0) = 0.0_wp
       !$omp do schedule(dynamic)
-      do ti = 1, ntile
-        do tj = ti, ntile
-          do i = (ti - 1)*assembly_tile + 1, min(ti*assembly_tile, nsph)
-            call starts(i, ks(:, 1), bs(:, 1), ps(1))
-            do j = max(i + 1, (tj - 1)*assembly_tile + 1), min(tj*assembly_tile, nsph)
-              call starts(j, ks(:, 2), bs(:, 2), ps(2))
-              ! Receiver j (rows), source i (columns).
-              d = r(:, j) - r(:, i)
-              dist = norm2(d)
-              if (dist <= 0.0_wp) then
-                if (first_coincident(i) == 0) first_coincident(i) = j
-                cycle
-              end if
-              if (dist <= 1.0_wp) n_over = n_over + 1
-              if (dist < this%min_distance) then
-                d = d*(this%min_distance/dist)
-                n_clamp = n_clamp + 1
-              end if
-              call irregular_harmonics(d, 2*this%lay%order, ih)
-              call pair_block_grouped(this%lay, d, ih, yw, gr, zeroed=.true.)
-              ! Column by column, each a contiguous run of K or B: the blocks below the diagonal
-              ! runs (yr >= x) from the columns of gr, the others (rows of sphere i) from its rows.
-              do x = 1, 4
-                if (hi(x) < lo(x)) cycle
-                do yr = 1, 4
-                  if (hi(yr) < lo(yr)) cycle
-                  if (yr >= x) then
-                    do b = 0, hi(x) - lo(x)
-                      this%k(ks(yr, 2):ks(yr, 2) + hi(yr) - lo(yr), ks(x, 1) + b) = gr(lo(yr):hi(yr), lo(x) + b)
-                    end do
-                  else
-                    do b = 0, hi(yr) - lo(yr)
-                      do a = 0, hi(x) - lo(x)
-                        this%k(ks(x, 1) + a, ks(yr, 2) + b) = gr(lo(yr) + b, lo(x) + a)
-                      end do
-                    end do
-                  end if
-                end do
-              end do
-              do x = 1, 3, 2
-                if (hi(x) < lo(x)) cycle
-                do b = 0, h - 1
-                  this%bp(bs(x, 2):bs(x, 2) + hi(x) - lo(x), ps(1) + b) = gr(lo(x):hi(x), lo(5) + b)
-                  do a = 0, hi(x) - lo(x)
-                    this%bp(bs(x, 1) + a, ps(2) + b) = gr(lo(5) + b, lo(x) + a)
-                  end do
-                end do
-              end do
-            end do
+      do s = 1, nsph
+        ! the spheres t by chunks, the entries of a chunk's pairs at once (t = s, not read, and
+        ! coincident spheres, an error below: a stand-in displacement)
+        do t0 = 1, nsph, assembly_chunk
+          nt = min(assembly_chunk, nsph - t0 + 1)
+          do t = t0, t0 + nt - 1
+            dd(:, t - t0 + 1) = [0.0_wp, 0.0_wp, 1.0_wp]
+            if (t == s) cycle
+            ! the pair (i, j) = (min(s, t), max(s, t)): receiver j (rows), source i (columns)
+            if (t > s) then
+              d = r(:, t) - r(:, s)
+            else
+              d = r(:, s) - r(:, t)
+            end if
+            dist = norm2(d)
+            if (dist <= 0.0_wp) then
+              if (t > s .and. first_coincident(s) == 0) first_coincident(s) = t
+              cycle
+            end if
+            if (t > s .and. dist <= 1.0_wp) n_over = n_over + 1
+            if (dist < this%min_distance) then
+              d = d*(this%min_distance/dist)
+              if (t > s) n_clamp = n_clamp + 1
+            end if
+            dd(:, t - t0 + 1) = d
           end do
+          call pair_entries(this%lay, nt, dd, yw, vt(t0:t0 + nt - 1, 1:))
         end do
+        call write_columns(s, vt)
       end do
       !$omp end do
-      deallocate (ih, yw, gr)
+      deallocate (yw, vt)
       !$omp end parallel
       this%n_overlapping = n_over
       this%n_clamped = n_clamp
@@ -298,6 +279,64 @@ contains
 
   contains
 
+    !> The columns of sphere so in K (lower triangle, its own diagonal blocks excepted) and
+    !> in B from the entries vt(t, :) of the pairs (so, t). Row t of a run holds element
+    !> G(row of t, column of so) of the block with receiver t and source so: for t > so the
+    !> pair's element (row, column), for t < so (the pair (t, so)) its element (column, row).
+    subroutine write_columns(so, vt)
+      integer, intent(in) :: so
+      real(wp), intent(in) :: vt(:, 0:)
+      integer :: rc, rr, b, a, c, g, col, ln, k0, e, tt
+      real(wp) :: sg
+      associate (idx => this%idx, src => this%elem_src, sgn => this%elem_sgn)
+        do rc = 1, 4
+          do b = 0, idx%hi(rc) - idx%lo(rc)
+            c = idx%lo(rc) + b
+            col = idx%k_start(rc, so) + b
+            do rr = rc, 4
+              ln = idx%hi(rr) - idx%lo(rr) + 1
+              k0 = idx%k_start(rr, 1)
+              do a = 0, ln - 1
+                g = idx%lo(rr) + a
+                e = src(g, c)
+                sg = sgn(g, c)
+                do tt = so + 1, nsph
+                  this%k(k0 + ln*(tt - 1) + a, col) = sg*vt(tt, e)
+                end do
+                if (rr == rc) cycle
+                e = src(c, g)
+                sg = sgn(c, g)
+                do tt = 1, so - 1
+                  this%k(k0 + ln*(tt - 1) + a, col) = sg*vt(tt, e)
+                end do
+              end do
+            end do
+          end do
+        end do
+        do b = 0, h - 1
+          c = idx%lo(5) + b
+          col = idx%p_start(so) + b
+          do rr = 1, 3, 2
+            ln = idx%hi(rr) - idx%lo(rr) + 1
+            k0 = idx%b_start(rr, 1)
+            do a = 0, ln - 1
+              g = idx%lo(rr) + a
+              e = src(g, c)
+              sg = sgn(g, c)
+              do tt = so + 1, nsph
+                this%bp(k0 + ln*(tt - 1) + a, col) = sg*vt(tt, e)
+              end do
+              e = src(c, g)
+              sg = sgn(c, g)
+              do tt = 1, so - 1
+                this%bp(k0 + ln*(tt - 1) + a, col) = sg*vt(tt, e)
+              end do
+            end do
+          end do
+        end do
+      end associate
+    end subroutine write_columns
+
     !> Starts of the runs of sphere s in K (ksv), in the rows of B (bsv) and its p column (psv).
     pure subroutine starts(s, ksv, bsv, psv)
       integer, intent(in) :: s
@@ -313,6 +352,26 @@ contains
     end subroutine starts
 
   end subroutine system_assemble
+
+  !> elem_src, elem_sgn (type components) from the layout's entries and mirrors.
+  subroutine build_elements(this)
+    class(multipole_system_t), intent(inout) :: this
+    integer :: u, m
+    associate (lay => this%lay)
+      if (allocated(this%elem_src)) deallocate (this%elem_src, this%elem_sgn)
+      allocate (this%elem_src(lay%nb, lay%nb), this%elem_sgn(lay%nb, lay%nb))
+      this%elem_src = 0
+      this%elem_sgn = 1.0_wp
+      do u = 1, lay%nhalf
+        this%elem_src(lay%fast_row(u), lay%fast_col(u)) = u
+      end do
+      do m = 1, lay%nmirror
+        u = lay%fast_mirror(m)
+        this%elem_src(lay%fast_col(u), lay%fast_row(u)) = u
+        this%elem_sgn(lay%fast_col(u), lay%fast_row(u)) = lay%fast_msign(m)
+      end do
+    end associate
+  end subroutine build_elements
 
   !> Assemble the scaled real system for centres r(3, N), eliminate the p-moments and
   !> factorise (Cholesky), with the single-precision copy when init asked for it; with
