@@ -108,8 +108,6 @@ contains
         allocate (mp)
         call mp%init(params%order, params%lubrication, eps_lub, error, literal_bwe=literal_bwe)
         if (allocated(error)) return
-        if (params%jacobian_order > 0) call mp%set_jacobian_order(params%jacobian_order, error)
-        if (allocated(error)) return
         call move_alloc(mp, model)
       end block
     case (update_adaptive)
