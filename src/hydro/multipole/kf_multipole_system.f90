@@ -120,6 +120,7 @@ contains
       return
     end if
     call this%lay%init(order)
+    call build_elements(this)
     this%min_distance = min_distance
     this%single_copy = .false.
     if (present(single_copy)) this%single_copy = single_copy
@@ -159,7 +160,7 @@ contains
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
     integer :: nsph, h, i, x, yr, n, q, t, s, t0, nt, pc, n_over, n_clamp
-    integer :: lo(5), hi(5), ks(4, 2), bs(4, 2), ps(2)
+    integer :: lo(5), hi(5), ks(4), bs(4), ps
     integer, allocatable :: first_coincident(:)
     integer(8) :: c0, c1, crate
     real(wp) :: d(3), dist, dd(3, assembly_chunk)
@@ -186,7 +187,6 @@ contains
       allocate (this%k(this%nr, this%nr), this%bp(this%idx%b_rows(), this%idx%p_unknowns()), &
                 this%w6(this%n6, this%n6))
       allocate (this%bq(max(1, this%nqt), 5), this%d6(this%n6, 5))
-      call build_elements(this)
     end if
     associate (idx => this%idx)
       lo = idx%lo
@@ -194,23 +194,23 @@ contains
 
       allocate (first_coincident(nsph))
       do i = 1, nsph
-        call starts(i, ks(:, 1), bs(:, 1), ps(1))
+        call starts(i, ks, bs, ps)
         do x = 1, 4
           do yr = x, 4
-            this%k(ks(yr, 1):ks(yr, 1) + hi(yr) - lo(yr), ks(x, 1):ks(x, 1) + hi(x) - lo(x)) = 0.0_wp
+            this%k(ks(yr):ks(yr) + hi(yr) - lo(yr), ks(x):ks(x) + hi(x) - lo(x)) = 0.0_wp
           end do
         end do
         do t = 1, 2*h
           pc = idx%k_row(t, i)
           this%k(pc, pc) = 1.0_wp
         end do
-        this%bp(bs(1, 1):bs(1, 1) + hi(1) - lo(1), ps(1):ps(1) + h - 1) = 0.0_wp
-        this%bp(bs(3, 1):bs(3, 1) + 2, ps(1):ps(1) + h - 1) = 0.0_wp
+        this%bp(bs(1):bs(1) + hi(1) - lo(1), ps:ps + h - 1) = 0.0_wp
+        this%bp(bs(3):bs(3) + 2, ps:ps + h - 1) = 0.0_wp
         do n = 1, this%lay%order
           do q = 0, 2*n
             t = this%lay%grp(this%lay%index(n, fam_phi, q))
             pc = this%lay%grp(this%lay%index(n, fam_p, q))
-            this%bp(idx%b_row(t, i), ps(1) + pc - lo(5)) = -this%lay%cn(n)
+            this%bp(idx%b_row(t, i), ps + pc - lo(5)) = -this%lay%cn(n)
           end do
         end do
       end do
@@ -286,56 +286,52 @@ contains
     subroutine write_columns(so, vt)
       integer, intent(in) :: so
       real(wp), intent(in) :: vt(:, 0:)
-      integer :: rc, rr, b, a, c, g, col, ln, k0, e, tt
-      real(wp) :: sg
-      associate (idx => this%idx, src => this%elem_src, sgn => this%elem_sgn)
+      integer :: rc, rr, b, c
+      associate (idx => this%idx)
         do rc = 1, 4
           do b = 0, idx%hi(rc) - idx%lo(rc)
             c = idx%lo(rc) + b
-            col = idx%k_start(rc, so) + b
             do rr = rc, 4
-              ln = idx%hi(rr) - idx%lo(rr) + 1
-              k0 = idx%k_start(rr, 1)
-              do a = 0, ln - 1
-                g = idx%lo(rr) + a
-                e = src(g, c)
-                sg = sgn(g, c)
-                do tt = so + 1, nsph
-                  this%k(k0 + ln*(tt - 1) + a, col) = sg*vt(tt, e)
-                end do
-                if (rr == rc) cycle
-                e = src(c, g)
-                sg = sgn(c, g)
-                do tt = 1, so - 1
-                  this%k(k0 + ln*(tt - 1) + a, col) = sg*vt(tt, e)
-                end do
-              end do
+              call write_run(so, vt, this%k(:, idx%k_start(rc, so) + b), idx%k_start(rr, 1), rr, c, rr /= rc)
             end do
           end do
         end do
         do b = 0, h - 1
           c = idx%lo(5) + b
-          col = idx%p_start(so) + b
           do rr = 1, 3, 2
-            ln = idx%hi(rr) - idx%lo(rr) + 1
-            k0 = idx%b_start(rr, 1)
-            do a = 0, ln - 1
-              g = idx%lo(rr) + a
-              e = src(g, c)
-              sg = sgn(g, c)
-              do tt = so + 1, nsph
-                this%bp(k0 + ln*(tt - 1) + a, col) = sg*vt(tt, e)
-              end do
-              e = src(c, g)
-              sg = sgn(c, g)
-              do tt = 1, so - 1
-                this%bp(k0 + ln*(tt - 1) + a, col) = sg*vt(tt, e)
-              end do
-            end do
+            call write_run(so, vt, this%bp(:, idx%p_start(so) + b), idx%b_start(rr, 1), rr, c, .true.)
           end do
         end do
       end associate
     end subroutine write_columns
+
+    !> Into column dst, the run of group rr (rows k0 + ln (t - 1) + a, a = 0..ln-1) of every
+    !> sphere t > so from element (row, c) of the pair entries vt(t, :) of (so, t), and with
+    !> `below` also of every t < so from element (c, row) of those of (t, so).
+    subroutine write_run(so, vt, dst, k0, rr, c, below)
+      integer, intent(in) :: so
+      real(wp), intent(in) :: vt(:, 0:)
+      real(wp), intent(inout) :: dst(:)
+      integer, intent(in) :: k0, rr, c
+      logical, intent(in) :: below
+      integer :: ln, a, g, e, tt
+      real(wp) :: sg
+      ln = this%idx%hi(rr) - this%idx%lo(rr) + 1
+      do a = 0, ln - 1
+        g = this%idx%lo(rr) + a
+        e = this%elem_src(g, c)
+        sg = this%elem_sgn(g, c)
+        do tt = so + 1, nsph
+          dst(k0 + ln*(tt - 1) + a) = sg*vt(tt, e)
+        end do
+        if (.not. below) cycle
+        e = this%elem_src(c, g)
+        sg = this%elem_sgn(c, g)
+        do tt = 1, so - 1
+          dst(k0 + ln*(tt - 1) + a) = sg*vt(tt, e)
+        end do
+      end do
+    end subroutine write_run
 
     !> Starts of the runs of sphere s in K (ksv), in the rows of B (bsv) and its p column (psv).
     pure subroutine starts(s, ksv, bsv, psv)
