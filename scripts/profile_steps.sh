@@ -57,7 +57,7 @@ phases() {
       name["factorise"] = "factorisation of K: p-moment elimination + dpotrf (nr = 16 N at L = 2)"
       pat["gmres"] = "_MOD_gmres|operator_apply|_MOD_precondition|stpsv|dtrsv|dsymv|system_apply"
       name["gmres"] = "GMRES: products with K and the pair blocks, triangular solves"
-      pat["assemble"] = "system_assemble|pair_block_grouped|irregular_harmonics"
+      pat["assemble"] = "system_assemble|pair_entries|irregular_harmonics"
       name["assemble"] = "assembly of K (pair blocks)"
       pat["lubrication"] = "kf_lubrication_MOD|kf_pair_tensor|kf_pair_blocks|kf_near_contact"
       name["lubrication"] = "lubrication blocks"
