@@ -25,7 +25,9 @@
 #   c, A = 2.2, t_end = 1000) or the seeded candy-cane (N = 152, A = 1, t_end = 2000), with the
 #   path of KNOTFLOW_CASE_UPDATE and KNOTFLOW_CASE_METHOD (default 'iterative' and 'ros34pw2');
 #   wall and processor seconds into $out/case_<shape>_<update>_<method>.txt (docs/accuracy.md,
-#   "A whole case")
+#   "A whole case"). Resumable: run again after an interruption (a kill, a reboot) and the case
+#   continues from its checkpoint; every segment's wall and processor seconds, load and commit go
+#   to <dir>/segments.txt and the summary sums them (KNOTFLOW_CASE_FRESH=1 starts over)
 #   threads: both cores for one case (OpenMP pair loops + OpenBLAS, 1 against 2 threads): one
 #   evaluation at N = 99 and 152, and 'stage' and 'iterative' on the trefoil t = 0-10, into
 #   $out/threads_trefoil.txt (docs/multipole.md, "Both cores for one case"; about 6 min on a
@@ -114,8 +116,7 @@ for part in "${parts[@]}"; do
       fi
       if [ "$jorder" != 0 ] || [ "$jsteps" != 4 ]; then name="${name}_jorder${jorder}_jsteps${jsteps}"; fi
       dir="$out/$name"
-      rm -rf "$dir"; mkdir -p "$dir"
-      cat > "$dir/case.nml" <<NML
+      scene=$(cat <<NML
 &chain
   $chain
 /
@@ -133,17 +134,63 @@ for part in "${parts[@]}"; do
   directory = '$dir', case_name = '$name', progress_interval = 300
 /
 NML
-      kf_log "a whole reference case on one core (taskset -c 0): $dir"
-      load0=$(cat /proc/loadavg)
+)
+      # resume when the same scene ran here before (its checkpoint is in $dir), else start over
+      if [ "${KNOTFLOW_CASE_FRESH:-0}" = 1 ] || [ ! -f "$dir/case.nml" ] \
+         || [ "$(cat "$dir/case.nml")" != "$scene" ]; then
+        rm -rf "$dir"; mkdir -p "$dir"
+        printf '%s\n' "$scene" > "$dir/case.nml"
+        kf_log "a whole reference case on one core (taskset -c 0): $dir"
+      else
+        kf_log "resuming the whole reference case in $dir (segments so far: $(grep -c '^segment' "$dir/segments.txt" 2>/dev/null || echo 0))"
+      fi
+      commit=$(git -C "$KF_ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
+      if tail -n 1 "$dir/segments.txt" 2>/dev/null | grep -q 'exit = finished$'; then
+        kf_log "already finished: $out/$name.txt"; cat "$out/$name.txt"; continue
+      fi
+      # a segment killed with its shell (a reboot, the end of a session) left its last sample
+      if [ -f "$dir/running.txt" ]; then
+        echo "segment $(cat "$dir/running.txt"); exit = killed (figures of its last sample, at most a minute old)" \
+          >> "$dir/segments.txt"
+        rm -f "$dir/running.txt"
+      fi
+      load0=$(cat /proc/loadavg) start=$(date +%s)
       status=finished
-      /usr/bin/time -f 'wall_s = %e\nprocessor_s = %U user + %S system' -o "$dir/time.txt" \
-        taskset -c 0 "$KF_ROOT/build/bin/knotflow" "$dir/case.nml" > "$dir/log.txt" 2>&1 \
-        || status=failed
+      /usr/bin/time -f '%e %U %S' -o "$dir/time.txt" \
+        taskset -c 0 "$KF_ROOT/build/bin/knotflow" "$dir/case.nml" >> "$dir/log.txt" 2>&1 &
+      tpid=$!
+      (  # every 30 s: the processor seconds of the run so far, kept in case the shell is killed
+        tick=$(getconf CLK_TCK)
+        while kill -0 "$tpid" 2>/dev/null; do
+          sleep 30
+          kpid=$(pgrep -P "$tpid" | head -n 1) || continue
+          read -r -a st < "/proc/$kpid/stat" 2>/dev/null || continue
+          printf 'wall_s = %s processor_s = %s user + %s system; loadavg_start = %s; loadavg_end = %s; commit = %s\n' \
+            "$(( $(date +%s) - start ))" "$(awk -v t="${st[13]}" -v c="$tick" 'BEGIN { printf "%.2f", t / c }')" \
+            "$(awk -v t="${st[14]}" -v c="$tick" 'BEGIN { printf "%.2f", t / c }')" "$load0" \
+            "$(cat /proc/loadavg)" "$commit" > "$dir/running.txt.part"
+          mv "$dir/running.txt.part" "$dir/running.txt"
+        done ) &
+      spid=$!
+      # a TERM or INT (Ctrl-C) to this script goes on to the run, which stops after its frame and
+      # checkpoint; the segment is recorded either way
+      trap 'kill -TERM "$(pgrep -P "$tpid" | head -n 1)" 2>/dev/null || true' TERM INT
+      while kill -0 "$tpid" 2>/dev/null; do wait "$tpid" || true; done
+      rc=0; wait "$tpid" || rc=$?
+      trap - TERM INT
+      case "$rc" in 0) ;; 75) status=stopped ;; *) status="failed (exit $rc)" ;; esac
+      kill "$spid" 2>/dev/null || true
+      wait "$spid" 2>/dev/null || true
+      rm -f "$dir/running.txt" "$dir/running.txt.part"
+      read -r wall user sys < <(tail -n 1 "$dir/time.txt")
+      echo "segment wall_s = $wall processor_s = $user user + $sys system; loadavg_start = $load0;" \
+           "loadavg_end = $(cat /proc/loadavg); commit = $commit; exit = $status" >> "$dir/segments.txt"
       { echo "part = $part"; echo "update = $update"; echo "method = $method"; echo "t_end = $t_end";
-        echo "jacobian_order = $jorder"; echo "jacobian_steps = $jsteps";
-        echo "overlap = relax"; echo "loadavg_start = $load0"; cat "$dir/time.txt";
-        echo "loadavg_end = $(cat /proc/loadavg)";
-        echo "status = $status (see $dir/log.txt)"; } > "$out/$name.txt"
+        echo "jacobian_order = $jorder"; echo "jacobian_steps = $jsteps"; echo "overlap = relax";
+        awk '/^segment/ { w += $4; p += $7 + $10; n++ }
+             END { printf "segments = %d\nwall_s = %.1f\nprocessor_s = %.1f (user + system, summed over the segments)\n", n, w, p }' \
+          "$dir/segments.txt"
+        echo "status of the last segment = $status (per segment: $dir/segments.txt; log: $dir/log.txt)"; } > "$out/$name.txt"
       cat "$out/$name.txt" ;;
     *) kf_die "unknown part '$part' (velocity trajectory speed overlaps scaling profile stiffness compare rosenbrock case case-candycane threads)" ;;
   esac
