@@ -201,3 +201,52 @@ def test_a_case_ledger_gives_the_answer_of_its_case_files(tmp_path):
             assert v["paired_cases"] == d["paired_cases"] == 3
     md = (tmp_path / "via" / "rheology.md").read_text()
     assert "Models: multipole with overlap = 'relax' (3 cases)." in md
+
+
+def scene_text(shape="trefoil", a=1.0, seed=1, rotation="random", method="dopri45"):
+    """A scene text as the program echoes it (kf_scene_items), the variables sample_cell reads."""
+    return (f"&chain\n  shape = '{shape}'\n  orientation = 'c'\n  seed = {seed}\n"
+            f"  candycane_rotation = '{rotation}'\n  tilt_deg = 30.000000000000000\n"
+            "  perturbation = 0.99999999999999995E-6\n/\n"
+            f"&forces\n  bending_a = {a!r}\n/\n&hydro\n  model = 'multipole'\n  overlap = 'relax'\n/\n"
+            f"&integrator\n  method = '{method}'\n/\n&output\n  case_name = 'x{seed}'\n/\n")
+
+
+def test_sample_cell_leaves_out_only_a_perturbation_seed():
+    from knotflow_tools.campaign import sample_cell
+    one = sample_cell(scene_text(seed=1))
+    assert one == sample_cell(scene_text(seed=2))                      # trefoil: a perturbation
+    assert one == sample_cell(scene_text(seed=2, method="ros34pw2"))   # the stepper is no cell
+    assert one != sample_cell(scene_text(a=1.4))
+    # a candy-cane's random rotation is drawn from the seed: each seed its own start
+    assert (sample_cell(scene_text("candycane", seed=1))
+            != sample_cell(scene_text("candycane", seed=2)))
+    # tilted about x, the seed draws only the perturbation
+    assert (sample_cell(scene_text("candycane", seed=1, rotation="tilt_x"))
+            == sample_cell(scene_text("candycane", seed=2, rotation="tilt_x")))
+
+
+def test_cells_pool_their_samples(tmp_path):
+    """Two samples of one cell (seeds 1, 2: viscosity shifts 3 and 1 in the knotted frames) and
+    one of another (shift -1): three case differences 3, 1, -1, but two cell differences,
+    (3 + 1)/2 = 2 (equal frame counts) and -1, whose sign-flip p over 2 cells is 1."""
+    sweep = tmp_path / "sweep"
+    sweep.mkdir()
+    kf = [0.9, 0.9, 0.9, 0.9, 0.1, 0.1, 0.1, 0.1]
+    for name, a, seed, shift in (("A1_s1", 1.0, 1, 3.0), ("A1_s2", 1.0, 2, 1.0),
+                                 ("A2_s1", 2.0, 1, -1.0)):
+        path = make_case(sweep / f"{name}.h5", a, kf, [1] * 8, shift)
+        with h5py.File(path, "a") as f:
+            f.attrs["scene"] = scene_text(a=a, seed=seed)
+    res = rheology.write_rheology([str(sweep)], [], str(tmp_path / "out"))
+    v = res["knot"]["all"]["viscosity"]
+    assert v["paired_cases"] == 3 and v["difference_mean"] == pytest.approx(1.0)
+    assert v["cells"] == 2 and v["paired_cells"] == 2 and v["cell_positive"] == 1
+    assert v["cell_difference_mean"] == pytest.approx(0.5)
+    assert v["cell_difference_std"] == pytest.approx(math.sqrt(4.5))
+    assert v["cell_p_value"] == 1.0
+    assert [c["cell"] for c in res["knot"]["cases"]] == ["trefoil, A = 1, orientation c"] * 2 + [
+        "trefoil, A = 2, orientation c"]
+    md = (tmp_path / "out" / "rheology.md").read_text()
+    assert "| trefoil, A = 1, orientation c | 2 | 2 |" in md
+    assert "| viscosity | 2 / 2 | 0.5 ± 2.1 | 1 of 2 | 1 |" in md

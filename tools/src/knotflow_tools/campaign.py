@@ -581,6 +581,34 @@ def _scene_value(scene: str, group: str, var: str):
         return v
 
 
+#: What makes a start and a model (scene group, variable): cases that agree on all of these
+#: sample one cell. The integrator's settings are not among them (samples of a cell may run
+#: on different steppers at one tolerance) and neither is &chain's seed, which sample_cell
+#: adds where it draws the start itself.
+CELL_VARIABLES = (("chain", "shape"), ("chain", "n_beads"), ("chain", "orientation"),
+                  ("chain", "trefoil_removed_point"), ("chain", "bond_length"),
+                  ("chain", "coordinate_file"), ("chain", "straight_direction"),
+                  ("chain", "candycane_rotation"), ("chain", "tilt_deg"),
+                  ("chain", "perturbation"), ("forces", "springs"), ("forces", "spring_k"),
+                  ("forces", "bending"), ("forces", "bending_a"), ("forces", "excluded_volume"),
+                  ("forces", "ev_strength"), ("forces", "ev_range"), ("forces", "external_force"),
+                  ("flow", "flow_type"), ("flow", "shear_rate"), ("flow", "velocity_gradient"),
+                  ("hydro", "model"), ("hydro", "order"), ("hydro", "lubrication"),
+                  ("hydro", "eps_lub"), ("hydro", "overlap"), ("hydro", "overlap_time"))
+
+
+def sample_cell(scene: str) -> tuple:
+    """The cell a case samples: the values of CELL_VARIABLES in its scene text, and &chain's
+    seed only where the seed draws the start itself (a random chain, a candy-cane with a random
+    rotation: kf_chain_shapes); elsewhere the seed draws only the start's perturbation, so the
+    cases of one cell start 1e-6 d apart and share their early frames."""
+    values = tuple(_scene_value(scene, g, v) for g, v in CELL_VARIABLES)
+    shape = _scene_value(scene, "chain", "shape")
+    rotation = _scene_value(scene, "chain", "candycane_rotation")
+    drawn = shape == "random" or (shape == "candycane" and rotation == "random")
+    return values + ((_scene_value(scene, "chain", "seed") if drawn else None),)
+
+
 def combined_totals(segments: list) -> dict | None:
     """The overlap and passage totals of a case run in segments: sums, extremes, the mean
     duration weighted by episodes, the first passage at the case's time (None without any)."""

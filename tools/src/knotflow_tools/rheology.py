@@ -162,7 +162,9 @@ def compare_case(case, by, t_from=0.0, threshold=KNOT_THRESHOLD, hysteresis=None
                          "&output stresslet = .true.)")
     first, second = COMPARISONS[by]
     frames, classes = case_classes(case, by, t_from, threshold, hysteresis)
+    cell, label = case_cell(case)
     row = {"case": case.name, "A": case.bending_a, "orientation": case.orientation,
+           "cell": cell, "cell_label": label,
            "time": case.time[frames], "classes": classes, "series": {},
            "values": {name: np.asarray(case.stresslet[name])[frames] for name in series}}
     if by == "knot":
@@ -174,11 +176,32 @@ def compare_case(case, by, t_from=0.0, threshold=KNOT_THRESHOLD, hysteresis=None
     return row
 
 
+def case_cell(case) -> tuple:
+    """(cell, label) of a case: campaign.sample_cell of its scene (the start and the model, the
+    perturbation's seed left out), or the case alone when it has no scene text."""
+    from .campaign import CELL_VARIABLES, sample_cell
+    scene = case.attrs.get("scene")
+    if not isinstance(scene, str) or not scene:
+        return ("case", case.name), case.name
+    cell = sample_cell(scene)
+    value = dict(zip(CELL_VARIABLES, cell))
+    parts = [str(value[("chain", "shape")]), f"A = {float(case.bending_a):g}"]
+    if value[("chain", "shape")] == "trefoil":
+        parts.append(f"orientation {value[('chain', 'orientation')]}")
+    if value[("chain", "shape")] == "candycane" and value[("chain", "candycane_rotation")] != "random":
+        parts.append(f"tilt {float(value[('chain', 'tilt_deg')]):g}°")
+    if cell[-1] is not None:
+        parts.append(f"seed {cell[-1]}")
+    return cell, ", ".join(parts)
+
+
 def compare_cases(rows, by, samples=200000, seed=1) -> dict:
     """Across cases, per series: the frames and intervals of each class with the mean and
     standard deviation over all their frames; the cases in which both classes occur, the mean
     and standard deviation of their per-case differences and the sign-flip p-value of that mean
-    (sign_flip_test: the cases are independent runs, the frames of one case are not)."""
+    (sign_flip_test: the cases are independent runs, the frames of one case are not); the same
+    over cells (cell_differences: the samples of one cell share their early frames, so only
+    cells are independent) and over stiffnesses."""
     first, second = COMPARISONS[by]
     out = {}
     for name in (rows[0]["series"] if rows else SERIES):
@@ -198,6 +221,13 @@ def compare_cases(rows, by, samples=200000, seed=1) -> dict:
         pooled["difference_std"] = float(d.std(ddof=1)) if len(d) > 1 else float("nan")
         pooled["positive"] = int((d > 0).sum())
         pooled["p_value"] = sign_flip_test(d, samples=samples, seed=seed)
+        c = np.array([x[2] for x in cell_differences(rows, name, first, second)], dtype=float)
+        pooled["cells"] = len({r["cell"] for r in rows})
+        pooled["paired_cells"] = int(len(c))
+        pooled["cell_difference_mean"] = float(c.mean()) if len(c) else float("nan")
+        pooled["cell_difference_std"] = float(c.std(ddof=1)) if len(c) > 1 else float("nan")
+        pooled["cell_positive"] = int((c > 0).sum())
+        pooled["cell_p_value"] = sign_flip_test(c, samples=samples, seed=seed)
         s = stiffness_differences(rows, name, first, second)
         pooled["paired_stiffnesses"] = int(len(s))
         pooled["stiffness_difference_mean"] = float(s.mean()) if len(s) else float("nan")
@@ -205,6 +235,22 @@ def compare_cases(rows, by, samples=200000, seed=1) -> dict:
         pooled["stiffness_positive"] = int((s > 0).sum())
         pooled["stiffness_p_value"] = sign_flip_test(s, samples=samples, seed=seed)
         out[name] = pooled
+    return out
+
+
+def cell_differences(rows, name, first, second) -> list:
+    """Per cell (compare_case's "cell", in the order of first appearance) in whose cases both
+    classes occur: (label, samples, the mean of series `name` over the frames of class `first`
+    of all the cell's cases minus that over the frames of class `second`). The samples of a
+    cell are pooled: they start 1e-6 d apart and share their early frames, so they are not
+    independent of each other; cells are."""
+    out = []
+    for cell in dict.fromkeys(r["cell"] for r in rows):
+        same = [r for r in rows if r["cell"] == cell]
+        v1 = np.concatenate([case_values(r, name, first) for r in same])
+        v2 = np.concatenate([case_values(r, name, second) for r in same])
+        if len(v1) and len(v2):
+            out.append((same[0]["cell_label"], len(same), float(v1.mean() - v2.mean())))
     return out
 
 
@@ -274,6 +320,23 @@ def comparison_tables(rows, summary, by) -> list:
             f"{b['frames']} | {_g(b['mean'])} ± {_g(b['std'], '.2g')} | {x['paired_cases']} | "
             f"{_g(x['difference_mean'])} ± {_g(x['difference_std'], '.2g')} | "
             f"{x['positive']} of {x['paired_cases']} | {_g(x['p_value'], '.2g')} |")
+    per_cell = {s: cell_differences(rows, s, first, second) for s in names}
+    out += ["", f"By cell (a start and a model; its samples, which differ only by the "
+            f"perturbation's seed and share their early frames, pooled: Δ_cell is the mean over "
+            f"the {first} frames minus the mean over the {second} frames of all the cell's "
+            "cases; cells are independent, samples of one cell are not):", "",
+            "| cell | samples | " + " | ".join(f"Δ_cell {LABELS[s]}" for s in names) + " |",
+            "|---|---|" + "---|" * len(names)]
+    for k, (label, count, _) in enumerate(per_cell[names[0]]):
+        out.append(f"| {label} | {count} | "
+                   + " | ".join(_g(per_cell[s][k][2]) for s in names) + " |")
+    out += ["", "| series | cells / with both | Δ_cell mean ± sd | Δ_cell > 0 in | p |",
+            "|---|---|---|---|---|"]
+    for s in names:
+        x = summary[s]
+        out.append(f"| {LABELS[s]} | {x['cells']} / {x['paired_cells']} | "
+                   f"{_g(x['cell_difference_mean'])} ± {_g(x['cell_difference_std'], '.2g')} | "
+                   f"{x['cell_positive']} of {x['paired_cells']} | {_g(x['cell_p_value'], '.2g')} |")
     out += ["", f"By bending stiffness (Δ_A: mean over the {first} frames minus mean over the "
             f"{second} frames of all the cases with stiffness A; mean ± standard deviation over "
             "the stiffnesses at which both occur; p: sign-flip test over them):", "",
@@ -381,7 +444,8 @@ def models_text(cases) -> str:
 
 def _jsonable(rows, summary):
     return {"cases": [{"case": r["case"], "A": r["A"], "orientation": r["orientation"],
-                       "series": r["series"]} for r in rows], "all": summary}
+                       "cell": r["cell_label"], "series": r["series"]} for r in rows],
+            "all": summary}
 
 
 def write_rheology(knot_dirs, mode_dirs, out, t_from=0.0, threshold=KNOT_THRESHOLD,
@@ -432,12 +496,14 @@ def write_rheology(knot_dirs, mode_dirs, out, t_from=0.0, threshold=KNOT_THRESHO
 
 def summary_lines(result) -> list:
     """One line per comparison of write_rheology's result: the viscosity difference of the
-    paired cases and its p-value."""
+    paired cases and of the paired cells, with their p-values."""
     lines = []
     for by in COMPARISONS:
         if by in result:
             x = result[by]["all"]["viscosity"]
             first, second = COMPARISONS[by]
             lines.append(f"{first} - {second}: viscosity difference {_g(x['difference_mean'])} "
-                         f"over {x['paired_cases']} case(s), p = {_g(x['p_value'], '.2g')}")
+                         f"over {x['paired_cases']} case(s), p = {_g(x['p_value'], '.2g')}; "
+                         f"{_g(x['cell_difference_mean'])} over {x['paired_cells']} cell(s), "
+                         f"p = {_g(x['cell_p_value'], '.2g')}")
     return lines
