@@ -250,3 +250,22 @@ def test_cells_pool_their_samples(tmp_path):
     md = (tmp_path / "out" / "rheology.md").read_text()
     assert "| trefoil, A = 1, orientation c | 2 | 2 |" in md
     assert "| viscosity | 2 / 2 | 0.5 ± 2.1 | 1 of 2 | 1 |" in md
+
+
+def test_finished_only_leaves_out_a_running_case(tmp_path, capsys):
+    """--finished: a case whose status is not 'finished' is left out and named; without it the
+    case counts."""
+    sweep = tmp_path / "sweep"
+    sweep.mkdir()
+    kf = [0.9, 0.9, 0.1, 0.1]
+    for name, shift, status in (("A1", 1.0, "finished"), ("A2", 3.0, "running")):
+        path = make_case(sweep / f"{name}.h5", float(name[1]), kf, [1] * 4, shift)
+        with h5py.File(path, "a") as f:
+            f.attrs["status"] = status
+            f.attrs["case_name"] = name
+    out = tmp_path / "out"
+    assert cli.main_rheology(["--knots", str(sweep), "--out", str(out)]) == 0
+    assert "viscosity difference 2 over 2 case(s)" in capsys.readouterr().out
+    assert cli.main_rheology(["--knots", str(sweep), "--out", str(out), "--finished"]) == 0
+    assert "viscosity difference 1 over 1 case(s)" in capsys.readouterr().out
+    assert "Left out, not finished: A2." in (out / "rheology.md").read_text()

@@ -517,6 +517,8 @@ def _rheology(argv: Argv) -> int:
     p.add_argument("--samples", type=int, default=200000,
                    help="random sign assignments of the test above 16 cases")
     p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--finished", action="store_true",
+                   help="only finished cases (a campaign still running has partial ones)")
     args = p.parse_args(argv)
     if not (args.knots or args.modes):
         p.error("give --knots DIR and/or --modes DIR")
@@ -531,7 +533,7 @@ def _rheology(argv: Argv) -> int:
         p.error(f"--samples {args.samples} is not allowed (a positive integer)")
     res = rheology.write_rheology(args.knots, args.modes, args.out, args.t_from, args.threshold,
                                   tuple(args.hysteresis) if args.hysteresis else None,
-                                  args.samples, args.seed)
+                                  args.samples, args.seed, args.finished)
     for line in rheology.summary_lines(res):
         print(line)
     print(f"wrote {os.path.join(args.out, 'rheology.md')}")

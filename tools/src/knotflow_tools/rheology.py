@@ -449,10 +449,11 @@ def _jsonable(rows, summary):
 
 
 def write_rheology(knot_dirs, mode_dirs, out, t_from=0.0, threshold=KNOT_THRESHOLD,
-                   hysteresis=None, samples=200000, seed=1) -> dict:
+                   hysteresis=None, samples=200000, seed=1, finished_only=False) -> dict:
     """Both comparisons for the cases of the given sweep directories (case files, or one sweep
     of a case ledger: its `<case>.json` entries, campaign.ledger_case, whose frame rows hold k_f,
-    the mode and the stresslet's series): rheology.md, rheology.json and the figures in out."""
+    the mode and the stresslet's series): rheology.md, rheology.json and the figures in out.
+    `finished_only`: leave out the cases whose status is not 'finished' (named in rheology.md)."""
     import json
     import os
 
@@ -474,11 +475,17 @@ def write_rheology(knot_dirs, mode_dirs, out, t_from=0.0, threshold=KNOT_THRESHO
             continue
         cases = [load_case(f) for f in files]
         cases = [c for c in cases if c.nframes > 0]
+        left_out = [c.name for c in cases if finished_only and c.status != "finished"]
+        cases = [c for c in cases if not (finished_only and c.status != "finished")]
+        if not cases:
+            continue
         names = case_series(cases)
         rows = [compare_case(c, by, t_from, threshold, hysteresis, names) for c in cases]
         summary = compare_cases(rows, by, samples, seed)
         md += [f"## {title}", "", f"Cases: {', '.join(f'`{d}`' for d in dirs)}.", "",
                f"Models: {models_text(cases)}.", ""]
+        if left_out:
+            md += [f"Left out, not finished: {', '.join(left_out)}.", ""]
         md += comparison_tables(rows, summary, by) + [""]
         if by == "knot":
             series = plot_series(rows, os.path.join(out, "rheology_time.png"))
