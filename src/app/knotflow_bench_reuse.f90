@@ -43,7 +43,8 @@
 !>              (multipole; rpy: the one exact path), each Rosenbrock 'iterative' also with
 !>              the mobility of its Jacobian kept for K steps (&integrator jacobian_steps,
 !>              default 4; after a 'stage' evaluation a new mobility costs nothing); per run wall time, steps, rejected,
-!>              velocity evaluations (per unit time), Jacobians, and the largest bead deviation
+!>              velocity evaluations (per unit time), Jacobians, processor seconds (cpu_time)
+!>              and the load average at its end, and the largest bead deviation
 !>              at T from dopri45 'stage'; the cost of one Jacobian (after an evaluation at its
 !>              positions, and cold). M: multipole (the study's model, default) or rpy.
 !>              --jacobian-order J: each Rosenbrock 'iterative' run also with the Jacobian's
@@ -888,7 +889,7 @@ contains
     type(dynamics_t) :: dyn
     class(stepper_t), allocatable :: integ
     type(error_t), allocatable :: error
-    real(wp) :: t, w0
+    real(wp) :: t, w0, c0, c1
     call study_scene(config, tol, upd, scene, r)
     if (eps_lub < 0.0_wp) scene%hydro%eps_lub = 1.0e-4_wp
     scene%integrator%method = method
@@ -900,10 +901,14 @@ contains
     if (allocated(error)) call die(program_name, error%message, 2)
     t = 0.0_wp
     w0 = wall_seconds()
+    call cpu_time(c0)
     call integ%advance(dyn, t, r, t_end, error)
+    call cpu_time(c1)
     if (allocated(error)) call die(program_name, label//': '//error%message, 2)
     wall = wall_seconds() - w0
     write (output_unit, '(a)') label//'.wall_s = '//to_str(wall, '(f10.2)')
+    write (output_unit, '(a)') label//'.processor_s = '//to_str(c1 - c0, '(f10.2)')
+    write (output_unit, '(a)') label//'.loadavg_end = '//loadavg()
     write (output_unit, '(a)') label//'.steps = '//to_str(integ%steps())
     write (output_unit, '(a)') label//'.rejected = '//to_str(integ%rejected())
     write (output_unit, '(a)') label//'.evaluations = '//to_str(dyn%evaluations)
