@@ -4,8 +4,9 @@
 !> rule of the multipole campaign (`--overlap`, default relax, a variant of ours).
 !>
 !> Usage: knotflow-bench-reuse PART [options]
-!>   velocity   [--config C] [--t-end T] [--every K]: integrate with the adaptive path and, at
-!>              every K-th stage, compare its velocities with the exact ones at the same positions
+!>   velocity   [--config C] [--t-end T] [--every K] [--update iterative]: integrate with the
+!>              adaptive path (or the iterative one) and, at every K-th stage, compare its
+!>              velocities with the exact ones at the same positions
 !>   trajectory [--config C] [--t-end T]: largest bead deviation at T between the two paths at
 !>              tolerance 1e-4, and of the exact path between tolerances 1e-4 and 1e-6
 !>   speed      [--config C] [--t-end T]: wall time of both paths to T and their ratio
@@ -355,9 +356,12 @@ contains
     type(error_t), allocatable :: error
     real(wp), allocatable :: r(:, :)
     real(wp) :: t, w0
+    character(len=:), allocatable :: fast
     call header()
-    call study_scene(config, 1.0e-4_wp, update_adaptive, scene, r)
-    call sys%init(scene, size(r, 2), error, every)
+    fast = update_adaptive
+    if (update == update_iterative) fast = update_iterative
+    call study_scene(config, 1.0e-4_wp, fast, scene, r)
+    call sys%init(scene, size(r, 2), error, every, fast)
     if (allocated(error)) call die(program_name, error%message, 2)
     call make_stepper(scene%integrator, integ, error)
     if (allocated(error)) call die(program_name, error%message, 2)
@@ -372,7 +376,7 @@ contains
     write (output_unit, '(a)') 'velocity_rms_max = '//to_str(sys%max_rms, '(es10.3)')
     write (output_unit, '(a)') 'velocity_rms_mean = '//to_str(sys%sum_rms/max(1_i8, sys%checks), '(es10.3)')
     write (output_unit, '(a)') 'velocity_maxnorm_max = '//to_str(sys%max_max, '(es10.3)')
-    call print_stats(update_adaptive//'.', sys%fast%hydro_statistics())
+    call print_stats(fast//'.', sys%fast%hydro_statistics())
     write (output_unit, '(a)') 'wall_s = '//to_str(wall_seconds() - w0, '(f10.2)')
   end subroutine run_velocity
 
