@@ -53,6 +53,9 @@
 !>              positions, and cold). M: multipole (the study's model, default) or rpy.
 !>              --jacobian-order J: each Rosenbrock 'iterative' run also with the Jacobian's
 !>              mobility of order J (&hydro jacobian_order; labels <method>_jorder<J>...)
+!>              --friction-change F: each 'iterative' run followed by the same run with the
+!>              iterative model's 6N friction factor threshold friction_change = F (labels
+!>              <run>_fc<F>.iterative; F = 0: refactorised at every call, as before)
 !>   rigid      [--config C]: the reused part at rigidly moved and at deformed configurations
 !>              (overlap rule pair only: the model's reused part against its exact one, both
 !>              without the dynamics' configuration rules separate and relax)
@@ -79,7 +82,8 @@ program knotflow_bench_reuse
   use kf_stepper, only: stepper_t
   use kf_stepper_factory, only: make_stepper
   use kf_stepper_rosenbrock, only: rosenbrock_stepper_t
-  use kf_hydro_model, only: hydro_stats_t
+  use kf_hydro_model, only: hydro_stats_t, hydro_model_t
+  use kf_hydro_factory, only: make_hydro_model
   use kf_hydro_multipole, only: multipole_model_t
   use kf_reuse_check, only: checked_dynamics_t
   use kf_run_diagnostics, only: run_diagnostics_t
@@ -99,7 +103,7 @@ program knotflow_bench_reuse
   character(len=*), parameter :: program_name = 'knotflow-bench-reuse'
 
   character(len=:), allocatable :: part, config, overlap, update, table, model, steppers
-  real(wp) :: t_end, eps_lub, tolerance
+  real(wp) :: t_end, eps_lub, tolerance, friction_change
   integer :: every, jacobian_steps, jacobian_order
   logical :: omp_set, rosenbrock_stage
 
@@ -145,7 +149,7 @@ contains
       'overlaps|scaling|rigid|stiffness|threads|rosenbrock|evaluation [--config trefoil|random60|coil|FILE] [--t-end T] [--every K]'// &
       ' [--eps-lub E] [--overlap RULE (one of '//name_list(overlap_names)//')] [--update U] [--tolerance TOL]'// &
       ' [--table FILE] [--model multipole|rpy] [--jacobian-steps K] [--jacobian-order J] [--rosenbrock-stage yes|no]'// &
-      ' [--steppers LIST]'//new_line('a')// &
+      ' [--steppers LIST] [--friction-change F]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
       'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).')
     config = 'trefoil'
@@ -160,6 +164,7 @@ contains
     jacobian_steps = 4
     jacobian_order = 0
     rosenbrock_stage = .true.
+    friction_change = -1.0_wp
     steppers = method_ros34pw2//','//method_ros34pw3
     k = 2
     do while (k <= command_argument_count())
@@ -203,6 +208,10 @@ contains
         read (val, *, iostat=ios) jacobian_order
         if (ios /= 0 .or. jacobian_order < 1) &
           call die(program_name, '--jacobian-order '//trim(val)//': expected an integer >= 1 (at most the order, 2)', 2)
+      case ('--friction-change')
+        read (val, *, iostat=ios) friction_change
+        if (ios /= 0 .or. .not. friction_change >= 0.0_wp) &
+          call die(program_name, '--friction-change '//trim(val)//': expected a number >= 0', 2)
       case ('--steppers')
         steppers = trim(val)
         call check_steppers(steppers)
@@ -845,8 +854,8 @@ contains
   subroutine run_rosenbrock()
     character(len=9), allocatable :: updates(:)
     character(len=:), allocatable :: label, method
-    real(wp), allocatable :: r_ref(:, :), r(:, :)
-    real(wp) :: wall_ref, wall
+    real(wp), allocatable :: r_ref(:, :)
+    real(wp) :: wall_ref
     integer :: k, m
     call header()
     write (output_unit, '(a)') 'model = '//model
@@ -861,36 +870,52 @@ contains
     call jacobian_cost()
     call run_method(method_dopri45//'.stage', method_dopri45, update_stage, 1, 1.0e-4_wp, r_ref, wall_ref)
     do k = 1, size(updates)
-      if (k > 1) then
-        label = method_dopri45//'.'//trim(updates(k))
-        call run_method(label, method_dopri45, trim(updates(k)), 1, 1.0e-4_wp, r, wall)
-        call compare_with_reference(label, r, wall, r_ref, wall_ref)
-      end if
+      if (k > 1) call run_compared(method_dopri45, method_dopri45, trim(updates(k)), 1, 1.0e-4_wp, 0, r_ref, wall_ref)
       if (trim(updates(k)) == update_stage .and. model == 'multipole' .and. .not. rosenbrock_stage) cycle
       do m = 1, count_items(steppers)
         method = item(steppers, m)
-        label = method//'.'//trim(updates(k))
-        call run_method(label, method, trim(updates(k)), 1, tolerance, r, wall)
-        call compare_with_reference(label, r, wall, r_ref, wall_ref)
-        if (jacobian_steps > 1 .and. trim(updates(k)) /= update_stage) then
-          label = method//'_mobility'//to_str(jacobian_steps)//'.'//trim(updates(k))
-          call run_method(label, method, trim(updates(k)), jacobian_steps, tolerance, r, wall)
-          call compare_with_reference(label, r, wall, r_ref, wall_ref)
-        end if
+        call run_compared(method, method, trim(updates(k)), 1, tolerance, 0, r_ref, wall_ref)
+        if (jacobian_steps > 1 .and. trim(updates(k)) /= update_stage) &
+          call run_compared(method//'_mobility'//to_str(jacobian_steps), method, trim(updates(k)), jacobian_steps, &
+                            tolerance, 0, r_ref, wall_ref)
         if (jacobian_order > 0 .and. trim(updates(k)) /= update_stage) then
-          label = method//'_jorder'//to_str(jacobian_order)//'.'//trim(updates(k))
-          call run_method(label, method, trim(updates(k)), 1, tolerance, r, wall, jacobian_order)
-          call compare_with_reference(label, r, wall, r_ref, wall_ref)
-          if (jacobian_steps > 1) then
-            label = method//'_jorder'//to_str(jacobian_order)//'_mobility'//to_str(jacobian_steps)//'.'//trim(updates(k))
-            call run_method(label, method, trim(updates(k)), jacobian_steps, tolerance, r, wall, jacobian_order)
-            call compare_with_reference(label, r, wall, r_ref, wall_ref)
-          end if
+          label = method//'_jorder'//to_str(jacobian_order)
+          call run_compared(label, method, trim(updates(k)), 1, tolerance, jacobian_order, r_ref, wall_ref)
+          if (jacobian_steps > 1) &
+            call run_compared(label//'_mobility'//to_str(jacobian_steps), method, trim(updates(k)), jacobian_steps, &
+                              tolerance, jacobian_order, r_ref, wall_ref)
         end if
       end do
     end do
     write (output_unit, '(a)') 'loadavg_end = '//loadavg()
   end subroutine run_rosenbrock
+
+  !> One run (run_method: label <name>.<upd>, jorder 0 for the scene default) compared with the
+  !> reference; with --friction-change F and upd 'iterative' the same run follows with the
+  !> iterative model's friction_change set to F (label <name>_fc<F>.<upd>), in the same process.
+  subroutine run_compared(name, method, upd, keep, tol, jorder, r_ref, wall_ref)
+    character(len=*), intent(in) :: name, method, upd
+    integer, intent(in) :: keep, jorder
+    real(wp), intent(in) :: tol, r_ref(:, :), wall_ref
+    real(wp), allocatable :: r(:, :)
+    real(wp) :: wall
+    character(len=:), allocatable :: label
+    label = name//'.'//upd
+    if (jorder > 0) then
+      call run_method(label, method, upd, keep, tol, r, wall, jorder)
+    else
+      call run_method(label, method, upd, keep, tol, r, wall)
+    end if
+    call compare_with_reference(label, r, wall, r_ref, wall_ref)
+    if (friction_change < 0.0_wp .or. upd /= update_iterative) return
+    label = name//'_fc'//to_str(friction_change, '(g0.3)')//'.'//upd
+    if (jorder > 0) then
+      call run_method(label, method, upd, keep, tol, r, wall, jorder, friction_change)
+    else
+      call run_method(label, method, upd, keep, tol, r, wall, fchange=friction_change)
+    end if
+    call compare_with_reference(label, r, wall, r_ref, wall_ref)
+  end subroutine run_compared
 
   !> The wall-time ratio and the largest bead deviation of a run (r, wall) from the reference.
   subroutine compare_with_reference(label, r, wall, r_ref, wall_ref)
@@ -902,16 +927,19 @@ contains
 
   !> One integration of the configuration to t_end (tolerance tol; eps_lub 1e-4 unless
   !> --eps-lub) with `method` and `upd`: its figures under `label`; r the final positions.
-  !> `jorder` (optional): &hydro jacobian_order.
-  subroutine run_method(label, method, upd, keep, tol, r, wall, jorder)
+  !> `jorder` (optional): &hydro jacobian_order; `fchange` (optional): the iterative model's
+  !> friction_change (the factory's model with that value, taken over by the dynamics).
+  subroutine run_method(label, method, upd, keep, tol, r, wall, jorder, fchange)
     character(len=*), intent(in) :: label, method, upd
     integer, intent(in) :: keep
     real(wp), intent(in) :: tol
     real(wp), allocatable, intent(out) :: r(:, :)
     real(wp), intent(out) :: wall
     integer, intent(in), optional :: jorder
+    real(wp), intent(in), optional :: fchange
     type(scene_t) :: scene
     type(dynamics_t) :: dyn
+    class(hydro_model_t), allocatable :: hydro
     class(stepper_t), allocatable :: integ
     type(error_t), allocatable :: error
     real(wp) :: t, w0, c0, c1
@@ -920,7 +948,17 @@ contains
     scene%integrator%method = method
     scene%integrator%jacobian_steps = keep
     if (present(jorder)) scene%hydro%jacobian_order = jorder
-    call dyn%init(scene, size(r, 2), error)
+    if (present(fchange)) then
+      call make_hydro_model(scene%hydro, scene%integrator%tolerance, hydro, error)
+      if (allocated(error)) call die(program_name, error%message, 2)
+      select type (hydro)
+      type is (multipole_iterative_t)
+        hydro%friction_change = fchange
+      class default
+        call die(program_name, '--friction-change: the model is not the iterative one', 2)
+      end select
+    end if
+    call dyn%init(scene, size(r, 2), error, hydro)
     if (allocated(error)) call die(program_name, error%message, 2)
     call make_stepper(scene%integrator, integ, error)
     if (allocated(error)) call die(program_name, error%message, 2)
