@@ -103,8 +103,8 @@ module kf_hydro_multipole_iterative
     real(wp), private :: cen_ref(3) = 0.0_wp
     real(wp), allocatable, private :: pos_ref(:, :), rp(:, :), frot(:, :)
     real(wp), allocatable, private :: zref(:, :)    !< zeta_L(ref), full storage
-    real(wp), allocatable, private :: pre(:, :)     !< Cholesky factor of zeta_L(ref) + dzeta
-    real(wp), allocatable, private :: pscale(:)     !< 1/sqrt of the diagonal of zeta_L(ref) + dzeta
+    real(wp), allocatable, private :: pre(:, :)     !< Cholesky factor of zeta_L(ref) + dzeta_f
+    real(wp), allocatable, private :: pscale(:)     !< 1/sqrt of the diagonal of zeta_L(ref) + dzeta_f
     integer, allocatable, private :: slot(:, :)     !< (N, N) work of largest_scaled_change
     real(wp), allocatable, private :: v(:, :)      !< Krylov basis
     real(wp), allocatable, private :: hm(:, :)     !< Hessenberg matrix (Givens-rotated)
