@@ -4,8 +4,9 @@
 !> rule of the multipole campaign (`--overlap`, default relax, a variant of ours).
 !>
 !> Usage: knotflow-bench-reuse PART [options]
-!>   velocity   [--config C] [--t-end T] [--every K]: integrate with the adaptive path and, at
-!>              every K-th stage, compare its velocities with the exact ones at the same positions
+!>   velocity   [--config C] [--t-end T] [--every K] [--update iterative]: integrate with the
+!>              adaptive path (or the iterative one) and, at every K-th stage, compare its
+!>              velocities with the exact ones at the same positions
 !>   trajectory [--config C] [--t-end T]: largest bead deviation at T between the two paths at
 !>              tolerance 1e-4, and of the exact path between tolerances 1e-4 and 1e-6
 !>   speed      [--config C] [--t-end T]: wall time of both paths to T and their ratio
@@ -28,13 +29,16 @@
 !>              deviation between the thread counts at T and the load average at every figure
 !>   evaluation [--config C]: the cost of one evaluation of the study's model, split: processor
 !>              seconds (cpu_time, best of 5-20 repetitions) of the assembly of K, the
-!>              lubrication blocks, the 6N friction Cholesky of an 'iterative' call, one product
-!>              K x, one triangular-solve pair with the factor of K and with its single-precision
-!>              copy, and of whole 'iterative' calls (at a configuration deformed by 0.003 d per
-!>              bead from the reference: the GMRES solve from zero, the forces and strain
-!>              changing sign between repetitions so that the last solution is no start; the
-!>              GMRES solve from the last call's solution, the configuration alternating with
-!>              one 0.001 d further; and a factorising call) and 'stage' calls
+!>              lubrication blocks, the 6N friction Cholesky of an 'iterative' call that
+!>              refactorises it, the largest scaled change of the lubrication blocks (the rule
+!>              that decides it) between the start and a configuration deformed by 0.003 d per
+!>              bead, one product K x, one triangular-solve pair with the factor of K and with
+!>              its single-precision copy, and of whole 'iterative' calls (at that deformed
+!>              configuration: the GMRES solve from zero, the forces and strain changing sign
+!>              between repetitions so that the last solution is no start, the 6N factor
+!>              refactorised where its rule says (the number of such factorisations printed);
+!>              the GMRES solve from the last call's solution, the configuration alternating
+!>              with one 0.001 d further; and a factorising call) and 'stage' calls
 !>   rosenbrock [--config C] [--t-end T] [--model M] [--jacobian-steps K] [--rosenbrock-stage
 !>              yes|no] [--steppers LIST] [--tolerance TOL]: the Rosenbrock-W steppers of LIST
 !>              (comma-separated, default ros34pw2,ros34pw3) at tolerance TOL (default 1e-4)
@@ -43,11 +47,15 @@
 !>              (multipole; rpy: the one exact path), each Rosenbrock 'iterative' also with
 !>              the mobility of its Jacobian kept for K steps (&integrator jacobian_steps,
 !>              default 4; after a 'stage' evaluation a new mobility costs nothing); per run wall time, steps, rejected,
-!>              velocity evaluations (per unit time), Jacobians, and the largest bead deviation
+!>              velocity evaluations (per unit time), Jacobians, processor seconds (cpu_time)
+!>              and the load average at its end, and the largest bead deviation
 !>              at T from dopri45 'stage'; the cost of one Jacobian (after an evaluation at its
 !>              positions, and cold). M: multipole (the study's model, default) or rpy.
 !>              --jacobian-order J: each Rosenbrock 'iterative' run also with the Jacobian's
 !>              mobility of order J (&hydro jacobian_order; labels <method>_jorder<J>...)
+!>              --friction-change F: each 'iterative' run followed by the same run with the
+!>              iterative model's 6N friction factor threshold friction_change = F (labels
+!>              <run>_fc<F>.iterative; F = 0: refactorised at every call, as before)
 !>   rigid      [--config C]: the reused part at rigidly moved and at deformed configurations
 !>              (overlap rule pair only: the model's reused part against its exact one, both
 !>              without the dynamics' configuration rules separate and relax)
@@ -74,7 +82,8 @@ program knotflow_bench_reuse
   use kf_stepper, only: stepper_t
   use kf_stepper_factory, only: make_stepper
   use kf_stepper_rosenbrock, only: rosenbrock_stepper_t
-  use kf_hydro_model, only: hydro_stats_t
+  use kf_hydro_model, only: hydro_stats_t, hydro_model_t
+  use kf_hydro_factory, only: make_hydro_model
   use kf_hydro_multipole, only: multipole_model_t
   use kf_reuse_check, only: checked_dynamics_t
   use kf_run_diagnostics, only: run_diagnostics_t
@@ -94,7 +103,7 @@ program knotflow_bench_reuse
   character(len=*), parameter :: program_name = 'knotflow-bench-reuse'
 
   character(len=:), allocatable :: part, config, overlap, update, table, model, steppers
-  real(wp) :: t_end, eps_lub, tolerance
+  real(wp) :: t_end, eps_lub, tolerance, friction_change
   integer :: every, jacobian_steps, jacobian_order
   logical :: omp_set, rosenbrock_stage
 
@@ -140,7 +149,7 @@ contains
       'overlaps|scaling|rigid|stiffness|threads|rosenbrock|evaluation [--config trefoil|random60|coil|FILE] [--t-end T] [--every K]'// &
       ' [--eps-lub E] [--overlap RULE (one of '//name_list(overlap_names)//')] [--update U] [--tolerance TOL]'// &
       ' [--table FILE] [--model multipole|rpy] [--jacobian-steps K] [--jacobian-order J] [--rosenbrock-stage yes|no]'// &
-      ' [--steppers LIST]'//new_line('a')// &
+      ' [--steppers LIST] [--friction-change F]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
       'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).')
     config = 'trefoil'
@@ -155,6 +164,7 @@ contains
     jacobian_steps = 4
     jacobian_order = 0
     rosenbrock_stage = .true.
+    friction_change = -1.0_wp
     steppers = method_ros34pw2//','//method_ros34pw3
     k = 2
     do while (k <= command_argument_count())
@@ -198,6 +208,10 @@ contains
         read (val, *, iostat=ios) jacobian_order
         if (ios /= 0 .or. jacobian_order < 1) &
           call die(program_name, '--jacobian-order '//trim(val)//': expected an integer >= 1 (at most the order, 2)', 2)
+      case ('--friction-change')
+        read (val, *, iostat=ios) friction_change
+        if (ios /= 0 .or. .not. friction_change >= 0.0_wp) &
+          call die(program_name, '--friction-change '//trim(val)//': expected a number >= 0', 2)
       case ('--steppers')
         steppers = trim(val)
         call check_steppers(steppers)
@@ -351,9 +365,12 @@ contains
     type(error_t), allocatable :: error
     real(wp), allocatable :: r(:, :)
     real(wp) :: t, w0
+    character(len=:), allocatable :: fast
     call header()
-    call study_scene(config, 1.0e-4_wp, update_adaptive, scene, r)
-    call sys%init(scene, size(r, 2), error, every)
+    fast = update_adaptive
+    if (update == update_iterative) fast = update_iterative
+    call study_scene(config, 1.0e-4_wp, fast, scene, r)
+    call sys%init(scene, size(r, 2), error, every, fast)
     if (allocated(error)) call die(program_name, error%message, 2)
     call make_stepper(scene%integrator, integ, error)
     if (allocated(error)) call die(program_name, error%message, 2)
@@ -368,7 +385,7 @@ contains
     write (output_unit, '(a)') 'velocity_rms_max = '//to_str(sys%max_rms, '(es10.3)')
     write (output_unit, '(a)') 'velocity_rms_mean = '//to_str(sys%sum_rms/max(1_i8, sys%checks), '(es10.3)')
     write (output_unit, '(a)') 'velocity_maxnorm_max = '//to_str(sys%max_max, '(es10.3)')
-    call print_stats(update_adaptive//'.', sys%fast%hydro_statistics())
+    call print_stats(fast//'.', sys%fast%hydro_statistics())
     write (output_unit, '(a)') 'wall_s = '//to_str(wall_seconds() - w0, '(f10.2)')
   end subroutine run_velocity
 
@@ -553,19 +570,22 @@ contains
   !> (module header, part evaluation); processor seconds, so that the time the process waits
   !> for a CPU on a shared machine does not count.
   subroutine run_evaluation()
-    integer, parameter :: reps(10) = [7, 7, 20, 20, 7, 5, 3, 3, 20, 6]
+    integer, parameter :: reps(11) = [7, 7, 20, 20, 7, 5, 3, 3, 20, 6, 20]
     type(scene_t) :: scene
     type(multipole_system_t) :: sys
     type(lubrication_t) :: lub
-    type(pair_blocks_t) :: blocks
+    type(pair_blocks_t) :: blocks, blocks2
     type(multipole_iterative_t) :: iter
     type(multipole_model_t) :: stage
     type(hydro_stats_t) :: s0, s1, s2, s3
     type(error_t), allocatable :: error
     real(wp), allocatable :: r(:, :), r2(:, :), r3(:, :), f(:, :), u(:, :), zeta(:, :), pre(:, :), x(:), y(:)
     real(sp), allocatable :: xs(:)
-    real(wp) :: e(3, 3), eps, best(10), c0, c1, sgn
+    real(wp), allocatable :: pscale(:)
+    integer, allocatable :: slot(:, :)
+    real(wp) :: e(3, 3), eps, best(11), c0, c1, sgn, change
     integer :: n, i, rep, what
+    integer(i8) :: factors6
     call header()
     call study_scene(config, 1.0e-4_wp, update_stage, scene, r)
     eps = merge(eps_lub, 1.0e-4_wp, eps_lub > 0.0_wp)
@@ -588,9 +608,10 @@ contains
     if (allocated(error)) call die(program_name, error%message, 2)
     ! the pieces in order: 1 assembly, 2 lubrication blocks, 3 K x, 4 solve pair, 5 6N Cholesky,
     ! 6 'iterative' GMRES calls from zero, 7 'iterative' factorising calls, 8 'stage' calls,
-    ! 9 'iterative' GMRES calls from the last solution, 10 single-precision solve pair
+    ! 9 'iterative' GMRES calls from the last solution, 10 single-precision solve pair, 11 the
+    ! largest scaled change of the lubrication blocks between r and r2 (the 6N factor's rule)
     best = huge(1.0_wp)
-    do what = 1, 10
+    do what = 1, 11
       select case (what)
       case (3)
         allocate (x(sys%unknowns()), y(sys%unknowns()), xs(sys%unknowns()))
@@ -600,6 +621,14 @@ contains
       case (5)
         call sys%grand_friction(zeta, error)
         if (.not. allocated(error)) call blocks%add_friction(zeta)
+      case (11)
+        allocate (pscale(6*n), slot(n, n))
+        slot = 0
+        do i = 1, 6*n
+          pscale(i) = 1.0_wp/sqrt(zeta(i, i))
+        end do
+        call lub%pair_blocks(r, blocks)
+        call lub%pair_blocks(r2, blocks2)
       case (6, 9)
         call iter%setup(2, .true., eps, error)
         if (.not. allocated(error)) call iter%velocities(r, f, u, error, e)
@@ -643,6 +672,8 @@ contains
         case (10)
           call sys%forward_single(xs)
           call sys%backward_single(xs)
+        case (11)
+          change = blocks2%largest_scaled_change(blocks, pscale, slot)
         case default
           call stage%velocities(r2, f, u, error, e)
         end select
@@ -651,6 +682,7 @@ contains
         best(what) = min(best(what), c1 - c0)
       end do
       if (what == 6) s1 = iter%statistics()
+      if (what == 6) factors6 = s1%preconditioners - s0%preconditioners
       if (what == 9) s3 = iter%statistics()
     end do
     write (output_unit, '(a)') 'lubrication_pairs = '//to_str(blocks%n_pairs())
@@ -663,8 +695,11 @@ contains
     write (output_unit, '(a)') 'iterative_reused_ms = '//to_str(1.0e3_wp*best(6), '(f0.3)')
     write (output_unit, '(a)') 'iterative_reused_iterations = '// &
       to_str(real(s1%cg_iterations - s0%cg_iterations, wp)/real(max(1_i8, s1%reused - s0%reused), wp), '(f0.2)')
+    write (output_unit, '(a)') 'friction_change_ms = '//to_str(1.0e3_wp*best(11), '(f0.3)')
+    write (output_unit, '(a)') 'friction_change_r_r2 = '//to_str(change, '(es10.3)')
+    write (output_unit, '(a)') 'iterative_reused_friction_factorisations = '//to_str(factors6)
     write (output_unit, '(a)') 'iterative_reused_rest_ms = '// &
-      to_str(1.0e3_wp*(best(6) - best(1) - best(2) - best(5)), '(f0.3)')
+      to_str(1.0e3_wp*(best(6) - best(1) - best(2) - best(11)), '(f0.3)')
     write (output_unit, '(a)') 'iterative_warm_ms = '//to_str(1.0e3_wp*best(9), '(f0.3)')
     write (output_unit, '(a)') 'iterative_warm_iterations = '// &
       to_str(real(s3%cg_iterations - s2%cg_iterations, wp)/real(max(1_i8, s3%reused - s2%reused), wp), '(f0.2)')
@@ -819,8 +854,8 @@ contains
   subroutine run_rosenbrock()
     character(len=9), allocatable :: updates(:)
     character(len=:), allocatable :: label, method
-    real(wp), allocatable :: r_ref(:, :), r(:, :)
-    real(wp) :: wall_ref, wall
+    real(wp), allocatable :: r_ref(:, :)
+    real(wp) :: wall_ref
     integer :: k, m
     call header()
     write (output_unit, '(a)') 'model = '//model
@@ -835,36 +870,52 @@ contains
     call jacobian_cost()
     call run_method(method_dopri45//'.stage', method_dopri45, update_stage, 1, 1.0e-4_wp, r_ref, wall_ref)
     do k = 1, size(updates)
-      if (k > 1) then
-        label = method_dopri45//'.'//trim(updates(k))
-        call run_method(label, method_dopri45, trim(updates(k)), 1, 1.0e-4_wp, r, wall)
-        call compare_with_reference(label, r, wall, r_ref, wall_ref)
-      end if
+      if (k > 1) call run_compared(method_dopri45, method_dopri45, trim(updates(k)), 1, 1.0e-4_wp, 0, r_ref, wall_ref)
       if (trim(updates(k)) == update_stage .and. model == 'multipole' .and. .not. rosenbrock_stage) cycle
       do m = 1, count_items(steppers)
         method = item(steppers, m)
-        label = method//'.'//trim(updates(k))
-        call run_method(label, method, trim(updates(k)), 1, tolerance, r, wall)
-        call compare_with_reference(label, r, wall, r_ref, wall_ref)
-        if (jacobian_steps > 1 .and. trim(updates(k)) /= update_stage) then
-          label = method//'_mobility'//to_str(jacobian_steps)//'.'//trim(updates(k))
-          call run_method(label, method, trim(updates(k)), jacobian_steps, tolerance, r, wall)
-          call compare_with_reference(label, r, wall, r_ref, wall_ref)
-        end if
+        call run_compared(method, method, trim(updates(k)), 1, tolerance, 0, r_ref, wall_ref)
+        if (jacobian_steps > 1 .and. trim(updates(k)) /= update_stage) &
+          call run_compared(method//'_mobility'//to_str(jacobian_steps), method, trim(updates(k)), jacobian_steps, &
+                            tolerance, 0, r_ref, wall_ref)
         if (jacobian_order > 0 .and. trim(updates(k)) /= update_stage) then
-          label = method//'_jorder'//to_str(jacobian_order)//'.'//trim(updates(k))
-          call run_method(label, method, trim(updates(k)), 1, tolerance, r, wall, jacobian_order)
-          call compare_with_reference(label, r, wall, r_ref, wall_ref)
-          if (jacobian_steps > 1) then
-            label = method//'_jorder'//to_str(jacobian_order)//'_mobility'//to_str(jacobian_steps)//'.'//trim(updates(k))
-            call run_method(label, method, trim(updates(k)), jacobian_steps, tolerance, r, wall, jacobian_order)
-            call compare_with_reference(label, r, wall, r_ref, wall_ref)
-          end if
+          label = method//'_jorder'//to_str(jacobian_order)
+          call run_compared(label, method, trim(updates(k)), 1, tolerance, jacobian_order, r_ref, wall_ref)
+          if (jacobian_steps > 1) &
+            call run_compared(label//'_mobility'//to_str(jacobian_steps), method, trim(updates(k)), jacobian_steps, &
+                              tolerance, jacobian_order, r_ref, wall_ref)
         end if
       end do
     end do
     write (output_unit, '(a)') 'loadavg_end = '//loadavg()
   end subroutine run_rosenbrock
+
+  !> One run (run_method: label <name>.<upd>, jorder 0 for the scene default) compared with the
+  !> reference; with --friction-change F and upd 'iterative' the same run follows with the
+  !> iterative model's friction_change set to F (label <name>_fc<F>.<upd>), in the same process.
+  subroutine run_compared(name, method, upd, keep, tol, jorder, r_ref, wall_ref)
+    character(len=*), intent(in) :: name, method, upd
+    integer, intent(in) :: keep, jorder
+    real(wp), intent(in) :: tol, r_ref(:, :), wall_ref
+    real(wp), allocatable :: r(:, :)
+    real(wp) :: wall
+    character(len=:), allocatable :: label
+    label = name//'.'//upd
+    if (jorder > 0) then
+      call run_method(label, method, upd, keep, tol, r, wall, jorder)
+    else
+      call run_method(label, method, upd, keep, tol, r, wall)
+    end if
+    call compare_with_reference(label, r, wall, r_ref, wall_ref)
+    if (friction_change < 0.0_wp .or. upd /= update_iterative) return
+    label = name//'_fc'//to_str(friction_change, '(g0.3)')//'.'//upd
+    if (jorder > 0) then
+      call run_method(label, method, upd, keep, tol, r, wall, jorder, friction_change)
+    else
+      call run_method(label, method, upd, keep, tol, r, wall, fchange=friction_change)
+    end if
+    call compare_with_reference(label, r, wall, r_ref, wall_ref)
+  end subroutine run_compared
 
   !> The wall-time ratio and the largest bead deviation of a run (r, wall) from the reference.
   subroutine compare_with_reference(label, r, wall, r_ref, wall_ref)
@@ -876,34 +927,51 @@ contains
 
   !> One integration of the configuration to t_end (tolerance tol; eps_lub 1e-4 unless
   !> --eps-lub) with `method` and `upd`: its figures under `label`; r the final positions.
-  !> `jorder` (optional): &hydro jacobian_order.
-  subroutine run_method(label, method, upd, keep, tol, r, wall, jorder)
+  !> `jorder` (optional): &hydro jacobian_order; `fchange` (optional): the iterative model's
+  !> friction_change (the factory's model with that value, taken over by the dynamics).
+  subroutine run_method(label, method, upd, keep, tol, r, wall, jorder, fchange)
     character(len=*), intent(in) :: label, method, upd
     integer, intent(in) :: keep
     real(wp), intent(in) :: tol
     real(wp), allocatable, intent(out) :: r(:, :)
     real(wp), intent(out) :: wall
     integer, intent(in), optional :: jorder
+    real(wp), intent(in), optional :: fchange
     type(scene_t) :: scene
     type(dynamics_t) :: dyn
+    class(hydro_model_t), allocatable :: hydro
     class(stepper_t), allocatable :: integ
     type(error_t), allocatable :: error
-    real(wp) :: t, w0
+    real(wp) :: t, w0, c0, c1
     call study_scene(config, tol, upd, scene, r)
     if (eps_lub < 0.0_wp) scene%hydro%eps_lub = 1.0e-4_wp
     scene%integrator%method = method
     scene%integrator%jacobian_steps = keep
     if (present(jorder)) scene%hydro%jacobian_order = jorder
-    call dyn%init(scene, size(r, 2), error)
+    if (present(fchange)) then
+      call make_hydro_model(scene%hydro, scene%integrator%tolerance, hydro, error)
+      if (allocated(error)) call die(program_name, error%message, 2)
+      select type (hydro)
+      type is (multipole_iterative_t)
+        hydro%friction_change = fchange
+      class default
+        call die(program_name, '--friction-change: the model is not the iterative one', 2)
+      end select
+    end if
+    call dyn%init(scene, size(r, 2), error, hydro)
     if (allocated(error)) call die(program_name, error%message, 2)
     call make_stepper(scene%integrator, integ, error)
     if (allocated(error)) call die(program_name, error%message, 2)
     t = 0.0_wp
     w0 = wall_seconds()
+    call cpu_time(c0)
     call integ%advance(dyn, t, r, t_end, error)
+    call cpu_time(c1)
     if (allocated(error)) call die(program_name, label//': '//error%message, 2)
     wall = wall_seconds() - w0
     write (output_unit, '(a)') label//'.wall_s = '//to_str(wall, '(f10.2)')
+    write (output_unit, '(a)') label//'.processor_s = '//to_str(c1 - c0, '(f10.2)')
+    write (output_unit, '(a)') label//'.loadavg_end = '//loadavg()
     write (output_unit, '(a)') label//'.steps = '//to_str(integ%steps())
     write (output_unit, '(a)') label//'.rejected = '//to_str(integ%rejected())
     write (output_unit, '(a)') label//'.evaluations = '//to_str(dyn%evaluations)

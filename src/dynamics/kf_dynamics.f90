@@ -64,17 +64,23 @@ module kf_dynamics
 
 contains
 
-  !> Build forces, hydrodynamic model and flow from the scene for a chain of n_beads.
-  subroutine dynamics_init(this, scene, n_beads, error)
+  !> Build forces, hydrodynamic model and flow from the scene for a chain of n_beads. `model`
+  !> (optional, allocated): a hydrodynamic model the caller built from scene%hydro (e.g. the
+  !> factory's with a setup value changed, for a benchmark), taken over instead of the factory's.
+  subroutine dynamics_init(this, scene, n_beads, error, model)
     class(dynamics_t), intent(out) :: this
     type(scene_t), intent(in) :: scene
     integer, intent(in) :: n_beads
     type(error_t), allocatable, intent(out) :: error
+    class(hydro_model_t), allocatable, intent(inout), optional :: model
     call this%forces%init(scene%forces, n_beads, scene%chain%bond_length, error)
     if (allocated(error)) return
     call this%flow%init(scene%flow, error)
     if (allocated(error)) return
-    call make_hydro_model(scene%hydro, scene%integrator%tolerance, this%model, error)
+    if (present(model)) then
+      if (allocated(model)) call move_alloc(model, this%model)
+    end if
+    if (.not. allocated(this%model)) call make_hydro_model(scene%hydro, scene%integrator%tolerance, this%model, error)
     if (allocated(error)) return
     call make_overlap_rule(scene%hydro%overlap, &
       effective_eps_lub(scene%hydro, scene%integrator%tolerance), scene%hydro%overlap_time, this%overlap, error)

@@ -1,5 +1,6 @@
 !> Checking the adaptive reuse of the hydrodynamic model along a real run: an ODE system that
-!> integrates with one dynamics (the adaptive one, which sees the stepper's hooks) and, at
+!> integrates with one dynamics (the adaptive one, or another update such as 'iterative', which
+!> sees the stepper's hooks) and, at
 !> every stage, computes also the velocities of a second dynamics (the exact one) at the
 !> same positions, and accumulates the relative errors of the velocities relative to the
 !> ambient flow (kf_accuracy's velocity_error_norms: RMS over beads and max over beads, both
@@ -36,16 +37,19 @@ module kf_reuse_check
 
 contains
 
-  !> The scene with update = 'adaptive' integrates, the same with 'stage' is the reference.
-  subroutine checked_init(this, scene, n_beads, error, every)
+  !> The scene with update = 'adaptive' (or fast_update, e.g. 'iterative') integrates, the same
+  !> with 'stage' is the reference.
+  subroutine checked_init(this, scene, n_beads, error, every, fast_update)
     class(checked_dynamics_t), intent(inout) :: this
     type(scene_t), intent(in) :: scene
     integer, intent(in) :: n_beads
     type(error_t), allocatable, intent(out) :: error
     integer, intent(in), optional :: every
+    character(len=*), intent(in), optional :: fast_update
     type(scene_t) :: sc
     sc = scene
     sc%hydro%update = update_adaptive
+    if (present(fast_update)) sc%hydro%update = fast_update
     call this%fast%init(sc, n_beads, error)
     if (allocated(error)) return
     sc%hydro%update = update_stage

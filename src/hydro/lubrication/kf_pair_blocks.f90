@@ -28,6 +28,7 @@ module kf_pair_blocks
     procedure :: add_friction
     procedure :: add_strain
     procedure :: add_strain_basis
+    procedure :: largest_scaled_change
   end type pair_blocks_t
 
 contains
@@ -182,5 +183,76 @@ contains
       call this%add_strain(basis(:, :, k), x(:, k))
     end do
   end subroutine add_strain_basis
+
+  !> The largest scaled entry of the difference of two lists' friction blocks: the maximum over
+  !> the pairs of either list and the entries (a, b) of their 12 x 12 blocks of
+  !> |zeta_this(a, b) - zeta_other(a, b)| s_a s_b, a pair missing from one list having a zero
+  !> block there. s: a 6N scale vector; slot(N, N): integer work, zero on entry and on return.
+  !> The blocks are symmetric (friction), so their lower triangles are compared; the couplings
+  !> xe are not.
+  function largest_scaled_change(this, other, s, slot) result(delta)
+    class(pair_blocks_t), intent(in) :: this
+    type(pair_blocks_t), intent(in) :: other
+    real(wp), intent(in) :: s(:)
+    integer, intent(inout) :: slot(:, :)
+    real(wp) :: delta
+    integer :: k, m, i, j
+    delta = 0.0_wp
+    do k = 1, other%count
+      slot(other%ij(1, k), other%ij(2, k)) = k
+    end do
+    do k = 1, this%count
+      i = this%ij(1, k)
+      j = this%ij(2, k)
+      m = slot(i, j)
+      if (m > 0) then
+        delta = max(delta, scaled_max(this%zeta(:, :, k), scales(this, k, s), other%zeta(:, :, m)))
+        slot(i, j) = -m
+      else
+        delta = max(delta, scaled_max(this%zeta(:, :, k), scales(this, k, s)))
+      end if
+    end do
+    do k = 1, other%count
+      i = other%ij(1, k)
+      j = other%ij(2, k)
+      if (slot(i, j) > 0) delta = max(delta, scaled_max(other%zeta(:, :, k), scales(other, k, s)))
+      slot(i, j) = 0
+    end do
+  end function largest_scaled_change
+
+  !> The entries of a 6N scale vector s at the 12 rows of pair k.
+  pure function scales(this, k, s) result(sl)
+    type(pair_blocks_t), intent(in) :: this
+    integer, intent(in) :: k
+    real(wp), intent(in) :: s(:)
+    real(wp) :: sl(12)
+    integer :: i0, j0
+    i0 = 6*(this%ij(1, k) - 1)
+    j0 = 6*(this%ij(2, k) - 1)
+    sl(1:6) = s(i0 + 1:i0 + 6)
+    sl(7:12) = s(j0 + 1:j0 + 6)
+  end function scales
+
+  !> max over a >= b of |z(a, b) - y(a, b)| sl(a) sl(b) (y absent: zero), for symmetric z, y.
+  pure real(wp) function scaled_max(z, sl, y)
+    real(wp), intent(in) :: z(12, 12), sl(12)
+    real(wp), intent(in), optional :: y(12, 12)
+    real(wp) :: col
+    integer :: a, b
+    scaled_max = 0.0_wp
+    do b = 1, 12
+      col = 0.0_wp
+      if (present(y)) then
+        do a = b, 12
+          col = max(col, abs(z(a, b) - y(a, b))*sl(a))
+        end do
+      else
+        do a = b, 12
+          col = max(col, abs(z(a, b))*sl(a))
+        end do
+      end if
+      scaled_max = max(scaled_max, col*sl(b))
+    end do
+  end function scaled_max
 
 end module kf_pair_blocks

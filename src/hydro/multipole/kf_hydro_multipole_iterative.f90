@@ -15,9 +15,8 @@
 !> flow is covariant), with the lubrication blocks of the rotated pairs, forces and strain
 !> rotated with it and the velocities back. It is solved by flexible GMRES, right-preconditioned
 !> with the inverse of the same system at the reference (the Cholesky factor of K_ref and of
-!> zeta_L(ref) + dzeta, the lubrication blocks of the call): one triangular-solve pair with K_ref
-!> and one with the 6N factor per iteration (the 6N factor is refactorised at every call with
-!> lubrication: the blocks change fast near contact, the many-body part slowly). The solves
+!> zeta_L(ref) + dzeta_f, dzeta_f the lubrication blocks of the call that last factorised it):
+!> one triangular-solve pair with K_ref and one with the 6N factor per iteration. The solves
 !> with K_ref use a single-precision copy of its factor (half the memory traffic of the
 !> iteration's largest part); flexible GMRES keeps the preconditioned basis, so the operator,
 !> applied in double to it, alone decides the solution: the preconditioner's rounding costs at
@@ -30,12 +29,30 @@
 !> inner solve with K preconditioned by K_ref): an inner solve alone needs as many iterations,
 !> each of the same cost, as the whole one-system solve (docs/multipole.md).
 !>
+!> 6N friction factor rule: a call refactorises the 6N factor with its own blocks dzeta when
+!> they differ from dzeta_f by more than friction_change (setup argument, default
+!> friction_change_default = 0.05) in the largest entry scaled by the factor's diagonal,
+!>   max over the pairs of either list and (a, b) of |dzeta - dzeta_f|_ab / sqrt(d_a d_b),
+!> d the diagonal of zeta_L(ref) + dzeta_f (a pair in one list only counts with its whole
+!> block; kf_pair_blocks `largest_scaled_change`, about 0.07 ms at N = 99 with 1328 pairs);
+!> otherwise it keeps the factor (about 2 ms of dpotrf and copy saved). The operator always
+!> holds the call's own blocks, so a kept factor costs iterations, never accuracy. A pair
+!> entering or leaving the list at the cutoff (tapered to zero there) changes little and keeps
+!> the factor; an approaching pair's squeeze block (about 1/(4 gap)) refactorises it. Each
+!> factorisation (the reference's too) makes the call's blocks dzeta_f. Measured on the study's
+!> case path, docs/multipole.md ("The 6N friction factor kept"). Counter: `preconditioners`.
+!>
 !> Stopping rule: the largest change of a bead's velocity between two iterations is at most
 !> solver_tolerance times the largest bead velocity (at least two iterations). Refactorisation
 !> rule: a call that needs more than refactor_iterations iterations makes the next call
 !> factorise at its configuration (the new reference); a call that does not converge in
 !> max_iterations factorises at once. The first call and a change of bead number factorise.
 !> A factorising call solves directly with the double factors (the exact inverse there).
+!>
+!> Memory (besides the parent's arrays): zeta_L(ref) and the 6N factor (6N x 6N each), the
+!> factor's diagonal scale (6N), two lists of lubrication blocks (the call's and the factor's),
+!> an N x N integer map for the rule's pair matching, the two many-body systems (the reference
+!> factor with its single-precision copy, and the assembled one) and the Krylov bases.
 !>
 !> Checkpoint: the reference and the last solution are not in the checkpoint; the reference is
 !> rebuilt (a direct solve) at the first call after a resume, so a resumed run agrees with an
@@ -63,6 +80,9 @@ module kf_hydro_multipole_iterative
   integer, parameter, public :: refactor_iterations_default = 6
   !> GMRES iterations before a call gives up and factorises (no restart).
   integer, parameter, public :: max_iterations = 30
+  !> The default largest scaled change of the lubrication blocks for which a call keeps the 6N
+  !> friction factor of an earlier call.
+  real(wp), parameter, public :: friction_change_default = 0.05_wp
 
   public :: iterative_memory_bytes
 
@@ -72,7 +92,10 @@ module kf_hydro_multipole_iterative
     integer :: refactor_iterations = refactor_iterations_default
     type(multipole_system_t), private :: cur   !< assembled at the current (rotated) configuration
     type(multipole_system_t), private :: ref   !< factorised at the reference
-    type(pair_blocks_t), private :: blocks     !< lubrication blocks of the current call
+    type(pair_blocks_t), private :: blocks(2)  !< lubrication blocks: of the call, of the 6N factor
+    integer, private :: ib = 1                 !< blocks(ib): the current call's
+    integer, private :: fb = 1                 !< blocks(fb): those in the 6N factor pre
+    real(wp) :: friction_change = friction_change_default
     logical, private :: ready = .false.
     logical, private :: refactor_next = .false.
     logical, private :: have_x = .false.       !< xs holds the last call's solution
@@ -80,7 +103,9 @@ module kf_hydro_multipole_iterative
     real(wp), private :: cen_ref(3) = 0.0_wp
     real(wp), allocatable, private :: pos_ref(:, :), rp(:, :), frot(:, :)
     real(wp), allocatable, private :: zref(:, :)    !< zeta_L(ref), full storage
-    real(wp), allocatable, private :: pre(:, :)     !< Cholesky factor of zeta_L(ref) + dzeta
+    real(wp), allocatable, private :: pre(:, :)     !< Cholesky factor of zeta_L(ref) + dzeta_f
+    real(wp), allocatable, private :: pscale(:)     !< 1/sqrt of the diagonal of zeta_L(ref) + dzeta_f
+    integer, allocatable, private :: slot(:, :)     !< (N, N) work of largest_scaled_change
     real(wp), allocatable, private :: v(:, :)      !< Krylov basis
     real(wp), allocatable, private :: hm(:, :)     !< Hessenberg matrix (Givens-rotated)
     real(wp), allocatable, private :: rhs(:), wk(:), m0(:), s6(:), uk(:), uprev(:), u0(:)
@@ -97,22 +122,24 @@ module kf_hydro_multipole_iterative
 
 contains
 
-  !> The model's dense arrays for n beads (bytes; a lower bound): the exact model's and one
-  !> more 6N x 6N matrix (288 N^2), the preconditioner's friction factor; its two many-body
-  !> systems (the reference factor with its single-precision copy, and the assembled one) and
-  !> the Krylov bases come on top.
+  !> The model's dense arrays for n beads (bytes; a lower bound): the exact model's, one more
+  !> 6N x 6N matrix (288 N^2), the preconditioner's friction factor, and the N x N integer map
+  !> of its rule (4 N^2); its two many-body systems (the reference factor with its
+  !> single-precision copy, and the assembled one) and the Krylov bases come on top.
   pure integer(i8) function iterative_memory_bytes(n, stresslet_lubrication) result(bytes)
     integer(i8), intent(in) :: n
     logical, intent(in) :: stresslet_lubrication
-    bytes = multipole_memory_bytes(n, stresslet_lubrication) + 288_i8*n*n
+    bytes = multipole_memory_bytes(n, stresslet_lubrication) + 292_i8*n*n
   end function iterative_memory_bytes
 
   !> Order L, lubrication, overlap shift eps_lub and `literal_bwe` (as the exact model), the
   !> relative solver tolerance (solver_tolerance_min..solver_tolerance_max, default
-  !> solver_tolerance_default) and the refactorisation threshold (>= 1 iterations, default
-  !> refactor_iterations_default).
+  !> solver_tolerance_default), the refactorisation threshold (>= 1 iterations, default
+  !> refactor_iterations_default) and the 6N friction factor's threshold friction_change
+  !> (>= 0, default friction_change_default; 0: refactorised at every call whose blocks
+  !> changed at all).
   subroutine iterative_setup(this, order, lubrication, eps_lub, error, solver_tolerance, refactor_iterations, &
-                             literal_bwe)
+                             literal_bwe, friction_change)
     class(multipole_iterative_t), intent(inout) :: this
     integer, intent(in) :: order
     logical, intent(in) :: lubrication
@@ -121,6 +148,7 @@ contains
     real(wp), intent(in), optional :: solver_tolerance
     integer, intent(in), optional :: refactor_iterations
     logical, intent(in), optional :: literal_bwe
+    real(wp), intent(in), optional :: friction_change
     real(wp) :: min_distance
     this%solver_tolerance = solver_tolerance_default
     if (present(solver_tolerance)) this%solver_tolerance = solver_tolerance
@@ -135,6 +163,13 @@ contains
     if (this%refactor_iterations < 1) then
       call fatal_error(error, 'multipole iterative: refactor_iterations = '//to_str(this%refactor_iterations)// &
                        ' not allowed (>= 1)')
+      return
+    end if
+    this%friction_change = friction_change_default
+    if (present(friction_change)) this%friction_change = friction_change
+    if (.not. (this%friction_change >= 0.0_wp)) then
+      call fatal_error(error, 'multipole iterative: friction_change = '//to_str(this%friction_change, '(es12.4)')// &
+                       ' not allowed (>= 0)')
       return
     end if
     call this%multipole_model_t%init(order, lubrication, eps_lub, error, literal_bwe=literal_bwe)
@@ -152,7 +187,8 @@ contains
   end subroutine iterative_setup
 
   !> The work counters, evaluations, refreshes (factorisations), reused (iterative solves),
-  !> cg_iterations (their GMRES iterations) and the wall time of both kinds.
+  !> cg_iterations (their GMRES iterations), preconditioners (the iterative solves that
+  !> refactorised the 6N friction factor) and the wall time of both kinds.
   function iterative_statistics(this) result(s)
     class(multipole_iterative_t), intent(in) :: this
     type(hydro_stats_t) :: s
@@ -198,12 +234,15 @@ contains
     if (allocated(error)) return
     this%n_overlaps = this%cur%n_clamped
     if (this%lubrication) then
-      call this%lub%pair_blocks(r, this%blocks, pairs, qt)
-      this%n_lub_pairs = this%blocks%n_pairs()
-      this%pre = this%zref
-      call this%blocks%add_friction(this%pre)
-      call cholesky_factor(this%pre, error, 'lubrication-corrected friction')
-      if (allocated(error)) return
+      this%ib = 3 - this%fb
+      call this%lub%pair_blocks(r, this%blocks(this%ib), pairs, qt)
+      this%n_lub_pairs = this%blocks(this%ib)%n_pairs()
+      if (this%blocks(this%ib)%largest_scaled_change(this%blocks(this%fb), this%pscale, this%slot) > &
+          this%friction_change) then
+        call factor_friction(this, error)
+        if (allocated(error)) return
+        this%istats%preconditioners = this%istats%preconditioners + 1
+      end if
     end if
     call right_hand_side(this, this%frot, matmul(qt, matmul(ez, q)))
     call gmres(this, its, converged)
@@ -241,13 +280,12 @@ contains
     call ensure_work(this, nb)
     call this%ref%grand_friction(this%zref, error)
     if (allocated(error)) return
-    this%pre = this%zref
     if (this%lubrication) then
-      call this%lub%pair_blocks(r, this%blocks, pairs)
-      call this%blocks%add_friction(this%pre)
-      this%n_lub_pairs = this%blocks%n_pairs()
+      this%ib = 3 - this%fb
+      call this%lub%pair_blocks(r, this%blocks(this%ib), pairs)
+      this%n_lub_pairs = this%blocks(this%ib)%n_pairs()
     end if
-    call cholesky_factor(this%pre, error, 'lubrication-corrected friction')
+    call factor_friction(this, error)
     if (allocated(error)) return
     this%pos_ref = r
     this%cen_ref = centroid(r)
@@ -262,6 +300,23 @@ contains
     this%istats%refreshes = this%istats%refreshes + 1
   end subroutine refresh
 
+  !> pre = the Cholesky factor of zeta_L(ref) + the current call's lubrication blocks (the 6N
+  !> friction factor of the preconditioner), pscale = 1/sqrt of that matrix's diagonal; the
+  !> current blocks become the factor's (fb = ib).
+  subroutine factor_friction(this, error)
+    class(multipole_iterative_t), intent(inout) :: this
+    type(error_t), allocatable, intent(out) :: error
+    integer :: a
+    this%pre = this%zref
+    if (this%lubrication) call this%blocks(this%ib)%add_friction(this%pre)
+    do a = 1, size(this%pscale)
+      this%pscale(a) = 1.0_wp/sqrt(this%pre(a, a))
+    end do
+    call cholesky_factor(this%pre, error, 'lubrication-corrected friction')
+    if (allocated(error)) return
+    this%fb = this%ib
+  end subroutine factor_friction
+
   !> Work arrays for nb beads (after a factorisation, which sizes the system).
   subroutine ensure_work(this, nb)
     class(multipole_iterative_t), intent(inout) :: this
@@ -271,11 +326,12 @@ contains
     nt = this%nr + 6*nb
     if (allocated(this%rhs)) then
       if (size(this%rhs) == nt .and. size(this%rp, 2) == nb) return
-      deallocate (this%pos_ref, this%rp, this%frot, this%pre, this%zref, this%v, this%hm, this%rhs, this%wk, &
+      deallocate (this%pos_ref, this%rp, this%frot, this%pre, this%pscale, this%slot, this%zref, this%v, this%hm, this%rhs, this%wk, &
                   this%m0, this%s6, this%uk, this%uprev, this%u0, this%zb, this%xs, this%zs, this%ms)
     end if
-    allocate (this%pos_ref(3, nb), this%rp(3, nb), this%frot(3, nb), this%pre(6*nb, 6*nb), &
-              this%zref(6*nb, 6*nb))
+    allocate (this%pos_ref(3, nb), this%rp(3, nb), this%frot(3, nb), this%pre(6*nb, 6*nb), this%pscale(6*nb), &
+              this%slot(nb, nb), this%zref(6*nb, 6*nb))
+    this%slot = 0
     allocate (this%v(nt, max_iterations + 1), this%hm(max_iterations + 1, max_iterations + 2))
     allocate (this%rhs(nt), this%wk(nt), this%m0(6*nb), this%s6(6*nb), this%uk(6*nb), this%uprev(6*nb), &
               this%u0(6*nb), this%zb(nt, max_iterations), this%xs(nt), this%zs(this%nr), this%ms(6*nb))
@@ -292,7 +348,7 @@ contains
     do i = 1, size(f, 2)
       this%rhs(nr + 6*i - 5:nr + 6*i - 3) = f(:, i)
     end do
-    if (this%lubrication) call this%blocks%add_strain(e, this%rhs(nr + 1:))
+    if (this%lubrication) call this%blocks(this%ib)%add_strain(e, this%rhs(nr + 1:))
   end subroutine right_hand_side
 
   !> y = A x, the system at the current configuration (module header).
@@ -313,7 +369,7 @@ contains
         y(j) = x(k)/(pi*s)
       end do
     end do
-    if (this%lubrication) call this%blocks%apply(x(nr + 1:), y(nr + 1:))
+    if (this%lubrication) call this%blocks(this%ib)%apply(x(nr + 1:), y(nr + 1:))
   end subroutine operator_apply
 
   !> z = P^-1 g, the inverse of the system at the reference (`exact`: with the double factor;
