@@ -601,7 +601,7 @@ def sample_cell(scene: str) -> tuple:
     """The cell a case samples: the values of CELL_VARIABLES in its scene text, and &chain's
     seed only where the seed draws the start itself (a random chain, a candy-cane with a random
     rotation: kf_chain_shapes); elsewhere the seed draws only the start's perturbation, so the
-    cases of one cell start 1e-6 d apart and share their early frames."""
+    cases of one cell start a perturbation apart and share their early frames."""
     values = tuple(_scene_value(scene, g, v) for g, v in CELL_VARIABLES)
     shape = _scene_value(scene, "chain", "shape")
     rotation = _scene_value(scene, "chain", "candycane_rotation")

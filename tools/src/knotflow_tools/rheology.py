@@ -185,7 +185,7 @@ def case_cell(case) -> tuple:
         return ("case", case.name), case.name
     cell = sample_cell(scene)
     value = dict(zip(CELL_VARIABLES, cell))
-    parts = [str(value[("chain", "shape")]), f"A = {float(case.bending_a):g}"]
+    parts = [str(value[("chain", "shape")]), f"A = {float(value[('forces', 'bending_a')] or 0.0):g}"]
     if value[("chain", "shape")] == "trefoil":
         parts.append(f"orientation {value[('chain', 'orientation')]}")
     if value[("chain", "shape")] == "candycane" and value[("chain", "candycane_rotation")] != "random":
@@ -242,8 +242,8 @@ def cell_differences(rows, name, first, second) -> list:
     """Per cell (compare_case's "cell", in the order of first appearance) in whose cases both
     classes occur: (label, samples, the mean of series `name` over the frames of class `first`
     of all the cell's cases minus that over the frames of class `second`). The samples of a
-    cell are pooled: they start 1e-6 d apart and share their early frames, so they are not
-    independent of each other; cells are."""
+    cell are pooled: they start a perturbation apart and share their early frames, so they are
+    not independent of each other; cells are."""
     out = []
     for cell in dict.fromkeys(r["cell"] for r in rows):
         same = [r for r in rows if r["cell"] == cell]
