@@ -890,7 +890,7 @@ contains
     write (output_unit, '(a)') 'loadavg_end = '//loadavg()
   end subroutine run_rosenbrock
 
-  !> One run (run_method: label <name>.<upd>, jorder 0 for the scene default) compared with the
+  !> One run (run_method: label <name>.<upd>, jorder 0 the scene default) compared with the
   !> reference; with --friction-change F and upd 'iterative' the same run follows with the
   !> iterative model's friction_change set to F (label <name>_fc<F>.<upd>), in the same process.
   subroutine run_compared(name, method, upd, keep, tol, jorder, r_ref, wall_ref)
@@ -901,19 +901,11 @@ contains
     real(wp) :: wall
     character(len=:), allocatable :: label
     label = name//'.'//upd
-    if (jorder > 0) then
-      call run_method(label, method, upd, keep, tol, r, wall, jorder)
-    else
-      call run_method(label, method, upd, keep, tol, r, wall)
-    end if
+    call run_method(label, method, upd, keep, tol, r, wall, jorder)
     call compare_with_reference(label, r, wall, r_ref, wall_ref)
     if (friction_change < 0.0_wp .or. upd /= update_iterative) return
     label = name//'_fc'//to_str(friction_change, '(g0.3)')//'.'//upd
-    if (jorder > 0) then
-      call run_method(label, method, upd, keep, tol, r, wall, jorder, friction_change)
-    else
-      call run_method(label, method, upd, keep, tol, r, wall, fchange=friction_change)
-    end if
+    call run_method(label, method, upd, keep, tol, r, wall, jorder, friction_change)
     call compare_with_reference(label, r, wall, r_ref, wall_ref)
   end subroutine run_compared
 

@@ -238,20 +238,28 @@ def compare_cases(rows, by, samples=200000, seed=1) -> dict:
     return out
 
 
-def cell_differences(rows, name, first, second) -> list:
-    """Per cell (compare_case's "cell", in the order of first appearance) in whose cases both
-    classes occur: (label, samples, the mean of series `name` over the frames of class `first`
-    of all the cell's cases minus that over the frames of class `second`). The samples of a
-    cell are pooled: they start a perturbation apart and share their early frames, so they are
-    not independent of each other; cells are."""
+def pooled_differences(rows, name, first, second, key) -> list:
+    """Per group of rows with one `key(row)` (in the order of first appearance) in whose cases
+    both classes occur: (the group's first row, its number of cases, the mean of series `name`
+    over the frames of class `first` of all the group's cases minus that over the frames of
+    class `second`)."""
     out = []
-    for cell in dict.fromkeys(r["cell"] for r in rows):
-        same = [r for r in rows if r["cell"] == cell]
+    for k in dict.fromkeys(key(r) for r in rows):
+        same = [r for r in rows if key(r) == k]
         v1 = np.concatenate([case_values(r, name, first) for r in same])
         v2 = np.concatenate([case_values(r, name, second) for r in same])
         if len(v1) and len(v2):
-            out.append((same[0]["cell_label"], len(same), float(v1.mean() - v2.mean())))
+            out.append((same[0], len(same), float(v1.mean() - v2.mean())))
     return out
+
+
+def cell_differences(rows, name, first, second) -> list:
+    """Per cell (compare_case's "cell", in the order of first appearance) in whose cases both
+    classes occur: (label, samples, Δ_cell) as pooled_differences. The samples of a cell are
+    pooled: they start a perturbation apart and share their early frames, so they are not
+    independent of each other; cells are."""
+    return [(r["cell_label"], n, d)
+            for r, n, d in pooled_differences(rows, name, first, second, lambda r: r["cell"])]
 
 
 def stiffness_differences(rows, name, first, second) -> np.ndarray:
@@ -259,14 +267,9 @@ def stiffness_differences(rows, name, first, second) -> np.ndarray:
     cases of that A (orientations, seeds): the mean of series `name` over the frames of class
     `first` minus that over the frames of class `second`. Compares a chain that stays knotted
     with its siblings that untied, which the per-case differences cannot."""
-    out = []
-    for a in sorted({r["A"] for r in rows}):
-        same = [r for r in rows if r["A"] == a]
-        v1 = np.concatenate([case_values(r, name, first) for r in same])
-        v2 = np.concatenate([case_values(r, name, second) for r in same])
-        if len(v1) and len(v2):
-            out.append(v1.mean() - v2.mean())
-    return np.array(out, dtype=float)
+    rows = sorted(rows, key=lambda r: r["A"])
+    return np.array([d for _, _, d in pooled_differences(rows, name, first, second,
+                                                         lambda r: r["A"])], dtype=float)
 
 
 def case_values(row, name, cls) -> np.ndarray:
@@ -475,8 +478,9 @@ def write_rheology(knot_dirs, mode_dirs, out, t_from=0.0, threshold=KNOT_THRESHO
             continue
         cases = [load_case(f) for f in files]
         cases = [c for c in cases if c.nframes > 0]
-        left_out = [c.name for c in cases if finished_only and c.status != "finished"]
-        cases = [c for c in cases if not (finished_only and c.status != "finished")]
+        left_out = [c.name for c in cases if c.status != "finished"] if finished_only else []
+        if finished_only:
+            cases = [c for c in cases if c.status == "finished"]
         if not cases:
             continue
         names = case_series(cases)
