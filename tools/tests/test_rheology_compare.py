@@ -226,6 +226,19 @@ def test_sample_cell_leaves_out_only_a_perturbation_seed():
             == sample_cell(scene_text("candycane", seed=2, rotation="tilt_x")))
 
 
+def test_sample_start_is_the_cell_without_the_model():
+    from knotflow_tools.campaign import sample_cell, sample_start
+    multipole = scene_text("candycane", seed=13)
+    rpy = multipole.replace("model = 'multipole'\n  overlap = 'relax'", "model = 'rpy'")
+    assert rpy != multipole
+    assert sample_start(rpy) == sample_start(multipole)      # one start, two models
+    assert sample_cell(rpy) != sample_cell(multipole)        # two cells
+    assert sample_start(multipole) != sample_start(scene_text("candycane", seed=14))
+    assert sample_start(multipole) != sample_start(scene_text("candycane", seed=13, a=3.0))
+    # a trefoil's seed draws only the perturbation: one start
+    assert sample_start(scene_text(seed=1)) == sample_start(scene_text(seed=2))
+
+
 def test_cells_pool_their_samples(tmp_path):
     """Two samples of one cell (seeds 1, 2: viscosity shifts 3 and 1 in the knotted frames) and
     one of another (shift -1): three case differences 3, 1, -1, but two cell differences,

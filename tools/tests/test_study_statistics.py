@@ -95,6 +95,39 @@ def test_mode_statistics_and_close_pair_windows():
     assert "| 1 | 2 | 1 (0.50, 0.01-0.99) |" in "\n".join(st.mode_table(list(stats.values())))
 
 
+def test_paired_starts_match_by_start_and_difference_per_a():
+    """Three starts run with two models, one start only here and one only there: per A the
+    pairs, the agreeing case modes and the mean differences of the late mode fractions, by
+    hand: A = 1: (0.05 - 0.046 + 0 - 0)/2 = 0.002 (mode I), (0 - 0 + 0.2 - 0.126)/2 = 0.037
+    (mode II), one of two case modes alike; A = 3: 0.5 - 0.461 = 0.039, none alike."""
+    t = np.arange(0.0, 101.0)
+    obs = {"a": np.full(t.size, 6.0), "b": np.full(t.size, 2.0), "c": np.full(t.size, 0.5),
+           "theta": np.zeros(t.size), "phi": np.zeros(t.size), "close_pairs": np.full(t.size, 3.0)}
+
+    def cane(a, seed, mode, fr1, fr2, status="finished"):
+        return {**_cane(a, mode, fr1, fr2, t, obs, status), "seed": seed, "case": f"A{a}_s{seed}"}
+    rows = [cane(1.0, 13, "-", 0.05, 0.0), cane(1.0, 14, "II", 0.0, 0.2),
+            cane(3.0, 18, "II", 0.0, 0.5), cane(3.0, 99, "-", 0.0, 0.1),
+            cane(3.0, 4, "II", 0.0, 0.4, status="running")]
+    other = [cane(1.0, 13, "-", 0.046, 0.0), cane(1.0, 14, "-", 0.0, 0.126),
+             cane(3.0, 18, "-", 0.0, 0.461), cane(3.0, 20, "-", 0.0, 0.0),
+             cane(3.0, 4, "II", 0.0, 0.444)]
+    paired = st.paired_starts(rows, other, key=lambda r: (r["A"], r["seed"]))
+    assert [(p["A"], p["start"]) for p in paired["pairs"]] == [(1.0, 13), (1.0, 14), (3.0, 18)]
+    by_a = {e["A"]: e for e in paired["per_A"]}
+    assert (by_a[1.0]["pairs"], by_a[1.0]["same_case_mode"]) == (2, 1)
+    assert by_a[1.0]["mode_I_late_difference"] == pytest.approx(0.002)
+    assert by_a[1.0]["mode_II_late_difference"] == pytest.approx(0.037)
+    assert (by_a[3.0]["pairs"], by_a[3.0]["same_case_mode"]) == (1, 0)
+    assert by_a[3.0]["mode_II_late_difference"] == pytest.approx(0.039)
+    # seed 99 here; seeds 20 and 4 there (4 is running here, so it pairs with nothing)
+    assert (paired["unmatched"], paired["unmatched_other"]) == (1, 2)
+    assert paired["pairs"][0]["this"]["a_over_b"] == pytest.approx(3.0)
+    md = "\n".join(st.paired_table(paired, "multipole", "rpy"))
+    assert "| 1 | 14 | II / - | 0.000 / 0.000 | 0.200 / 0.126 | 3.00 / 3.00 |" in md
+    assert "| 1 | 2 | 1 of 2 | +0.002 | +0.037 |" in md
+
+
 def test_knotflow_study_samples_and_rotations_end_to_end(tmp_path):
     """knotflow-study --samples: four perturbed samples of the cell (1.4, b), two of which re-knot
     (k_f written into /analysis/knots), give probability 2/4 with the exact interval; --rotations
@@ -127,13 +160,20 @@ def test_knotflow_study_samples_and_rotations_end_to_end(tmp_path):
                     closures=10, seed=1)
     out = tmp_path / "out"
     assert main_study(["--samples", str(samples), "--rotations", str(cane), "--window", "40",
-                       "--out", str(out)]) == 0
+                       "--same-starts", str(cane), "--out", str(out)]) == 0
     res = json.loads((out / "results.json").read_text())
     (cell,) = res["samples"]["cells"]
     assert (cell["samples"], cell["transitions"], cell["study"]) == (4, 2, True)
     assert cell["interval"] == pytest.approx(list(st.clopper_pearson(2, 4)))
     assert [c["A"] for c in res["rotations"]["per_A"]] == [1.0, 3.0]
     assert len(res["rotations"]["close_pair_windows"]) == 2
+    with pytest.raises(SystemExit):   # the starts compared with nothing: refused
+        main_study(["--candycane", str(cane), "--same-starts", str(cane), "--out", str(out)])
+    # the sweep against itself: each case its own partner (no scene text: matched by case)
+    same = res["rotations"]["same_starts"]
+    assert [(e["A"], e["pairs"], e["same_case_mode"]) for e in same["per_A"]] == [(1.0, 1, 1),
+                                                                               (3.0, 1, 1)]
+    assert (same["unmatched"], same["unmatched_other"]) == (0, 0)
     md = (out / "results.md").read_text()
     assert "## Table 2 as probabilities" in md and "| 1.4 | b | 4 | 2 | **0.50" in md
     with h5py.File(samples / "A1.40_orb_s1.h5") as f:

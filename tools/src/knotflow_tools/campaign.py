@@ -581,32 +581,47 @@ def _scene_value(scene: str, group: str, var: str):
         return v
 
 
-#: What makes a start and a model (scene group, variable): cases that agree on all of these
-#: sample one cell. The integrator's settings are not among them (samples of a cell may run
-#: on different steppers at one tolerance) and neither is &chain's seed, which sample_cell
-#: adds where it draws the start itself.
-CELL_VARIABLES = (("chain", "shape"), ("chain", "n_beads"), ("chain", "orientation"),
-                  ("chain", "trefoil_removed_point"), ("chain", "bond_length"),
-                  ("chain", "coordinate_file"), ("chain", "straight_direction"),
-                  ("chain", "candycane_rotation"), ("chain", "tilt_deg"),
-                  ("chain", "perturbation"), ("forces", "springs"), ("forces", "spring_k"),
-                  ("forces", "bending"), ("forces", "bending_a"), ("forces", "excluded_volume"),
-                  ("forces", "ev_strength"), ("forces", "ev_range"), ("forces", "external_force"),
-                  ("flow", "flow_type"), ("flow", "shear_rate"), ("flow", "velocity_gradient"),
-                  ("hydro", "model"), ("hydro", "order"), ("hydro", "lubrication"),
-                  ("hydro", "eps_lub"), ("hydro", "overlap"), ("hydro", "overlap_time"))
+#: What makes a start (scene group, variable): the chain, its stiffness and the flow. Cases that
+#: agree on these (and on &chain's seed where it draws the start: `sample_start`) start alike,
+#: whatever model then runs them.
+START_VARIABLES = (("chain", "shape"), ("chain", "n_beads"), ("chain", "orientation"),
+                   ("chain", "trefoil_removed_point"), ("chain", "bond_length"),
+                   ("chain", "coordinate_file"), ("chain", "straight_direction"),
+                   ("chain", "candycane_rotation"), ("chain", "tilt_deg"),
+                   ("chain", "perturbation"), ("forces", "bending_a"), ("flow", "flow_type"),
+                   ("flow", "shear_rate"), ("flow", "velocity_gradient"))
+#: What makes a start and a model: cases that agree on all of these sample one cell. The
+#: integrator's settings are not among them (samples of a cell may run on different steppers at
+#: one tolerance) and neither is &chain's seed, which sample_cell adds where it draws the start
+#: itself.
+CELL_VARIABLES = START_VARIABLES + (
+    ("forces", "springs"), ("forces", "spring_k"), ("forces", "bending"),
+    ("forces", "excluded_volume"), ("forces", "ev_strength"), ("forces", "ev_range"),
+    ("forces", "external_force"), ("hydro", "model"), ("hydro", "order"), ("hydro", "lubrication"),
+    ("hydro", "eps_lub"), ("hydro", "overlap"), ("hydro", "overlap_time"))
+
+
+def _drawn_seed(scene: str):
+    """&chain's seed where it draws the start itself (a random chain, a candy-cane with a random
+    rotation: kf_chain_shapes), else None (there it draws only the start's perturbation)."""
+    shape = _scene_value(scene, "chain", "shape")
+    rotation = _scene_value(scene, "chain", "candycane_rotation")
+    drawn = shape == "random" or (shape == "candycane" and rotation == "random")
+    return _scene_value(scene, "chain", "seed") if drawn else None
+
+
+def sample_start(scene: str) -> tuple:
+    """The start a case runs from: the values of START_VARIABLES in its scene text and the seed
+    where it draws the start (`_drawn_seed`); the same for one start run with two models."""
+    return tuple(_scene_value(scene, g, v) for g, v in START_VARIABLES) + (_drawn_seed(scene),)
 
 
 def sample_cell(scene: str) -> tuple:
     """The cell a case samples: the values of CELL_VARIABLES in its scene text, and &chain's
-    seed only where the seed draws the start itself (a random chain, a candy-cane with a random
-    rotation: kf_chain_shapes); elsewhere the seed draws only the start's perturbation, so the
-    cases of one cell start a perturbation apart and share their early frames."""
-    values = tuple(_scene_value(scene, g, v) for g, v in CELL_VARIABLES)
-    shape = _scene_value(scene, "chain", "shape")
-    rotation = _scene_value(scene, "chain", "candycane_rotation")
-    drawn = shape == "random" or (shape == "candycane" and rotation == "random")
-    return values + ((_scene_value(scene, "chain", "seed") if drawn else None),)
+    seed only where the seed draws the start itself (`_drawn_seed`); elsewhere the seed draws
+    only the start's perturbation, so the cases of one cell start a perturbation apart and share
+    their early frames."""
+    return tuple(_scene_value(scene, g, v) for g, v in CELL_VARIABLES) + (_drawn_seed(scene),)
 
 
 def combined_totals(segments: list) -> dict | None:

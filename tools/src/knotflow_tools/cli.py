@@ -280,6 +280,10 @@ def _study(argv: Argv) -> int:
                    help="sweeps of candy-canes from many starts: case and frame fractions in "
                    "modes I and II per A with 95 %% intervals, late shape distributions, and "
                    "the close-pair ratio A = 1 / A = 3 per --window")
+    p.add_argument("--same-starts", nargs="+", metavar="DIR",
+                   help="with --rotations: sweeps of the same starts run with another model "
+                   "(matched by chain, stiffness, flow and drawing seed): both models' case "
+                   "modes, late mode fractions and shapes side by side, start by start")
     p.add_argument("--window", type=float, default=250.0,
                    help="with --rotations: the width of the close-pair ratio's time windows")
     p.add_argument("--out", default="docs/reproduction",
@@ -350,8 +354,10 @@ def _study(argv: Argv) -> int:
                 "and/or --rotations DIR ...")
     if not (math.isfinite(args.window) and args.window > 0):
         p.error(f"--window {args.window:g} is not allowed (a positive number)")
+    if args.same_starts and not args.rotations:
+        p.error("--same-starts needs --rotations DIR ... (the starts it is compared with)")
     for d in (args.trefoil, args.candycane, args.ensemble, *(args.samples or []),
-              *(args.rotations or [])):
+              *(args.rotations or []), *(args.same_starts or [])):
         if d and not os.path.isdir(d):
             p.error(f"directory not found: {d}")
     if args.rpy_trefoil and not args.trefoil:
@@ -365,7 +371,7 @@ def _study(argv: Argv) -> int:
     res = study.write_study(args.trefoil, args.candycane, args.out, args.closures, args.ensemble,
                             rpy_trefoil, rpy_candycane, args.ledger_matrices,
                             samples_dirs=args.samples, rotation_dirs=args.rotations,
-                            window=args.window)
+                            window=args.window, same_starts=args.same_starts)
     if "trefoil" in res:
         t, k = res["trefoil"], res["trefoil"]["reknottings"]
         print(f"trefoils: {t['agreement']} agree with the study on "

@@ -19,7 +19,9 @@ many cases are finished.
 `--samples DIR ...` (perturbed Table 2 samples) adds Table 2 as probabilities with exact 95 %
 intervals and the scores of the study's table and of 'never'; `--rotations DIR ...` (candy-canes
 from many starts) adds the per-A fractions in modes I and II with intervals, the late shape
-distributions and the close-pair ratio A = 1 / A = 3 per `--window` (study_statistics).
+distributions and the close-pair ratio A = 1 / A = 3 per `--window` (study_statistics);
+with `--same-starts DIR ...` (the same starts run with another model) both models side by side,
+start by start.
 
 `--rpy-trefoil JSON` and `--rpy-candycane JSON` take the results.json of an earlier
 knotflow-study run with RPY + excluded volume (its "trefoil" part, resp. its "candycane" and
@@ -57,7 +59,7 @@ import numpy as np  # noqa: E402
 
 from . import study_statistics  # noqa: E402
 from .atomic import save_figure, write_text  # noqa: E402
-from .campaign import find_ledger_cases, load_case  # noqa: E402
+from .campaign import find_ledger_cases, load_case, sample_start  # noqa: E402
 from .io import find_case_files, write_xyz  # noqa: E402
 from .plot import _draw_chain  # noqa: E402
 from .study_compare import candycane_comparison, trefoil_comparison  # noqa: E402
@@ -482,7 +484,7 @@ def no_case_files(directory) -> str:
 
 def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None,
                 rpy_trefoil=None, rpy_candycane=None, ledger_matrices=None, samples_dirs=None,
-                rotation_dirs=None, window=250.0):
+                rotation_dirs=None, window=250.0, same_starts=None):
     """Write figures, results.md, results.json and the per-frame CSV files into `out`.
     rpy_trefoil, rpy_candycane: `load_rpy` of earlier RPY + EV results (or None): three-column
     comparison tables and a "comparison" part in results.json. A sweep directory without case
@@ -490,7 +492,8 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
     and nothing else. ledger_matrices: the knot matrices of the cases of a case ledger
     (campaign.ledger_case). samples_dirs: sweeps of perturbed Table 2 samples, rotation_dirs:
     sweeps of candy-canes from many starts (study_statistics; `window` the width of the
-    close-pair ratio's time windows)."""
+    close-pair ratio's time windows; `same_starts`: sweeps of the same starts with another
+    model, compared start by start)."""
     confirm_dir = os.path.join(out, "confirm")
     os.makedirs(out, exist_ok=True)
     md = ["# knotflow-study: generated results", ""]
@@ -557,7 +560,8 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
         lines, result["samples"] = samples_section(samples_dirs, closures)
         md += lines
     if rotation_dirs:
-        lines, result["rotations"] = rotations_section(rotation_dirs, closures, window)
+        lines, result["rotations"] = rotations_section(rotation_dirs, closures, window,
+                                                       same_starts)
         md += lines
     if comparison:
         result["comparison"] = comparison
@@ -582,8 +586,19 @@ def samples_section(dirs, closures=200):
     return lines, {"cells": cells, "scores": scores, "level": study_statistics.LEVEL}
 
 
-def rotations_section(dirs, closures=200, window=250.0):
-    """Markdown and the results.json part of the candy-canes from many starts per A."""
+def _start(row):
+    """The start of a candy-cane row (campaign.sample_start of its scene; the case alone
+    without a scene text)."""
+    scene = row["_case"].attrs.get("scene")
+    if not isinstance(scene, str) or not scene:
+        return ("case", row["case"])
+    return sample_start(scene)
+
+
+def rotations_section(dirs, closures=200, window=250.0, same_starts=None):
+    """Markdown and the results.json part of the candy-canes from many starts per A; with
+    `same_starts` (sweeps of the same starts run with another model) also both models side by
+    side per start (study_statistics.paired_starts)."""
     rows = candycane_rows(_sweep_files(dirs), closures)
     stats = study_statistics.mode_statistics(rows)
     windows = study_statistics.close_pair_ratio_windows(rows, window)
@@ -596,10 +611,25 @@ def rotations_section(dirs, closures=200, window=250.0):
     if windows:
         lines += [f"Close-pair ratio A = 1 / A = 3 per window of {window:g} time units (mean over "
                   "the cases of each A):", ""] + study_statistics.ratio_table(windows) + [""]
+    part = {"per_A": stats, "close_pair_windows": windows,
+            "bootstrap": {"samples": study_statistics.BOOTSTRAP_SAMPLES,
+                          "seed": study_statistics.BOOTSTRAP_SEED}}
+    if same_starts:
+        from .rheology import models_text
+        other = candycane_rows(_sweep_files(same_starts), closures)
+        paired = study_statistics.paired_starts(rows, other, _start)
+        lines += ["### The same starts with another model", "",
+                  f"Other sweeps: {', '.join(f'`{d}`' for d in same_starts)}. Starts matched by "
+                  "the chain, its stiffness, the flow and the seed where it draws the start "
+                  "(campaign.sample_start); finished cases only.", ""]
+        lines += study_statistics.paired_table(
+            paired, models_text([r["_case"] for r in rows]),
+            models_text([r["_case"] for r in other])) + [""]
+        part["same_starts"] = {"sweeps": list(same_starts),
+                               **{k: v for k, v in paired.items() if k != "pairs"},
+                               "pairs": [{**p, "start": str(p["start"])} for p in paired["pairs"]]}
     lines += sweep_records(rows)
-    return lines, {"per_A": stats, "close_pair_windows": windows,
-                   "bootstrap": {"samples": study_statistics.BOOTSTRAP_SAMPLES,
-                                 "seed": study_statistics.BOOTSTRAP_SEED}}
+    return lines, part
 
 
 def write_frame(path, frame, xyz, core_of=None) -> None:

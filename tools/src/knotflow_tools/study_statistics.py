@@ -181,6 +181,19 @@ def phi_rate(t, phi) -> float:
     return float((u[-1] - u[0]) / (t[-1] - t[0]))
 
 
+#: The late means of a candy-cane case (late_means), in the order of the tables.
+LATE_MEANS = ("a_over_b", "b_over_c", "abs_cos_theta", "phi_rate", "close_pairs")
+
+
+def late_means(row) -> dict:
+    """A candy-cane row's late frames: the means of a/b, b/c, |cos theta| and the close pairs,
+    and the rate of phi."""
+    t, o = _late(row)
+    return {"a_over_b": float(np.mean(o["a"] / o["b"])), "b_over_c": float(np.mean(o["b"] / o["c"])),
+            "abs_cos_theta": float(np.mean(np.abs(np.cos(o["theta"])))),
+            "phi_rate": phi_rate(t, o["phi"]), "close_pairs": float(np.mean(o["close_pairs"]))}
+
+
 def mode_statistics(rows) -> list:
     """Per bending stiffness A of candy-cane rows (finished cases): the fraction of cases whose
     case mode is I and II (exact intervals), the mean over cases of the fraction of late frames
@@ -200,17 +213,12 @@ def mode_statistics(rows) -> list:
             entry[f"frames_mode_{m}"] = {"mean": float(np.mean(fr)) if fr else math.nan,
                                          "interval": list(bootstrap_mean_interval(fr)),
                                          "cases": len(fr)}
-        per_case: dict[str, list[float]] = {"a_over_b": [], "b_over_c": [], "abs_cos_theta": [],
-                                             "phi_rate": [], "close_pairs": []}
+        per_case: dict[str, list[float]] = {k: [] for k in LATE_MEANS}
         for r in g:
             if "_case" not in r:
                 continue
-            t, o = _late(r)
-            per_case["a_over_b"].append(float(np.mean(o["a"] / o["b"])))
-            per_case["b_over_c"].append(float(np.mean(o["b"] / o["c"])))
-            per_case["abs_cos_theta"].append(float(np.mean(np.abs(np.cos(o["theta"])))))
-            per_case["phi_rate"].append(phi_rate(t, o["phi"]))
-            per_case["close_pairs"].append(float(np.mean(o["close_pairs"])))
+            for k, v in late_means(r).items():
+                per_case[k].append(v)
         entry["late_per_case"] = {
             k: ({"median": float(np.median(v)), "min": float(np.min(v)), "max": float(np.max(v))}
                 if v else None) for k, v in per_case.items()}
@@ -278,4 +286,73 @@ def ratio_table(windows) -> list:
     for w in windows:
         out.append(f"| {w['t_from']:g}-{w['t_to']:g} | {w['numerator']:.2f} | "
                    f"{w['denominator']:.2f} | {w['ratio']:.2f} |")
+    return out
+
+
+# ------------------------------------------------------------------ one start, two models
+
+def paired_starts(rows, other_rows, key) -> dict:
+    """Candy-canes run from the same starts with two models (finished cases of both): the pairs
+    whose `key(row)` (the start: campaign.sample_start of the scene) agree, each with both rows'
+    case modes, late frame fractions in modes I and II and late_means; per A the pairs, in how
+    many the case mode is the same, and the mean over the pairs of this model's late mode I and
+    II fractions minus the other's; the finished cases without a partner on either side."""
+    done = [r for r in rows if r.get("status", "finished") == "finished"]
+    other = {key(r): r for r in other_rows if r.get("status", "finished") == "finished"}
+    pairs, unmatched = [], 0
+    for r in done:
+        o = other.get(key(r))
+        if o is None:
+            unmatched += 1
+            continue
+        pair = {"A": float(r["A"]), "start": key(r)[-1], "case": r.get("case"),
+                "other_case": o.get("case")}
+        for side, row in (("this", r), ("other", o)):
+            pair[side] = {"case_mode": row["case_mode"], "mode_I_late": row.get("mode_I_late"),
+                          "mode_II_late": row.get("mode_II_late"),
+                          **(late_means(row) if "_case" in row else {})}
+        pairs.append(pair)
+    pairs.sort(key=lambda p: (p["A"], str(p["start"])))
+    matched_other = {key(r) for r in done} & set(other)
+    per_a = []
+    for a in sorted({p["A"] for p in pairs}):
+        g = [p for p in pairs if p["A"] == a]
+        entry: dict = {"A": a, "pairs": len(g),
+                       "same_case_mode": sum(p["this"]["case_mode"] == p["other"]["case_mode"]
+                                             for p in g)}
+        for m in ("I", "II"):
+            d = [p["this"][f"mode_{m}_late"] - p["other"][f"mode_{m}_late"] for p in g
+                 if p["this"][f"mode_{m}_late"] is not None
+                 and p["other"][f"mode_{m}_late"] is not None]
+            entry[f"mode_{m}_late_difference"] = float(np.mean(d)) if d else math.nan
+        per_a.append(entry)
+    return {"pairs": pairs, "per_A": per_a, "unmatched": unmatched,
+            "unmatched_other": len(other) - len(matched_other)}
+
+
+def paired_table(paired, this: str, other: str) -> list:
+    """Markdown of paired_starts: one row per start (this / other), then one per A."""
+    def two(p, k, spec=".3f"):
+        def fmt(v):
+            if v is None or (isinstance(v, float) and math.isnan(v)):
+                return "-"
+            return v if isinstance(v, str) else f"{v:{spec}}"
+        return f"{fmt(p['this'].get(k))} / {fmt(p['other'].get(k))}"
+    out = [f"Each start run with {this} and with {other} (this / other; late = second half of "
+           "each run):", "",
+           "| A | start (seed) | case mode | late frames in mode I | late frames in mode II | "
+           "a/b late | b/c late | abs cos theta late | close pairs late |",
+           "|---|---|---|---|---|---|---|---|---|"]
+    for p in paired["pairs"]:
+        out.append(f"| {p['A']:g} | {p['start']} | {two(p, 'case_mode')} | "
+                   f"{two(p, 'mode_I_late')} | {two(p, 'mode_II_late')} | "
+                   f"{two(p, 'a_over_b', '.2f')} | {two(p, 'b_over_c', '.2f')} | "
+                   f"{two(p, 'abs_cos_theta', '.2f')} | {two(p, 'close_pairs', '.2f')} |")
+    out += ["", "| A | starts | same case mode | late mode I: this − other (mean) | "
+            "late mode II: this − other (mean) |", "|---|---|---|---|---|"]
+    for e in paired["per_A"]:
+        out.append(f"| {e['A']:g} | {e['pairs']} | {e['same_case_mode']} of {e['pairs']} | "
+                   f"{e['mode_I_late_difference']:+.3f} | {e['mode_II_late_difference']:+.3f} |")
+    out += ["", f"Finished cases without a partner: {paired['unmatched']} here, "
+            f"{paired['unmatched_other']} in the other sweeps."]
     return out
