@@ -21,9 +21,16 @@
 !> iteration's largest part); flexible GMRES keeps the preconditioned basis, so the operator,
 !> applied in double to it, alone decides the solution: the preconditioner's rounding costs at
 !> most iterations, not accuracy (a left-preconditioned GMRES would stall at the single
-!> precision's level). The iteration starts from the last call's solution (the moments and the
-!> velocities of every call are in the reference frame, so it is a guess in the right frame),
-!> or from zero when that has the smaller residual.
+!> precision's level).
+!> Start (docs/multipole.md, "An extrapolated warm start"): the right-hand sides b_j and
+!> solutions x_j of the last warm_history calls since the last factorisation (setup argument,
+!> default warm_history_default = 6; the moments and velocities of every call are in the
+!> reference frame) give x0 = sum_j c_j x_j with the affine weights (sum c_j = 1) that fit the
+!> call's b best, sum_j c_j b_j (affine_weights: least squares in the differences to the newest,
+!> nearly dependent ones dropped, sum |c_j| bounded by weight_bound); x0 = 0 when that has the
+!> smaller residual. Since A_j x_j = b_j, b - A x0 = (b - sum c_j b_j) - sum c_j (A - A_j) x_j:
+!> the stiff forces change faster than the operator. warm_history = 1: the last call's
+!> solution. A factorisation or a change of bead number starts the history anew.
 !> GMRES, not CG: the system is symmetric but indefinite (its Schur complement onto U is
 !> negative definite). One system, not nested solves (CG on the 6N friction, each product an
 !> inner solve with K preconditioned by K_ref): an inner solve alone needs as many iterations,
@@ -52,9 +59,10 @@
 !> Memory (besides the parent's arrays): zeta_L(ref) and the 6N factor (6N x 6N each), the
 !> factor's diagonal scale (6N), two lists of lubrication blocks (the call's and the factor's),
 !> an N x N integer map for the rule's pair matching, the two many-body systems (the reference
-!> factor with its single-precision copy, and the assembled one) and the Krylov bases.
+!> factor with its single-precision copy, and the assembled one), the Krylov bases and the
+!> start's history (2 warm_history vectors of the system's size).
 !>
-!> Checkpoint: the reference and the last solution are not in the checkpoint; the reference is
+!> Checkpoint: the reference and the history of solutions are not in the checkpoint; the reference is
 !> rebuilt (a direct solve) at the first call after a resume, so a resumed run agrees with an
 !> uninterrupted one to the solver tolerance (not bit for bit). Frames, the stresslet and
 !> `prepare` use the exact model's routes (the parent type).
@@ -83,8 +91,8 @@ module kf_hydro_multipole_iterative
   !> The default largest scaled change of the lubrication blocks for which a call keeps the 6N
   !> friction factor of an earlier call.
   real(wp), parameter, public :: friction_change_default = 0.05_wp
-  !> The default number of earlier calls (since the last factorisation) whose rotated
-  !> configurations and solutions make GMRES's start (1: the last call's solution).
+  !> The default number of earlier calls (since the last factorisation) whose right-hand
+  !> sides and solutions make GMRES's start (1: the last call's solution).
   integer, parameter, public :: warm_history_default = 6
   !> The largest allowed warm_history.
   integer, parameter, public :: warm_history_max = 8
@@ -109,7 +117,7 @@ module kf_hydro_multipole_iterative
     real(wp) :: friction_change = friction_change_default
     logical, private :: ready = .false.
     logical, private :: refactor_next = .false.
-    integer :: warm_history = warm_history_default
+    integer :: warm_history = warm_history_default  !< calls kept for the start (1: the last solution)
     integer, private :: hn = 0                 !< calls in the history (newest last)
     integer, private :: nr = 0                 !< unknowns of K
     real(wp), private :: cen_ref(3) = 0.0_wp
@@ -149,9 +157,10 @@ contains
   !> Order L, lubrication, overlap shift eps_lub and `literal_bwe` (as the exact model), the
   !> relative solver tolerance (solver_tolerance_min..solver_tolerance_max, default
   !> solver_tolerance_default), the refactorisation threshold (>= 1 iterations, default
-  !> refactor_iterations_default) and the 6N friction factor's threshold friction_change
+  !> refactor_iterations_default), the 6N friction factor's threshold friction_change
   !> (>= 0, default friction_change_default; 0: refactorised at every call whose blocks
-  !> changed at all).
+  !> changed at all) and the number of earlier solutions of the start, warm_history (1 to
+  !> warm_history_max, default warm_history_default; 1: the last call's solution).
   subroutine iterative_setup(this, order, lubrication, eps_lub, error, solver_tolerance, refactor_iterations, &
                              literal_bwe, friction_change, warm_history)
     class(multipole_iterative_t), intent(inout) :: this
@@ -450,7 +459,7 @@ contains
   end subroutine precondition
 
   !> Flexible GMRES (right-preconditioned, the preconditioned basis kept) on A x = b from the
-  !> last call's solution xs, or from zero when that has the larger residual (no restart, at
+  !> start of warm_start (the extrapolated history, or zero; no restart, at
   !> most max_iterations); uk = the velocity part of the last iterate, `its` the iterations
   !> done, `converged` by the stopping rule of the module header; xs = the solution when
   !> converged. With the basis z_k = P^-1 v_k kept, A Z_k = V_k+1 H_k holds with the double
