@@ -62,9 +62,9 @@
 !> factor with its single-precision copy, and the assembled one), the Krylov bases and the
 !> start's history (2 warm_history vectors of the system's size).
 !>
-!> Checkpoint: the reference and the history of solutions are not in the checkpoint; the reference is
-!> rebuilt (a direct solve) at the first call after a resume, so a resumed run agrees with an
-!> uninterrupted one to the solver tolerance (not bit for bit). Frames, the stresslet and
+!> Checkpoint: the reference and the history of solutions are not in the checkpoint; the
+!> reference is rebuilt (a direct solve) at the first call after a resume, so a resumed run
+!> agrees with an uninterrupted one to the solver tolerance (not bit for bit). Frames, the stresslet and
 !> `prepare` use the exact model's routes (the parent type).
 module kf_hydro_multipole_iterative
   use kf_kinds, only: wp, sp, i8
@@ -564,12 +564,13 @@ contains
   end subroutine warm_start
 
   !> The converged call (its right-hand side and solution xs) becomes the history's newest
-  !> entry (the oldest dropped when warm_history are stored).
+  !> entry (the oldest dropped when warm_history are stored; the public component taken within
+  !> 1..warm_history_max).
   subroutine history_push(this)
     class(multipole_iterative_t), intent(inout) :: this
     integer :: nt, k
     nt = size(this%xs)
-    k = this%warm_history
+    k = max(1, min(this%warm_history, warm_history_max))
     if (allocated(this%hx)) then
       if (size(this%hx, 1) /= nt .or. size(this%hx, 2) /= k) deallocate (this%hb, this%hx)
     end if
