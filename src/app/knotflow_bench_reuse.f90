@@ -56,6 +56,9 @@
 !>              --friction-change F: each 'iterative' run followed by the same run with the
 !>              iterative model's 6N friction factor threshold friction_change = F (labels
 !>              <run>_fc<F>.iterative; F = 0: refactorised at every call, as before)
+!>              --warm-history K: each 'iterative' run followed by the same run with the
+!>              iterative model's warm_history = K (labels <run>_wh<K>.iterative; K = 1: GMRES
+!>              starts from the last call's solution, as before)
 !>   rigid      [--config C]: the reused part at rigidly moved and at deformed configurations
 !>              (overlap rule pair only: the model's reused part against its exact one, both
 !>              without the dynamics' configuration rules separate and relax)
@@ -94,7 +97,7 @@ program knotflow_bench_reuse
     set_openmp_threads
   use kf_scene_chain, only: chain_params_t
   use kf_multipole_system, only: multipole_system_t
-  use kf_hydro_multipole_iterative, only: multipole_iterative_t
+  use kf_hydro_multipole_iterative, only: multipole_iterative_t, warm_history_max, warm_history_default
   use kf_lubrication, only: lubrication_t
   use kf_pair_blocks, only: pair_blocks_t
   use kf_lapack, only: cholesky_factor
@@ -104,7 +107,7 @@ program knotflow_bench_reuse
 
   character(len=:), allocatable :: part, config, overlap, update, table, model, steppers
   real(wp) :: t_end, eps_lub, tolerance, friction_change
-  integer :: every, jacobian_steps, jacobian_order
+  integer :: every, jacobian_steps, jacobian_order, warm_history
   logical :: omp_set, rosenbrock_stage
 
   ! The OpenMP pair loops get the BLAS's thread count (OPENBLAS_NUM_THREADS=1: one core; kf_blas_threads).
@@ -149,7 +152,7 @@ contains
       'overlaps|scaling|rigid|stiffness|threads|rosenbrock|evaluation [--config trefoil|random60|coil|FILE] [--t-end T] [--every K]'// &
       ' [--eps-lub E] [--overlap RULE (one of '//name_list(overlap_names)//')] [--update U] [--tolerance TOL]'// &
       ' [--table FILE] [--model multipole|rpy] [--jacobian-steps K] [--jacobian-order J] [--rosenbrock-stage yes|no]'// &
-      ' [--steppers LIST] [--friction-change F]'//new_line('a')// &
+      ' [--steppers LIST] [--friction-change F] [--warm-history K]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
       'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).')
     config = 'trefoil'
@@ -165,6 +168,7 @@ contains
     jacobian_order = 0
     rosenbrock_stage = .true.
     friction_change = -1.0_wp
+    warm_history = 0
     steppers = method_ros34pw2//','//method_ros34pw3
     k = 2
     do while (k <= command_argument_count())
@@ -212,6 +216,11 @@ contains
         read (val, *, iostat=ios) friction_change
         if (ios /= 0 .or. .not. friction_change >= 0.0_wp) &
           call die(program_name, '--friction-change '//trim(val)//': expected a number >= 0', 2)
+      case ('--warm-history')
+        read (val, *, iostat=ios) warm_history
+        if (ios /= 0 .or. warm_history < 1 .or. warm_history > warm_history_max) &
+          call die(program_name, '--warm-history '//trim(val)//': expected an integer in [1, '// &
+                   to_str(warm_history_max)//']', 2)
       case ('--steppers')
         steppers = trim(val)
         call check_steppers(steppers)
@@ -630,7 +639,9 @@ contains
         call lub%pair_blocks(r, blocks)
         call lub%pair_blocks(r2, blocks2)
       case (6, 9)
-        call iter%setup(2, .true., eps, error)
+        ! warm_history 1 for 9: the start is the last call's solution (with a longer history the
+        ! configuration two calls back, the same, would give the exact start)
+        call iter%setup(2, .true., eps, error, warm_history=merge(1, warm_history_default, what == 9))
         if (.not. allocated(error)) call iter%velocities(r, f, u, error, e)
         if (what == 6) s0 = iter%statistics()
         if (what == 9) s2 = iter%statistics()
@@ -892,7 +903,8 @@ contains
 
   !> One run (run_method: label <name>.<upd>, jorder 0 the scene default) compared with the
   !> reference; with --friction-change F and upd 'iterative' the same run follows with the
-  !> iterative model's friction_change set to F (label <name>_fc<F>.<upd>), in the same process.
+  !> iterative model's friction_change set to F (label <name>_fc<F>.<upd>), in the same process;
+  !> with --warm-history K likewise with its warm_history set to K (label <name>_wh<K>.<upd>).
   subroutine run_compared(name, method, upd, keep, tol, jorder, r_ref, wall_ref)
     character(len=*), intent(in) :: name, method, upd
     integer, intent(in) :: keep, jorder
@@ -903,10 +915,17 @@ contains
     label = name//'.'//upd
     call run_method(label, method, upd, keep, tol, r, wall, jorder)
     call compare_with_reference(label, r, wall, r_ref, wall_ref)
-    if (friction_change < 0.0_wp .or. upd /= update_iterative) return
-    label = name//'_fc'//to_str(friction_change, '(g0.3)')//'.'//upd
-    call run_method(label, method, upd, keep, tol, r, wall, jorder, friction_change)
-    call compare_with_reference(label, r, wall, r_ref, wall_ref)
+    if (upd /= update_iterative) return
+    if (friction_change >= 0.0_wp) then
+      label = name//'_fc'//to_str(friction_change, '(g0.3)')//'.'//upd
+      call run_method(label, method, upd, keep, tol, r, wall, jorder, fchange=friction_change)
+      call compare_with_reference(label, r, wall, r_ref, wall_ref)
+    end if
+    if (warm_history > 0) then
+      label = name//'_wh'//to_str(warm_history)//'.'//upd
+      call run_method(label, method, upd, keep, tol, r, wall, jorder, whistory=warm_history)
+      call compare_with_reference(label, r, wall, r_ref, wall_ref)
+    end if
   end subroutine run_compared
 
   !> The wall-time ratio and the largest bead deviation of a run (r, wall) from the reference.
@@ -920,8 +939,9 @@ contains
   !> One integration of the configuration to t_end (tolerance tol; eps_lub 1e-4 unless
   !> --eps-lub) with `method` and `upd`: its figures under `label`; r the final positions.
   !> `jorder` (optional): &hydro jacobian_order; `fchange` (optional): the iterative model's
-  !> friction_change (the factory's model with that value, taken over by the dynamics).
-  subroutine run_method(label, method, upd, keep, tol, r, wall, jorder, fchange)
+  !> friction_change, `whistory` (optional): its warm_history (the factory's model with that
+  !> value, taken over by the dynamics).
+  subroutine run_method(label, method, upd, keep, tol, r, wall, jorder, fchange, whistory)
     character(len=*), intent(in) :: label, method, upd
     integer, intent(in) :: keep
     real(wp), intent(in) :: tol
@@ -929,6 +949,7 @@ contains
     real(wp), intent(out) :: wall
     integer, intent(in), optional :: jorder
     real(wp), intent(in), optional :: fchange
+    integer, intent(in), optional :: whistory
     type(scene_t) :: scene
     type(dynamics_t) :: dyn
     class(hydro_model_t), allocatable :: hydro
@@ -940,14 +961,15 @@ contains
     scene%integrator%method = method
     scene%integrator%jacobian_steps = keep
     if (present(jorder)) scene%hydro%jacobian_order = jorder
-    if (present(fchange)) then
+    if (present(fchange) .or. present(whistory)) then
       call make_hydro_model(scene%hydro, scene%integrator%tolerance, hydro, error)
       if (allocated(error)) call die(program_name, error%message, 2)
       select type (hydro)
       type is (multipole_iterative_t)
-        hydro%friction_change = fchange
+        if (present(fchange)) hydro%friction_change = fchange
+        if (present(whistory)) hydro%warm_history = whistory
       class default
-        call die(program_name, '--friction-change: the model is not the iterative one', 2)
+        call die(program_name, '--friction-change, --warm-history: the model is not the iterative one', 2)
       end select
     end if
     call dyn%init(scene, size(r, 2), error, hydro)

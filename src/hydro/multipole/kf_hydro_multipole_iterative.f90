@@ -21,9 +21,16 @@
 !> iteration's largest part); flexible GMRES keeps the preconditioned basis, so the operator,
 !> applied in double to it, alone decides the solution: the preconditioner's rounding costs at
 !> most iterations, not accuracy (a left-preconditioned GMRES would stall at the single
-!> precision's level). The iteration starts from the last call's solution (the moments and the
-!> velocities of every call are in the reference frame, so it is a guess in the right frame),
-!> or from zero when that has the smaller residual.
+!> precision's level).
+!> Start (docs/multipole.md, "An extrapolated warm start"): the right-hand sides b_j and
+!> solutions x_j of the last warm_history calls since the last factorisation (setup argument,
+!> default warm_history_default = 6; the moments and velocities of every call are in the
+!> reference frame) give x0 = sum_j c_j x_j with the affine weights (sum c_j = 1) that fit the
+!> call's b best, sum_j c_j b_j (affine_weights: least squares in the differences to the newest,
+!> nearly dependent ones dropped, sum |c_j| bounded by weight_bound); x0 = 0 when that has the
+!> smaller residual. Since A_j x_j = b_j, b - A x0 = (b - sum c_j b_j) - sum c_j (A - A_j) x_j:
+!> the stiff forces change faster than the operator. warm_history = 1: the last call's
+!> solution. A factorisation or a change of bead number starts the history anew.
 !> GMRES, not CG: the system is symmetric but indefinite (its Schur complement onto U is
 !> negative definite). One system, not nested solves (CG on the 6N friction, each product an
 !> inner solve with K preconditioned by K_ref): an inner solve alone needs as many iterations,
@@ -52,11 +59,12 @@
 !> Memory (besides the parent's arrays): zeta_L(ref) and the 6N factor (6N x 6N each), the
 !> factor's diagonal scale (6N), two lists of lubrication blocks (the call's and the factor's),
 !> an N x N integer map for the rule's pair matching, the two many-body systems (the reference
-!> factor with its single-precision copy, and the assembled one) and the Krylov bases.
+!> factor with its single-precision copy, and the assembled one), the Krylov bases and the
+!> start's history (2 warm_history vectors of the system's size).
 !>
-!> Checkpoint: the reference and the last solution are not in the checkpoint; the reference is
-!> rebuilt (a direct solve) at the first call after a resume, so a resumed run agrees with an
-!> uninterrupted one to the solver tolerance (not bit for bit). Frames, the stresslet and
+!> Checkpoint: the reference and the history of solutions are not in the checkpoint; the
+!> reference is rebuilt (a direct solve) at the first call after a resume, so a resumed run
+!> agrees with an uninterrupted one to the solver tolerance (not bit for bit). Frames, the stresslet and
 !> `prepare` use the exact model's routes (the parent type).
 module kf_hydro_multipole_iterative
   use kf_kinds, only: wp, sp, i8
@@ -83,8 +91,19 @@ module kf_hydro_multipole_iterative
   !> The default largest scaled change of the lubrication blocks for which a call keeps the 6N
   !> friction factor of an earlier call.
   real(wp), parameter, public :: friction_change_default = 0.05_wp
+  !> The default number of earlier calls (since the last factorisation) whose right-hand
+  !> sides and solutions make GMRES's start (1: the last call's solution).
+  integer, parameter, public :: warm_history_default = 6
+  !> The largest allowed warm_history.
+  integer, parameter, public :: warm_history_max = 8
+  !> The largest sum of |weights| of an extrapolated start; larger weights are shrunk towards
+  !> the newest call's (a convex combination of the extrapolation and the newest solution).
+  real(wp), parameter, public :: weight_bound = 4.0_wp
+  !> A stored difference whose part orthogonal to the newer ones is at most this fraction of
+  !> its length does not take part in the fit (repeated or collinear configurations).
+  real(wp), parameter, public :: drop_tolerance = 1.0e-6_wp
 
-  public :: iterative_memory_bytes
+  public :: iterative_memory_bytes, affine_weights
 
   !> Multipole model, exact at every call by preconditioned GMRES on the assembled system.
   type, extends(multipole_model_t), public :: multipole_iterative_t
@@ -98,7 +117,8 @@ module kf_hydro_multipole_iterative
     real(wp) :: friction_change = friction_change_default
     logical, private :: ready = .false.
     logical, private :: refactor_next = .false.
-    logical, private :: have_x = .false.       !< xs holds the last call's solution
+    integer :: warm_history = warm_history_default  !< calls kept for the start (1: the last solution)
+    integer, private :: hn = 0                 !< calls in the history (newest last)
     integer, private :: nr = 0                 !< unknowns of K
     real(wp), private :: cen_ref(3) = 0.0_wp
     real(wp), allocatable, private :: pos_ref(:, :), rp(:, :), frot(:, :)
@@ -110,7 +130,9 @@ module kf_hydro_multipole_iterative
     real(wp), allocatable, private :: hm(:, :)     !< Hessenberg matrix (Givens-rotated)
     real(wp), allocatable, private :: rhs(:), wk(:), m0(:), s6(:), uk(:), uprev(:), u0(:)
     real(wp), allocatable, private :: zb(:, :)     !< preconditioned basis (flexible GMRES)
-    real(wp), allocatable, private :: xs(:)        !< the last call's solution (reference frame)
+    real(wp), allocatable, private :: xs(:)        !< the start, then the solution (reference frame)
+    real(wp), allocatable, private :: hb(:, :)     !< (nt, warm_history) the history's right-hand sides
+    real(wp), allocatable, private :: hx(:, :)     !< (nt, warm_history) their solutions
     real(sp), allocatable, private :: zs(:), ms(:) !< single-precision work of the preconditioner
     type(hydro_stats_t), private :: istats
   contains
@@ -135,11 +157,12 @@ contains
   !> Order L, lubrication, overlap shift eps_lub and `literal_bwe` (as the exact model), the
   !> relative solver tolerance (solver_tolerance_min..solver_tolerance_max, default
   !> solver_tolerance_default), the refactorisation threshold (>= 1 iterations, default
-  !> refactor_iterations_default) and the 6N friction factor's threshold friction_change
+  !> refactor_iterations_default), the 6N friction factor's threshold friction_change
   !> (>= 0, default friction_change_default; 0: refactorised at every call whose blocks
-  !> changed at all).
+  !> changed at all) and the number of earlier solutions of the start, warm_history (1 to
+  !> warm_history_max, default warm_history_default; 1: the last call's solution).
   subroutine iterative_setup(this, order, lubrication, eps_lub, error, solver_tolerance, refactor_iterations, &
-                             literal_bwe, friction_change)
+                             literal_bwe, friction_change, warm_history)
     class(multipole_iterative_t), intent(inout) :: this
     integer, intent(in) :: order
     logical, intent(in) :: lubrication
@@ -149,6 +172,7 @@ contains
     integer, intent(in), optional :: refactor_iterations
     logical, intent(in), optional :: literal_bwe
     real(wp), intent(in), optional :: friction_change
+    integer, intent(in), optional :: warm_history
     real(wp) :: min_distance
     this%solver_tolerance = solver_tolerance_default
     if (present(solver_tolerance)) this%solver_tolerance = solver_tolerance
@@ -172,6 +196,13 @@ contains
                        ' not allowed (>= 0)')
       return
     end if
+    this%warm_history = warm_history_default
+    if (present(warm_history)) this%warm_history = warm_history
+    if (this%warm_history < 1 .or. this%warm_history > warm_history_max) then
+      call fatal_error(error, 'multipole iterative: warm_history = '//to_str(this%warm_history)// &
+                       ' not allowed (1 to '//to_str(warm_history_max)//')')
+      return
+    end if
     call this%multipole_model_t%init(order, lubrication, eps_lub, error, literal_bwe=literal_bwe)
     if (allocated(error)) return
     ! the systems' overlap treatment as the exact model's (0: the real positions, 'bwe')
@@ -181,7 +212,7 @@ contains
     call this%ref%init(order, min_distance, error, single_copy=.true.)
     if (allocated(error)) return
     this%ready = .false.
-    this%have_x = .false.
+    this%hn = 0
     this%refactor_next = .false.
     this%istats = hydro_stats_t()
   end subroutine iterative_setup
@@ -253,6 +284,7 @@ contains
       this%istats%refresh_seconds = this%istats%refresh_seconds + real(c1 - c0, wp)/real(crate, wp)
       return
     end if
+    call history_push(this)
     do i = 1, nb
       u(:, i) = matmul(q, this%uk(6*i - 5:6*i - 3))
     end do
@@ -273,7 +305,7 @@ contains
     integer :: nb, i
     nb = size(r, 2)
     this%ready = .false.
-    this%have_x = .false.
+    this%hn = 0
     call this%ref%factorise(r, error)
     if (allocated(error)) return
     this%n_overlaps = this%ref%n_clamped
@@ -291,7 +323,7 @@ contains
     this%cen_ref = centroid(r)
     call right_hand_side(this, f, e)
     call precondition(this, this%rhs, this%xs, exact=.true.)
-    this%have_x = .true.
+    call history_push(this)
     do i = 1, nb
       u(:, i) = this%xs(this%nr + 6*i - 5:this%nr + 6*i - 3)
     end do
@@ -427,7 +459,7 @@ contains
   end subroutine precondition
 
   !> Flexible GMRES (right-preconditioned, the preconditioned basis kept) on A x = b from the
-  !> last call's solution xs, or from zero when that has the larger residual (no restart, at
+  !> start of warm_start (the extrapolated history, or zero; no restart, at
   !> most max_iterations); uk = the velocity part of the last iterate, `its` the iterations
   !> done, `converged` by the stopping rule of the module header; xs = the solution when
   !> converged. With the basis z_k = P^-1 v_k kept, A Z_k = V_k+1 H_k holds with the double
@@ -446,26 +478,12 @@ contains
     nb = size(this%rp, 2)
     converged = .false.
     its = 0
-    ! the start: the last call's solution (the same reference frame) or zero, the smaller residual
-    this%v(:, 1) = this%rhs
-    if (this%have_x) then
-      call operator_apply(this, this%xs, this%wk)
-      this%wk = this%rhs - this%wk
-      if (norm2(this%wk) < norm2(this%rhs)) then
-        this%v(:, 1) = this%wk
-      else
-        this%xs = 0.0_wp
-      end if
-    else
-      this%xs = 0.0_wp
-    end if
-    this%have_x = .false.
+    call warm_start(this)
     beta = norm2(this%v(:, 1))
     this%u0 = this%xs(nr + 1:nt)
     this%uk = this%u0
     if (beta == 0.0_wp) then
       converged = .true.
-      this%have_x = .true.
       return
     end if
     this%v(:, 1) = this%v(:, 1)/beta
@@ -516,8 +534,128 @@ contains
     end do
     if (.not. converged) return
     this%xs = this%xs + matmul(this%zb(:, 1:its), y(1:its))
-    this%have_x = .true.
   end subroutine gmres
+
+  !> GMRES's start xs and its residual v(:, 1) = b - A xs: the combination sum_j c_j x_j of the
+  !> history's solutions with the affine weights c of the call's right-hand side b in theirs
+  !> (affine_weights), or zero (v(:, 1) = b) when that has the smaller residual or the history
+  !> is empty. x_j solves A_j x_j = b_j, so b - A sum_j c_j x_j = (b - sum_j c_j b_j) -
+  !> sum_j c_j (A - A_j) x_j: the fit makes the first term small; the operator changes little
+  !> between calls.
+  subroutine warm_start(this)
+    class(multipole_iterative_t), intent(inout) :: this
+    real(wp) :: c(warm_history_max)
+    integer :: m
+    m = this%hn
+    this%v(:, 1) = this%rhs
+    if (m == 0) then
+      this%xs = 0.0_wp
+      return
+    end if
+    call affine_weights(this%hb(:, 1:m), this%rhs, c(1:m))
+    this%xs = matmul(this%hx(:, 1:m), c(1:m))
+    call operator_apply(this, this%xs, this%wk)
+    this%wk = this%rhs - this%wk
+    if (norm2(this%wk) < norm2(this%rhs)) then
+      this%v(:, 1) = this%wk
+    else
+      this%xs = 0.0_wp
+    end if
+  end subroutine warm_start
+
+  !> The converged call (its right-hand side and solution xs) becomes the history's newest
+  !> entry (the oldest dropped when warm_history are stored; the public component taken within
+  !> 1..warm_history_max).
+  subroutine history_push(this)
+    class(multipole_iterative_t), intent(inout) :: this
+    integer :: nt, k
+    nt = size(this%xs)
+    k = max(1, min(this%warm_history, warm_history_max))
+    if (allocated(this%hx)) then
+      if (size(this%hx, 1) /= nt .or. size(this%hx, 2) /= k) deallocate (this%hb, this%hx)
+    end if
+    if (.not. allocated(this%hx)) then
+      allocate (this%hb(nt, k), this%hx(nt, k))
+      this%hn = 0
+    end if
+    if (this%hn == k) then
+      this%hb(:, 1:k - 1) = this%hb(:, 2:k)
+      this%hx(:, 1:k - 1) = this%hx(:, 2:k)
+    else
+      this%hn = this%hn + 1
+    end if
+    this%hb(:, this%hn) = this%rhs
+    this%hx(:, this%hn) = this%xs
+  end subroutine history_push
+
+  !> Affine weights c (sum c = 1) of the target y in the points p(:, 1:m) (the newest last):
+  !> c minimises |y - sum_j c_j p_j| (least squares in the differences p_j - p_m, newest first;
+  !> a difference nearly in the span of the newer ones is dropped, drop_tolerance, its weight
+  !> 0), then shrunk towards the newest point, c = (1 - s) e_m + s c, so that sum |c| is at
+  !> most weight_bound.
+  pure subroutine affine_weights(p, y, c)
+    real(wp), intent(in) :: p(:, :), y(:)
+    real(wp), intent(out) :: c(:)
+    real(wp) :: d(size(p, 1), size(p, 2) - 1), a(size(p, 2) - 1), total, s
+    integer :: m, j
+    m = size(p, 2)
+    c = 0.0_wp
+    c(m) = 1.0_wp
+    if (m == 1) return
+    do j = 1, m - 1
+      d(:, j) = p(:, m - j) - p(:, m)
+    end do
+    call least_squares(d, y - p(:, m), a)
+    do j = 1, m - 1
+      c(m - j) = a(j)
+    end do
+    c(m) = 1.0_wp - sum(a)
+    total = sum(abs(c))
+    if (total > weight_bound) then
+      s = (weight_bound - 1.0_wp)/(total - 1.0_wp)
+      c = s*c
+      c(m) = c(m) + (1.0_wp - s)
+    end if
+  end subroutine affine_weights
+
+  !> w minimising |y - a w| by modified Gram-Schmidt (twice) over the columns in their order;
+  !> a column whose part orthogonal to the kept ones is at most drop_tolerance times its
+  !> length (or zero) gets the weight 0.
+  pure subroutine least_squares(a, y, w)
+    real(wp), intent(in) :: a(:, :), y(:)
+    real(wp), intent(out) :: w(:)
+    real(wp) :: q(size(a, 1), size(a, 2)), rr(size(a, 2), size(a, 2)), z(size(a, 2)), b(size(a, 2))
+    real(wp) :: res(size(a, 1)), col, h
+    integer :: keep(size(a, 2)), nk, j, i, pass
+    w = 0.0_wp
+    nk = 0
+    res = y
+    rr = 0.0_wp
+    do j = 1, size(a, 2)
+      col = norm2(a(:, j))
+      if (col == 0.0_wp) cycle
+      q(:, nk + 1) = a(:, j)
+      rr(:, nk + 1) = 0.0_wp
+      do pass = 1, 2
+        do i = 1, nk
+          h = dot_product(q(:, i), q(:, nk + 1))
+          rr(i, nk + 1) = rr(i, nk + 1) + h
+          q(:, nk + 1) = q(:, nk + 1) - h*q(:, i)
+        end do
+      end do
+      rr(nk + 1, nk + 1) = norm2(q(:, nk + 1))
+      if (rr(nk + 1, nk + 1) <= drop_tolerance*col) cycle
+      nk = nk + 1
+      q(:, nk) = q(:, nk)/rr(nk, nk)
+      keep(nk) = j
+      z(nk) = dot_product(q(:, nk), res)
+      res = res - z(nk)*q(:, nk)
+    end do
+    do i = nk, 1, -1
+      b(i) = (z(i) - dot_product(rr(i, i + 1:nk), b(i + 1:nk)))/rr(i, i)
+    end do
+    w(keep(1:nk)) = b(1:nk)
+  end subroutine least_squares
 
   !> Its calls never prepare, so a mobility costs a factorisation; its reference is rebuilt after
   !> a resume anyway: an earlier mobility may be kept.
