@@ -69,7 +69,9 @@
 !> Memory (besides the parent's arrays): zeta_L(ref) and the 6N factor (6N x 6N each), the
 !> factor's diagonal scale (6N), two lists of lubrication blocks (the call's and the factor's),
 !> an N x N integer map for the rule's pair matching, the two many-body systems (the reference
-!> factor with its single-precision copy, and the assembled one) and the Krylov bases.
+!> factor with its single-precision copy, and the assembled one with the single copies of K0
+!> and B, 5 nr^2 bytes (K0 full, 4 nr^2; B, nr^2): 12.5 MB at N = 99, made at the first call that
+!> uses them) and the Krylov bases.
 !>
 !> Checkpoint: the reference and the last solution are not in the checkpoint; the reference is
 !> rebuilt (a direct solve) at the first call after a resume, so a resumed run agrees with an
@@ -149,7 +151,8 @@ contains
   !> The model's dense arrays for n beads (bytes; a lower bound): the exact model's, one more
   !> 6N x 6N matrix (288 N^2), the preconditioner's friction factor, and the N x N integer map
   !> of its rule (4 N^2); its two many-body systems (the reference factor with its
-  !> single-precision copy, and the assembled one) and the Krylov bases come on top.
+  !> single-precision copy, and the assembled one with the single copies of its products) and
+  !> the Krylov bases come on top.
   pure integer(i8) function iterative_memory_bytes(n, stresslet_lubrication) result(bytes)
     integer(i8), intent(in) :: n
     logical, intent(in) :: stresslet_lubrication

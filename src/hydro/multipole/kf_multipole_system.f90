@@ -25,15 +25,16 @@
 !> for the approximate triangular solves `forward_single` ... `backward_p_single` (single
 !> arithmetic, BLAS stpsv) of a preconditioner; the exact solves keep the double factor.
 !>
-!> Single-precision products (`copy_products_single`, then `apply_single`): after `assemble`,
-!> single copies of K0's lower triangle (full storage, nr^2 4 bytes, the upper part not
+!> Single-precision products (`apply_single`, after `copy_products_single` or an `assemble` with
+!> `single`, which converts each sphere's columns right after writing them, from cache):
+!> the single copies of K0's lower triangle (full storage, nr^2 4 bytes, the upper part not
 !> touched) and of B (its size in 4 bytes) give y = K x in single arithmetic (BLAS ssymv and
 !> sgemv, x rounded to single, y returned in double) from half the bytes of `apply`. Each
 !> entry of K0 and B is rounded once (relative u = 2^-24) and the sums accumulate in single,
-!> so |y_single - K x| <= (n + 2) u (|K0| |x| + |B| |B^T| |x|) + O(u^2) componentwise with n the
-!> longest sum (nr for K0, the B columns for B^T x, ...) (Higham, Accuracy and Stability,
-!> section 3.5). Not a preconditioner's business: kf_hydro_multipole_iterative uses them inside
-!> its Krylov loop only where its rule bounds their effect (its header).
+!> so |y_single - K x| <= (nr + 3) u (|K0| |x| + |B| |B^T| |x|) + O(u^2) componentwise (nr the
+!> longest sum; Higham, Accuracy and Stability of Numerical Algorithms, section 3.5).
+!> kf_hydro_multipole_iterative uses them inside its Krylov loop only where its rule bounds
+!> their effect on the solution (its header).
 module kf_multipole_system
   use kf_kinds, only: wp, sp
   use kf_strings, only: to_str
