@@ -32,13 +32,16 @@
 !>              lubrication blocks, the 6N friction Cholesky of an 'iterative' call that
 !>              refactorises it, the largest scaled change of the lubrication blocks (the rule
 !>              that decides it) between the start and a configuration deformed by 0.003 d per
-!>              bead, one product K x, one triangular-solve pair with the factor of K and with
-!>              its single-precision copy, and of whole 'iterative' calls (at that deformed
+!>              bead, one product K x (and in single precision, with the cost of the single
+!>              copies of K0 and B), one triangular-solve pair with the factor of K and with
+!>              its single-precision copy, the assembly with the single copies of K0 and B,
+!>              and of whole 'iterative' calls (at that deformed
 !>              configuration: the GMRES solve from zero, the forces and strain changing sign
 !>              between repetitions so that the last solution is no start, the 6N factor
 !>              refactorised where its rule says (the number of such factorisations printed);
 !>              the GMRES solve from the last call's solution, the configuration alternating
-!>              with one 0.001 d further; and a factorising call) and 'stage' calls
+!>              with one 0.001 d further, with the Krylov loop's products in single where the
+!>              rule allows and always in double; and a factorising call) and 'stage' calls
 !>   rosenbrock [--config C] [--t-end T] [--model M] [--jacobian-steps K] [--rosenbrock-stage
 !>              yes|no] [--steppers LIST] [--tolerance TOL]: the Rosenbrock-W steppers of LIST
 !>              (comma-separated, default ros34pw2,ros34pw3) at tolerance TOL (default 1e-4)
@@ -59,6 +62,9 @@
 !>              --warm-history K: each 'iterative' run followed by the same run with the
 !>              iterative model's warm_history = K (labels <run>_wh<K>.iterative; K = 1: GMRES
 !>              starts from the last call's solution, as before)
+!>              --double-products yes: each 'iterative' run followed by the same run with the
+!>              Krylov loop's products always in double (single_products = .false.; labels
+!>              <run>_double.iterative; the model before the single-precision products)
 !>   rigid      [--config C]: the reused part at rigidly moved and at deformed configurations
 !>              (overlap rule pair only: the model's reused part against its exact one, both
 !>              without the dynamics' configuration rules separate and relax)
@@ -107,6 +113,7 @@ program knotflow_bench_reuse
 
   character(len=:), allocatable :: part, config, overlap, update, table, model, steppers
   real(wp) :: t_end, eps_lub, tolerance, friction_change
+  logical :: double_products
   integer :: every, jacobian_steps, jacobian_order, warm_history
   logical :: omp_set, rosenbrock_stage
 
@@ -152,7 +159,7 @@ contains
       'overlaps|scaling|rigid|stiffness|threads|rosenbrock|evaluation [--config trefoil|random60|coil|FILE] [--t-end T] [--every K]'// &
       ' [--eps-lub E] [--overlap RULE (one of '//name_list(overlap_names)//')] [--update U] [--tolerance TOL]'// &
       ' [--table FILE] [--model multipole|rpy] [--jacobian-steps K] [--jacobian-order J] [--rosenbrock-stage yes|no]'// &
-      ' [--steppers LIST] [--friction-change F] [--warm-history K]'//new_line('a')// &
+      ' [--steppers LIST] [--friction-change F] [--warm-history K] [--double-products yes|no]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
       'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).')
     config = 'trefoil'
@@ -169,6 +176,7 @@ contains
     rosenbrock_stage = .true.
     friction_change = -1.0_wp
     warm_history = 0
+    double_products = .false.
     steppers = method_ros34pw2//','//method_ros34pw3
     k = 2
     do while (k <= command_argument_count())
@@ -221,6 +229,10 @@ contains
         if (ios /= 0 .or. warm_history < 1 .or. warm_history > warm_history_max) &
           call die(program_name, '--warm-history '//trim(val)//': expected an integer in [1, '// &
                    to_str(warm_history_max)//']', 2)
+      case ('--double-products')
+        if (val /= 'yes' .and. val /= 'no') &
+          call die(program_name, '--double-products '//trim(val)//': allowed values are yes, no', 2)
+        double_products = val == 'yes'
       case ('--steppers')
         steppers = trim(val)
         call check_steppers(steppers)
@@ -361,6 +373,8 @@ contains
     write (output_unit, '(a)') prefix//'refreshes = '//to_str(s%refreshes)
     write (output_unit, '(a)') prefix//'reused = '//to_str(s%reused)
     write (output_unit, '(a)') prefix//'cg_iterations = '//to_str(s%cg_iterations)
+    write (output_unit, '(a)') prefix//'single_solves = '//to_str(s%single_solves)
+    write (output_unit, '(a)') prefix//'single_iterations = '//to_str(s%single_iterations)
     write (output_unit, '(a)') prefix//'preconditioners = '//to_str(s%preconditioners)
     write (output_unit, '(a)') prefix//'max_error_ratio = '//to_str(s%max_error_ratio, '(es10.3)')
     write (output_unit, '(a)') prefix//'refresh_seconds = '//to_str(s%refresh_seconds, '(f0.3)')
@@ -579,20 +593,20 @@ contains
   !> (module header, part evaluation); processor seconds, so that the time the process waits
   !> for a CPU on a shared machine does not count.
   subroutine run_evaluation()
-    integer, parameter :: reps(11) = [7, 7, 20, 20, 7, 5, 3, 3, 20, 6, 20]
+    integer, parameter :: reps(15) = [7, 7, 20, 20, 7, 5, 3, 3, 20, 6, 20, 7, 20, 20, 7]
     type(scene_t) :: scene
     type(multipole_system_t) :: sys
     type(lubrication_t) :: lub
     type(pair_blocks_t) :: blocks, blocks2
     type(multipole_iterative_t) :: iter
     type(multipole_model_t) :: stage
-    type(hydro_stats_t) :: s0, s1, s2, s3
+    type(hydro_stats_t) :: s0, s1, s2, s3, s4, s5
     type(error_t), allocatable :: error
     real(wp), allocatable :: r(:, :), r2(:, :), r3(:, :), f(:, :), u(:, :), zeta(:, :), pre(:, :), x(:), y(:)
     real(sp), allocatable :: xs(:)
     real(wp), allocatable :: pscale(:)
     integer, allocatable :: slot(:, :)
-    real(wp) :: e(3, 3), eps, best(11), c0, c1, sgn, change
+    real(wp) :: e(3, 3), eps, best(15), c0, c1, sgn, change
     integer :: n, i, rep, what
     integer(i8) :: factors6
     call header()
@@ -618,9 +632,12 @@ contains
     ! the pieces in order: 1 assembly, 2 lubrication blocks, 3 K x, 4 solve pair, 5 6N Cholesky,
     ! 6 'iterative' GMRES calls from zero, 7 'iterative' factorising calls, 8 'stage' calls,
     ! 9 'iterative' GMRES calls from the last solution, 10 single-precision solve pair, 11 the
-    ! largest scaled change of the lubrication blocks between r and r2 (the 6N factor's rule)
+    ! largest scaled change of the lubrication blocks between r and r2 (the 6N factor's rule),
+    ! 12 the single copies of K0 and B, 13 one single-precision product K x, 14 as 9 with the
+    ! Krylov loop's products in double (single_products = .false.), 15 the assembly with the
+    ! single copies made column by column (assemble's `single`)
     best = huge(1.0_wp)
-    do what = 1, 11
+    do what = 1, 15
       select case (what)
       case (3)
         allocate (x(sys%unknowns()), y(sys%unknowns()), xs(sys%unknowns()))
@@ -638,13 +655,18 @@ contains
         end do
         call lub%pair_blocks(r, blocks)
         call lub%pair_blocks(r2, blocks2)
-      case (6, 9)
-        ! warm_history 1 for 9: the start is the last call's solution (with a longer history the
-        ! configuration two calls back, the same, would give the exact start)
-        call iter%setup(2, .true., eps, error, warm_history=merge(1, warm_history_default, what == 9))
+      case (12)
+        call sys%assemble(r, error)
+      case (6, 9, 14)
+        ! warm_history 1 for 9 and 14: the start is the last call's solution (with a longer
+        ! history the configuration two calls back, the same, would give the exact start)
+        call iter%setup(2, .true., eps, error, &
+                        warm_history=merge(1, warm_history_default, what == 9 .or. what == 14))
+        iter%single_products = what /= 14
         if (.not. allocated(error)) call iter%velocities(r, f, u, error, e)
         if (what == 6) s0 = iter%statistics()
         if (what == 9) s2 = iter%statistics()
+        if (what == 14) s4 = iter%statistics()
       end select
       if (allocated(error)) call die(program_name, error%message, 2)
       do rep = 1, reps(what)
@@ -674,7 +696,13 @@ contains
           call iter%velocities(r2, sgn*f, u, error, sgn*e)
         case (7)
           call iter%velocities(r2, f, u, error, e)
-        case (9)
+        case (12)
+          call sys%copy_products_single()
+        case (15)
+          call sys%assemble(r, error, single=.true.)
+        case (13)
+          call sys%apply_single(x, y)
+        case (9, 14)
           if (mod(rep, 2) == 1) then
             call iter%velocities(r2, f, u, error, e)
           else
@@ -695,6 +723,7 @@ contains
       if (what == 6) s1 = iter%statistics()
       if (what == 6) factors6 = s1%preconditioners - s0%preconditioners
       if (what == 9) s3 = iter%statistics()
+      if (what == 14) s5 = iter%statistics()
     end do
     write (output_unit, '(a)') 'lubrication_pairs = '//to_str(blocks%n_pairs())
     write (output_unit, '(a)') 'assembly_ms = '//to_str(1.0e3_wp*best(1), '(f0.3)')
@@ -714,6 +743,14 @@ contains
     write (output_unit, '(a)') 'iterative_warm_ms = '//to_str(1.0e3_wp*best(9), '(f0.3)')
     write (output_unit, '(a)') 'iterative_warm_iterations = '// &
       to_str(real(s3%cg_iterations - s2%cg_iterations, wp)/real(max(1_i8, s3%reused - s2%reused), wp), '(f0.2)')
+    write (output_unit, '(a)') 'iterative_warm_single_solves = '//to_str(s3%single_solves - s2%single_solves)// &
+      ' of '//to_str(s3%reused - s2%reused)
+    write (output_unit, '(a)') 'iterative_warm_double_ms = '//to_str(1.0e3_wp*best(14), '(f0.3)')
+    write (output_unit, '(a)') 'iterative_warm_double_iterations = '// &
+      to_str(real(s5%cg_iterations - s4%cg_iterations, wp)/real(max(1_i8, s5%reused - s4%reused), wp), '(f0.2)')
+    write (output_unit, '(a)') 'copy_products_single_ms = '//to_str(1.0e3_wp*best(12), '(f0.3)')
+    write (output_unit, '(a)') 'assembly_with_single_copies_ms = '//to_str(1.0e3_wp*best(15), '(f0.3)')
+    write (output_unit, '(a)') 'product_k_single_ms = '//to_str(1.0e3_wp*best(13), '(f0.3)')
     write (output_unit, '(a)') 'iterative_refresh_ms = '//to_str(1.0e3_wp*best(7), '(f0.3)')
     write (output_unit, '(a)') 'stage_ms = '//to_str(1.0e3_wp*best(8), '(f0.3)')
     write (output_unit, '(a)') 'loadavg_end = '//loadavg()
@@ -904,7 +941,9 @@ contains
   !> One run (run_method: label <name>.<upd>, jorder 0 the scene default) compared with the
   !> reference; with --friction-change F and upd 'iterative' the same run follows with the
   !> iterative model's friction_change set to F (label <name>_fc<F>.<upd>), in the same process;
-  !> with --warm-history K likewise with its warm_history set to K (label <name>_wh<K>.<upd>).
+  !> with --warm-history K likewise with its warm_history set to K (label <name>_wh<K>.<upd>);
+  !> with --double-products yes likewise with the Krylov loop's products in double (label
+  !> <name>_double.<upd>).
   subroutine run_compared(name, method, upd, keep, tol, jorder, r_ref, wall_ref)
     character(len=*), intent(in) :: name, method, upd
     integer, intent(in) :: keep, jorder
@@ -926,6 +965,11 @@ contains
       call run_method(label, method, upd, keep, tol, r, wall, jorder, whistory=warm_history)
       call compare_with_reference(label, r, wall, r_ref, wall_ref)
     end if
+    if (double_products) then
+      label = name//'_double.'//upd
+      call run_method(label, method, upd, keep, tol, r, wall, jorder, double=.true.)
+      call compare_with_reference(label, r, wall, r_ref, wall_ref)
+    end if
   end subroutine run_compared
 
   !> The wall-time ratio and the largest bead deviation of a run (r, wall) from the reference.
@@ -939,9 +983,10 @@ contains
   !> One integration of the configuration to t_end (tolerance tol; eps_lub 1e-4 unless
   !> --eps-lub) with `method` and `upd`: its figures under `label`; r the final positions.
   !> `jorder` (optional): &hydro jacobian_order; `fchange` (optional): the iterative model's
-  !> friction_change, `whistory` (optional): its warm_history (the factory's model with that
-  !> value, taken over by the dynamics).
-  subroutine run_method(label, method, upd, keep, tol, r, wall, jorder, fchange, whistory)
+  !> friction_change, `whistory` (optional): its warm_history, `double` (optional): .true. sets
+  !> its single_products = .false. (the factory's model with those values, taken over by the
+  !> dynamics).
+  subroutine run_method(label, method, upd, keep, tol, r, wall, jorder, fchange, whistory, double)
     character(len=*), intent(in) :: label, method, upd
     integer, intent(in) :: keep
     real(wp), intent(in) :: tol
@@ -950,6 +995,7 @@ contains
     integer, intent(in), optional :: jorder
     real(wp), intent(in), optional :: fchange
     integer, intent(in), optional :: whistory
+    logical, intent(in), optional :: double
     type(scene_t) :: scene
     type(dynamics_t) :: dyn
     class(hydro_model_t), allocatable :: hydro
@@ -961,15 +1007,16 @@ contains
     scene%integrator%method = method
     scene%integrator%jacobian_steps = keep
     if (present(jorder)) scene%hydro%jacobian_order = jorder
-    if (present(fchange) .or. present(whistory)) then
+    if (present(fchange) .or. present(whistory) .or. present(double)) then
       call make_hydro_model(scene%hydro, scene%integrator%tolerance, hydro, error)
       if (allocated(error)) call die(program_name, error%message, 2)
       select type (hydro)
       type is (multipole_iterative_t)
         if (present(fchange)) hydro%friction_change = fchange
         if (present(whistory)) hydro%warm_history = whistory
+        if (present(double)) hydro%single_products = .not. double
       class default
-        call die(program_name, '--friction-change, --warm-history: the model is not the iterative one', 2)
+        call die(program_name, '--friction-change, --warm-history, --double-products: the model is not the iterative one', 2)
       end select
     end if
     call dyn%init(scene, size(r, 2), error, hydro)

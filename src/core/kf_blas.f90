@@ -6,6 +6,7 @@ module kf_blas
   private
 
   public :: dpotrf, dpotrs, dpotri, dsyev, dtrsm, dtrsv, stpsv, dgemm, dsyrk, dgemv, dsymv, dgetrf, dgetrs
+  public :: sgemv, ssymv
 
   interface
     subroutine dpotrf(uplo, n, a, lda, info)
@@ -92,6 +93,21 @@ module kf_blas
       real(wp), intent(in) :: alpha, beta, a(lda, *), x(*)
       real(wp), intent(inout) :: y(*)
     end subroutine dsymv
+    subroutine sgemv(trans, m, n, alpha, a, lda, x, incx, beta, y, incy)
+      import :: sp
+      character(len=1), intent(in) :: trans
+      integer, intent(in) :: m, n, lda, incx, incy
+      real(sp), intent(in) :: alpha, beta
+      real(sp), intent(in) :: a(lda, *), x(*)
+      real(sp), intent(inout) :: y(*)
+    end subroutine sgemv
+    subroutine ssymv(uplo, n, alpha, a, lda, x, incx, beta, y, incy)
+      import :: sp
+      character(len=1), intent(in) :: uplo
+      integer, intent(in) :: n, lda, incx, incy
+      real(sp), intent(in) :: alpha, beta, a(lda, *), x(*)
+      real(sp), intent(inout) :: y(*)
+    end subroutine ssymv
     subroutine dgetrf(m, n, a, lda, ipiv, info)
       import :: wp
       integer, intent(in) :: m, n, lda

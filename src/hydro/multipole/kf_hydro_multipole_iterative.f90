@@ -31,6 +31,26 @@
 !> smaller residual. Since A_j x_j = b_j, b - A x0 = (b - sum c_j b_j) - sum c_j (A - A_j) x_j:
 !> the stiff forces change faster than the operator. warm_history = 1: the last call's
 !> solution. A factorisation or a change of bead number starts the history anew.
+!> Single-precision products in the Krylov loop (`single_products`, default .true.): the
+!> start's residual r0 = b - A x0 is always computed with the double operator; the loop then
+!> computes only a correction d with A d = r0. With the loop's products those of A + E (K's
+!> products from single copies of K0 and B, kf_multipole_system `apply_single`; the 6N rows,
+!> the coupling and the lubrication blocks stay double), flexible GMRES solves (A + E) d' = r0,
+!> so the solution moves by d' - d = -A^-1 E d' and, with |E| <= eta |A| (eta about the single
+!> rounding u = 2^-24 = 6.0e-8 times the sums' growth) and d' close to d = A^-1 r0,
+!>   |d' - d| / |x| <= kappa eta |d| / |x| <= kappa^2 eta |r0| / |b|,
+!> kappa the condition number that maps a residual of K's rows onto the velocities. A call uses
+!> the single products when its start is warm and close:
+!>   |r0| < |b|  and  |r0| <= theta |b|,  theta = solver_tolerance / (single_margin u),
+!> single_margin = 100 standing for kappa^2 times the growth (theta = 0.17 at the default 1e-6;
+!> measured along dopri45 runs against 'stage', docs/multipole.md, "Single-precision products
+!> in the Krylov loop": with 99 % of the iterations in single the largest velocity error is
+!> that of the double products, 2.4e-7). A cold start (x0 = 0, so |r0| = |b|: the first call,
+!> after a factorisation or when zero is the better start) and small tolerances (theta = 1.7e-5
+!> at 1e-10, below the warm starts of the tests) use the double products. The single copies
+!> are made by the assembly (each sphere's columns from cache, about 1 ms at N = 99; 1.6-2.1 ms
+!> as a separate conversion) when the last call's start satisfied the rule, and used when this
+!> call's does too. Counters: `statistics` (single_solves, single_iterations).
 !> GMRES, not CG: the system is symmetric but indefinite (its Schur complement onto U is
 !> negative definite). One system, not nested solves (CG on the 6N friction, each product an
 !> inner solve with K preconditioned by K_ref): an inner solve alone needs as many iterations,
@@ -59,8 +79,10 @@
 !> Memory (besides the parent's arrays): zeta_L(ref) and the 6N factor (6N x 6N each), the
 !> factor's diagonal scale (6N), two lists of lubrication blocks (the call's and the factor's),
 !> an N x N integer map for the rule's pair matching, the two many-body systems (the reference
-!> factor with its single-precision copy, and the assembled one), the Krylov bases and the
-!> start's history (2 warm_history vectors of the system's size).
+!> factor with its single-precision copy, and the assembled one with the single copies of K0
+!> and B, 5 nr^2 bytes (K0 full, 4 nr^2; B, nr^2): 12.5 MB at N = 99, made at the first call that
+!> uses them), the Krylov bases and the start's history (2 warm_history vectors of the system's
+!> size).
 !>
 !> Checkpoint: the reference and the history of solutions are not in the checkpoint; the
 !> reference is rebuilt (a direct solve) at the first call after a resume, so a resumed run
@@ -102,6 +124,9 @@ module kf_hydro_multipole_iterative
   !> A stored difference whose part orthogonal to the newer ones is at most this fraction of
   !> its length does not take part in the fit (repeated or collinear configurations).
   real(wp), parameter, public :: drop_tolerance = 1.0e-6_wp
+  !> The rule's margin for single-precision products (module header): a call uses them when
+  !> |r0| <= solver_tolerance / (single_margin u) |b|, u the single rounding unit.
+  real(wp), parameter, public :: single_margin = 100.0_wp
 
   public :: iterative_memory_bytes, affine_weights
 
@@ -115,6 +140,10 @@ module kf_hydro_multipole_iterative
     integer, private :: ib = 1                 !< blocks(ib): the current call's
     integer, private :: fb = 1                 !< blocks(fb): those in the 6N factor pre
     real(wp) :: friction_change = friction_change_default
+    !> .false.: the Krylov loop's products always in double (module header).
+    logical :: single_products = .true.
+    !> The last GMRES call's start satisfied the rule: the next assembly makes the single copies.
+    logical, private :: single_next = .false.
     logical, private :: ready = .false.
     logical, private :: refactor_next = .false.
     integer :: warm_history = warm_history_default  !< calls kept for the start (1: the last solution)
@@ -147,7 +176,8 @@ contains
   !> The model's dense arrays for n beads (bytes; a lower bound): the exact model's, one more
   !> 6N x 6N matrix (288 N^2), the preconditioner's friction factor, and the N x N integer map
   !> of its rule (4 N^2); its two many-body systems (the reference factor with its
-  !> single-precision copy, and the assembled one) and the Krylov bases come on top.
+  !> single-precision copy, and the assembled one with the single copies of its products) and
+  !> the Krylov bases come on top.
   pure integer(i8) function iterative_memory_bytes(n, stresslet_lubrication) result(bytes)
     integer(i8), intent(in) :: n
     logical, intent(in) :: stresslet_lubrication
@@ -215,10 +245,12 @@ contains
     this%hn = 0
     this%refactor_next = .false.
     this%istats = hydro_stats_t()
+    this%single_next = .true.
   end subroutine iterative_setup
 
   !> The work counters, evaluations, refreshes (factorisations), reused (iterative solves),
-  !> cg_iterations (their GMRES iterations), preconditioners (the iterative solves that
+  !> cg_iterations (their GMRES iterations), single_solves and single_iterations (the GMRES
+  !> calls whose loop used the single-precision products, and their iterations), preconditioners (the iterative solves that
   !> refactorised the 6N friction factor) and the wall time of both kinds.
   function iterative_statistics(this) result(s)
     class(multipole_iterative_t), intent(in) :: this
@@ -261,7 +293,7 @@ contains
       this%rp(:, i) = matmul(qt, r(:, i) - c) + this%cen_ref
       this%frot(:, i) = matmul(qt, f(:, i))
     end do
-    call this%cur%assemble(this%rp, error)
+    call this%cur%assemble(this%rp, error, single=this%single_products .and. this%single_next)
     if (allocated(error)) return
     this%n_overlaps = this%cur%n_clamped
     if (this%lubrication) then
@@ -383,15 +415,24 @@ contains
     if (this%lubrication) call this%blocks(this%ib)%add_strain(e, this%rhs(nr + 1:))
   end subroutine right_hand_side
 
-  !> y = A x, the system at the current configuration (module header).
-  subroutine operator_apply(this, x, y)
+  !> y = A x, the system at the current configuration (module header); `single` (optional,
+  !> default .false.): K's products from the single copies (after copy_products_single).
+  subroutine operator_apply(this, x, y, single)
     class(multipole_iterative_t), intent(inout) :: this
     real(wp), intent(in), contiguous :: x(:)
     real(wp), intent(out), contiguous :: y(:)
+    logical, intent(in), optional :: single
     integer :: nr, i, c, k, j
     real(wp) :: s
+    logical :: use_single
     nr = this%nr
-    call this%cur%apply(x(1:nr), y(1:nr))
+    use_single = .false.
+    if (present(single)) use_single = single
+    if (use_single) then
+      call this%cur%apply_single(x(1:nr), y(1:nr))
+    else
+      call this%cur%apply(x(1:nr), y(1:nr))
+    end if
     do i = 1, size(this%rp, 2)
       do c = 1, 6
         k = this%ref%p_row(i, c)
@@ -472,6 +513,7 @@ contains
     real(wp) :: beta, cs(max_iterations), sn(max_iterations), gv(max_iterations + 1), y(max_iterations)
     real(wp) :: tmp, den, change, scale
     integer :: k, j, nr, nt, nb
+    logical :: single, close
 
     nr = this%nr
     nt = size(this%rhs)
@@ -486,13 +528,21 @@ contains
       converged = .true.
       return
     end if
+    ! the loop's products in single when the rule of the module header allows
+    ! (the copies come from the assembly when the last call's start satisfied the rule too)
+    close = beta < norm2(this%rhs) .and. &
+            beta <= this%solver_tolerance/(single_margin*0.5_wp*epsilon(1.0_sp))*norm2(this%rhs)
+    single = this%single_products .and. close .and. this%cur%has_single_products()
+    this%single_next = close
+    if (single) this%istats%single_solves = this%istats%single_solves + 1
     this%v(:, 1) = this%v(:, 1)/beta
     gv = 0.0_wp
     gv(1) = beta
     do k = 1, max_iterations
       its = k
       call precondition(this, this%v(:, k), this%zb(:, k), exact=.false.)
-      call operator_apply(this, this%zb(:, k), this%v(:, k + 1))
+      call operator_apply(this, this%zb(:, k), this%v(:, k + 1), single)
+      if (single) this%istats%single_iterations = this%istats%single_iterations + 1
       ! modified Gram-Schmidt
       do j = 1, k
         this%hm(j, k) = dot_product(this%v(:, j), this%v(:, k + 1))

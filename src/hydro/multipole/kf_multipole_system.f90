@@ -24,10 +24,21 @@
 !> triangle in single precision, packed by columns (half the bytes of the double lower triangle),
 !> for the approximate triangular solves `forward_single` ... `backward_p_single` (single
 !> arithmetic, BLAS stpsv) of a preconditioner; the exact solves keep the double factor.
+!>
+!> Single-precision products (`apply_single`, after `copy_products_single` or an `assemble` with
+!> `single`, which converts each sphere's columns right after writing them, from cache):
+!> the single copies of K0's lower triangle (full storage, nr^2 4 bytes, the upper part not
+!> touched) and of B (its size in 4 bytes) give y = K x in single arithmetic (BLAS ssymv and
+!> sgemv, x rounded to single, y returned in double) from half the bytes of `apply`. Each
+!> entry of K0 and B is rounded once (relative u = 2^-24) and the sums accumulate in single,
+!> so |y_single - K x| <= (nr + 3) u (|K0| |x| + |B| |B^T| |x|) + O(u^2) componentwise (nr the
+!> longest sum; Higham, Accuracy and Stability of Numerical Algorithms, section 3.5).
+!> kf_hydro_multipole_iterative uses them inside its Krylov loop only where its rule bounds
+!> their effect on the solution (its header).
 module kf_multipole_system
   use kf_kinds, only: wp, sp
   use kf_strings, only: to_str
-  use kf_blas, only: dpotrf, dpotri, dtrsm, dtrsv, stpsv, dgemm, dsyrk, dgemv, dsymv
+  use kf_blas, only: dpotrf, dpotri, dtrsm, dtrsv, stpsv, dgemm, dsyrk, dgemv, dsymv, sgemv, ssymv
   use kf_lapack, only: symmetric_eigenvalues
   use kf_constants, only: pi
   use kf_error, only: error_t, fatal_error
@@ -62,6 +73,10 @@ module kf_multipole_system
     real(wp) :: scal(6) = 0.0_wp !< moment_hat = scal(c) * Cartesian force/torque component c
     real(wp), allocatable :: k(:, :)     !< K, then its Cholesky factor (lower triangle)
     real(sp), allocatable :: k32(:)      !< the factor in single precision, packed by columns
+    real(sp), allocatable :: k0s(:, :)   !< K0's lower triangle in single (copy_products_single)
+    real(sp), allocatable :: bps(:, :)   !< B in single (copy_products_single)
+    real(sp), allocatable :: xw(:), yw(:), tw(:) !< single work of apply_single
+    logical :: single_current = .false. !< k0s and bps hold the last assembly's K0 and B
     real(wp), allocatable :: bp(:, :)    !< phi <- p couplings (rows phi, columns p)
     real(wp), allocatable :: w6(:, :)    !< 6N x 6N work
     real(wp), allocatable :: bq(:, :)    !< nqt x 5 work
@@ -79,6 +94,9 @@ module kf_multipole_system
     procedure :: factorise => system_factorise
     procedure :: spectrum => system_spectrum
     procedure :: apply => system_apply
+    procedure :: copy_products_single => system_copy_products_single
+    procedure :: apply_single => system_apply_single
+    procedure :: has_single_products => system_has_single_products
     procedure :: forward => system_forward
     procedure :: backward => system_backward
     procedure :: forward_p => system_forward_p
@@ -155,16 +173,20 @@ contains
 
   !> Assemble the scaled real system for centres r(3, N) without factorising: the (phi, chi)
   !> block K0 (lower triangle) and the phi <- p couplings B, so that K = K0 - B B^T (`apply`).
-  subroutine system_assemble(this, r, error)
+  !> `single` (optional, default .false.): also the single copies of `copy_products_single`,
+  !> each sphere's columns converted right after they are written (from cache).
+  subroutine system_assemble(this, r, error, single)
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
+    logical, intent(in), optional :: single
     integer :: nsph, h, i, x, yr, n, q, t, s, t0, nt, pc, n_over, n_clamp
     integer :: lo(5), hi(5), ks(4), bs(4), ps
     integer, allocatable :: first_coincident(:)
     integer(8) :: c0, c1, crate
     real(wp) :: d(3), dist, dd(3, assembly_chunk)
     real(wp), allocatable :: yw(:, :), vt(:, :)
+    logical :: conv
 
     nsph = size(r, 2)
     if (nsph < 1) then
@@ -188,6 +210,10 @@ contains
                 this%w6(this%n6, this%n6))
       allocate (this%bq(max(1, this%nqt), 5), this%d6(this%n6, 5))
     end if
+    conv = .false.
+    if (present(single)) conv = single
+    this%single_current = .false.
+    if (conv) call allocate_single(this)
     associate (idx => this%idx)
       lo = idx%lo
       hi = idx%hi
@@ -225,7 +251,7 @@ contains
       n_over = 0
       n_clamp = 0
       first_coincident = 0
-      !$omp parallel default(none) shared(this, r, nsph, first_coincident) &
+      !$omp parallel default(none) shared(this, r, nsph, first_coincident, conv) &
       !$omp private(s, t, t0, nt, d, dist, dd, yw, vt) reduction(+:n_over, n_clamp)
       allocate (yw(assembly_chunk, 2*this%lay%nslot), vt(nsph, 0:this%lay%nhalf))
       vt(:, 0) = 0.0_wp
@@ -259,6 +285,7 @@ contains
           call pair_entries(this%lay, nt, dd, yw, vt(t0:t0 + nt - 1, 1:))
         end do
         call write_columns(s, vt)
+        if (conv) call single_columns(s)
       end do
       !$omp end do
       deallocate (yw, vt)
@@ -274,10 +301,30 @@ contains
         end if
       end do
     end associate
+    this%single_current = conv
     call system_clock(c1)
     this%t_assembly = real(c1 - c0, wp)/real(crate, wp)
 
   contains
+
+    !> The columns of sphere so in K0 (lower triangle from the diagonal) and in B, in single.
+    subroutine single_columns(so)
+      integer, intent(in) :: so
+      integer :: rc, b, c, nr
+      nr = this%nr
+      associate (idx => this%idx)
+        do rc = 1, 4
+          do b = 0, idx%hi(rc) - idx%lo(rc)
+            c = idx%k_start(rc, so) + b
+            this%k0s(c:nr, c) = real(this%k(c:nr, c), sp)
+          end do
+        end do
+        do b = 0, h - 1
+          c = idx%p_start(so) + b
+          this%bps(:, c) = real(this%bp(:, c), sp)
+        end do
+      end associate
+    end subroutine single_columns
 
     !> The columns of sphere so in K (lower triangle, its own diagonal blocks excepted) and
     !> in B from the entries vt(t, :) of the pairs (so, t). Row t of a run holds element
@@ -455,6 +502,66 @@ contains
       if (na > 0) call dgemv('N', na, w, -1.0_wp, this%bp(1, c0), nphi, t(c0), 1, 1.0_wp, y, 1)
     end do
   end subroutine system_apply
+
+  !> The single-precision copies of K0 (lower triangle) and B of the last `assemble` for
+  !> `apply_single` (module header); to be called after each `assemble` that they should follow.
+  subroutine system_copy_products_single(this)
+    class(multipole_system_t), intent(inout) :: this
+    integer :: j, nr
+    nr = this%nr
+    call allocate_single(this)
+    do j = 1, nr
+      this%k0s(j:nr, j) = real(this%k(j:nr, j), sp)
+    end do
+    this%bps = real(this%bp, sp)
+    this%single_current = .true.
+  end subroutine system_copy_products_single
+
+  !> True when the single copies hold the last assembly (assemble with `single`, or
+  !> copy_products_single after it).
+  pure logical function system_has_single_products(this) result(yes)
+    class(multipole_system_t), intent(in) :: this
+    yes = this%single_current
+  end function system_has_single_products
+
+  !> The single copies and work of apply_single, sized for the current system.
+  subroutine allocate_single(this)
+    class(multipole_system_t), intent(inout) :: this
+    integer :: nr
+    nr = this%nr
+    if (allocated(this%k0s)) then
+      if (size(this%k0s, 1) /= nr .or. any(shape(this%bps) /= shape(this%bp))) &
+        deallocate (this%k0s, this%bps, this%xw, this%yw, this%tw)
+    end if
+    if (.not. allocated(this%k0s)) then
+      allocate (this%k0s(nr, nr), this%bps(size(this%bp, 1), size(this%bp, 2)), this%xw(nr), this%yw(nr), &
+                this%tw(size(this%bp, 2)))
+    end if
+  end subroutine allocate_single
+
+  !> y = K x as `apply`, in single arithmetic with the copies of `copy_products_single` (x
+  !> rounded to single, y returned in double; the error bound in the module header).
+  subroutine system_apply_single(this, x, y)
+    class(multipole_system_t), intent(inout) :: this
+    real(wp), intent(in), contiguous :: x(:)
+    real(wp), intent(out), contiguous :: y(:)
+    integer :: na, nc, nphi, np, cs, c0, w
+    na = (this%lay%h - 3)*this%n
+    nc = 3*this%n
+    nphi = this%lay%h*this%n
+    np = nphi
+    cs = 2*na + 1
+    this%xw = real(x(1:this%nr), sp)
+    call ssymv('L', this%nr, 1.0_sp, this%k0s, this%nr, this%xw, 1, 0.0_sp, this%yw, 1)
+    do c0 = 1, np, apply_panel
+      w = min(apply_panel, np - c0 + 1)
+      call sgemv('T', nc, w, 1.0_sp, this%bps(na + 1, c0), nphi, this%xw(cs:), 1, 0.0_sp, this%tw(c0), 1)
+      if (na > 0) call sgemv('T', na, w, 1.0_sp, this%bps(1, c0), nphi, this%xw, 1, 1.0_sp, this%tw(c0), 1)
+      call sgemv('N', nc, w, -1.0_sp, this%bps(na + 1, c0), nphi, this%tw(c0), 1, 1.0_sp, this%yw(cs:), 1)
+      if (na > 0) call sgemv('N', na, w, -1.0_sp, this%bps(1, c0), nphi, this%tw(c0), 1, 1.0_sp, this%yw, 1)
+    end do
+    y(1:this%nr) = real(this%yw, wp)
+  end subroutine system_apply_single
 
   !> x = L^-1 x with the Cholesky factor K = L L^T of the last `factorise` (nr unknowns).
   subroutine system_forward(this, x)
