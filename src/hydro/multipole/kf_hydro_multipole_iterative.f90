@@ -511,7 +511,7 @@ contains
     integer, intent(out) :: its
     logical, intent(out) :: converged
     real(wp) :: beta, cs(max_iterations), sn(max_iterations), gv(max_iterations + 1), y(max_iterations)
-    real(wp) :: tmp, den, change, scale
+    real(wp) :: tmp, den, change, scale, bnorm
     integer :: k, j, nr, nt, nb
     logical :: single, close
 
@@ -530,8 +530,8 @@ contains
     end if
     ! the loop's products in single when the rule of the module header allows
     ! (the copies come from the assembly when the last call's start satisfied the rule too)
-    close = beta < norm2(this%rhs) .and. &
-            beta <= this%solver_tolerance/(single_margin*0.5_wp*epsilon(1.0_sp))*norm2(this%rhs)
+    bnorm = norm2(this%rhs)
+    close = beta < bnorm .and. beta <= this%solver_tolerance/(single_margin*0.5_wp*epsilon(1.0_sp))*bnorm
     single = this%single_products .and. close .and. this%cur%has_single_products()
     this%single_next = close
     if (single) this%istats%single_solves = this%istats%single_solves + 1

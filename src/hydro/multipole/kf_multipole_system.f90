@@ -285,7 +285,7 @@ contains
           call pair_entries(this%lay, nt, dd, yw, vt(t0:t0 + nt - 1, 1:))
         end do
         call write_columns(s, vt)
-        if (conv) call single_columns(s)
+        if (conv) call single_columns(this, s)
       end do
       !$omp end do
       deallocate (yw, vt)
@@ -306,25 +306,6 @@ contains
     this%t_assembly = real(c1 - c0, wp)/real(crate, wp)
 
   contains
-
-    !> The columns of sphere so in K0 (lower triangle from the diagonal) and in B, in single.
-    subroutine single_columns(so)
-      integer, intent(in) :: so
-      integer :: rc, b, c, nr
-      nr = this%nr
-      associate (idx => this%idx)
-        do rc = 1, 4
-          do b = 0, idx%hi(rc) - idx%lo(rc)
-            c = idx%k_start(rc, so) + b
-            this%k0s(c:nr, c) = real(this%k(c:nr, c), sp)
-          end do
-        end do
-        do b = 0, h - 1
-          c = idx%p_start(so) + b
-          this%bps(:, c) = real(this%bp(:, c), sp)
-        end do
-      end associate
-    end subroutine single_columns
 
     !> The columns of sphere so in K (lower triangle, its own diagonal blocks excepted) and
     !> in B from the entries vt(t, :) of the pairs (so, t). Row t of a run holds element
@@ -507,15 +488,34 @@ contains
   !> `apply_single` (module header); to be called after each `assemble` that they should follow.
   subroutine system_copy_products_single(this)
     class(multipole_system_t), intent(inout) :: this
-    integer :: j, nr
-    nr = this%nr
+    integer :: so
     call allocate_single(this)
-    do j = 1, nr
-      this%k0s(j:nr, j) = real(this%k(j:nr, j), sp)
+    do so = 1, this%n
+      call single_columns(this, so)
     end do
-    this%bps = real(this%bp, sp)
     this%single_current = .true.
   end subroutine system_copy_products_single
+
+  !> The columns of sphere so in K0 (lower triangle from the diagonal) and in B, in single
+  !> (what the single copies hold; `assemble` calls it per sphere from cache).
+  subroutine single_columns(this, so)
+    class(multipole_system_t), intent(inout) :: this
+    integer, intent(in) :: so
+    integer :: rc, b, c, nr
+    nr = this%nr
+    associate (idx => this%idx)
+      do rc = 1, 4
+        do b = 0, idx%hi(rc) - idx%lo(rc)
+          c = idx%k_start(rc, so) + b
+          this%k0s(c:nr, c) = real(this%k(c:nr, c), sp)
+        end do
+      end do
+      do b = 0, this%lay%h - 1
+        c = idx%p_start(so) + b
+        this%bps(:, c) = real(this%bp(:, c), sp)
+      end do
+    end associate
+  end subroutine single_columns
 
   !> True when the single copies hold the last assembly (assemble with `single`, or
   !> copy_products_single after it).
