@@ -39,9 +39,10 @@
 !>              configuration: the GMRES solve from zero, the forces and strain changing sign
 !>              between repetitions so that the last solution is no start, the 6N factor
 !>              refactorised where its rule says (the number of such factorisations printed);
-!>              the GMRES solve from the last call's solution, the configuration alternating
-!>              with one 0.001 d further, with the Krylov loop's products in single where the
-!>              rule allows and always in double; and a factorising call) and 'stage' calls
+!>              a factorising call) and 'stage' calls; then whole 'iterative' calls from the
+!>              last call's solution, the configuration alternating with one 0.001 d further,
+!>              with the Krylov loop's products in single where the rule allows and always in
+!>              double, the two interleaved in 100 pairs (medians and the median ratio)
 !>   rosenbrock [--config C] [--t-end T] [--model M] [--jacobian-steps K] [--rosenbrock-stage
 !>              yes|no] [--steppers LIST] [--tolerance TOL]: the Rosenbrock-W steppers of LIST
 !>              (comma-separated, default ros34pw2,ros34pw3) at tolerance TOL (default 1e-4)
@@ -97,13 +98,13 @@ program knotflow_bench_reuse
   use kf_reuse_check, only: checked_dynamics_t
   use kf_run_diagnostics, only: run_diagnostics_t
   use kf_cli, only: standard_option, argument, die
-  use kf_accuracy, only: wall_seconds, max_bead_deviation, loglog_slope
+  use kf_accuracy, only: wall_seconds, max_bead_deviation, loglog_slope, median
   use kf_stiffness_probe, only: stiffness_probe_t, stability_boundary
   use kf_blas_threads, only: set_blas_threads, blas_threads_in_use, openmp_threads_in_use, use_openmp_threads, &
     set_openmp_threads
   use kf_scene_chain, only: chain_params_t
   use kf_multipole_system, only: multipole_system_t
-  use kf_hydro_multipole_iterative, only: multipole_iterative_t, warm_history_max, warm_history_default
+  use kf_hydro_multipole_iterative, only: multipole_iterative_t, warm_history_max
   use kf_lubrication, only: lubrication_t
   use kf_pair_blocks, only: pair_blocks_t
   use kf_lapack, only: cholesky_factor
@@ -593,14 +594,14 @@ contains
   !> (module header, part evaluation); processor seconds, so that the time the process waits
   !> for a CPU on a shared machine does not count.
   subroutine run_evaluation()
-    integer, parameter :: reps(15) = [7, 7, 20, 20, 7, 5, 3, 3, 20, 6, 20, 7, 20, 20, 7]
+    integer, parameter :: reps(15) = [7, 7, 20, 20, 7, 5, 3, 3, 0, 6, 20, 7, 20, 0, 7] ! 9, 14: warm_calls_interleaved
     type(scene_t) :: scene
     type(multipole_system_t) :: sys
     type(lubrication_t) :: lub
     type(pair_blocks_t) :: blocks, blocks2
     type(multipole_iterative_t) :: iter
     type(multipole_model_t) :: stage
-    type(hydro_stats_t) :: s0, s1, s2, s3, s4, s5
+    type(hydro_stats_t) :: s0, s1
     type(error_t), allocatable :: error
     real(wp), allocatable :: r(:, :), r2(:, :), r3(:, :), f(:, :), u(:, :), zeta(:, :), pre(:, :), x(:), y(:)
     real(sp), allocatable :: xs(:)
@@ -631,13 +632,14 @@ contains
     if (allocated(error)) call die(program_name, error%message, 2)
     ! the pieces in order: 1 assembly, 2 lubrication blocks, 3 K x, 4 solve pair, 5 6N Cholesky,
     ! 6 'iterative' GMRES calls from zero, 7 'iterative' factorising calls, 8 'stage' calls,
-    ! 9 'iterative' GMRES calls from the last solution, 10 single-precision solve pair, 11 the
-    ! largest scaled change of the lubrication blocks between r and r2 (the 6N factor's rule),
-    ! 12 the single copies of K0 and B, 13 one single-precision product K x, 14 as 9 with the
-    ! Krylov loop's products in double (single_products = .false.), 15 the assembly with the
-    ! single copies made column by column (assemble's `single`)
+    ! 10 single-precision solve pair, 11 the largest scaled change of the lubrication blocks
+    ! between r and r2 (the 6N factor's rule), 12 the single copies of K0 and B, 13 one
+    ! single-precision product K x, 15 the assembly with the single copies made column by
+    ! column (assemble's `single`); the calls from the last solution (9, 14) after the loop,
+    ! interleaved (warm_calls_interleaved)
     best = huge(1.0_wp)
     do what = 1, 15
+      if (what == 9 .or. what == 14) cycle
       select case (what)
       case (3)
         allocate (x(sys%unknowns()), y(sys%unknowns()), xs(sys%unknowns()))
@@ -657,16 +659,10 @@ contains
         call lub%pair_blocks(r2, blocks2)
       case (12)
         call sys%assemble(r, error)
-      case (6, 9, 14)
-        ! warm_history 1 for 9 and 14: the start is the last call's solution (with a longer
-        ! history the configuration two calls back, the same, would give the exact start)
-        call iter%setup(2, .true., eps, error, &
-                        warm_history=merge(1, warm_history_default, what == 9 .or. what == 14))
-        iter%single_products = what /= 14
+      case (6)
+        call iter%setup(2, .true., eps, error)
         if (.not. allocated(error)) call iter%velocities(r, f, u, error, e)
-        if (what == 6) s0 = iter%statistics()
-        if (what == 9) s2 = iter%statistics()
-        if (what == 14) s4 = iter%statistics()
+        s0 = iter%statistics()
       end select
       if (allocated(error)) call die(program_name, error%message, 2)
       do rep = 1, reps(what)
@@ -702,12 +698,6 @@ contains
           call sys%assemble(r, error, single=.true.)
         case (13)
           call sys%apply_single(x, y)
-        case (9, 14)
-          if (mod(rep, 2) == 1) then
-            call iter%velocities(r2, f, u, error, e)
-          else
-            call iter%velocities(r3, f, u, error, e)
-          end if
         case (10)
           call sys%forward_single(xs)
           call sys%backward_single(xs)
@@ -722,8 +712,6 @@ contains
       end do
       if (what == 6) s1 = iter%statistics()
       if (what == 6) factors6 = s1%preconditioners - s0%preconditioners
-      if (what == 9) s3 = iter%statistics()
-      if (what == 14) s5 = iter%statistics()
     end do
     write (output_unit, '(a)') 'lubrication_pairs = '//to_str(blocks%n_pairs())
     write (output_unit, '(a)') 'assembly_ms = '//to_str(1.0e3_wp*best(1), '(f0.3)')
@@ -740,14 +728,7 @@ contains
     write (output_unit, '(a)') 'iterative_reused_friction_factorisations = '//to_str(factors6)
     write (output_unit, '(a)') 'iterative_reused_rest_ms = '// &
       to_str(1.0e3_wp*(best(6) - best(1) - best(2) - best(11)), '(f0.3)')
-    write (output_unit, '(a)') 'iterative_warm_ms = '//to_str(1.0e3_wp*best(9), '(f0.3)')
-    write (output_unit, '(a)') 'iterative_warm_iterations = '// &
-      to_str(real(s3%cg_iterations - s2%cg_iterations, wp)/real(max(1_i8, s3%reused - s2%reused), wp), '(f0.2)')
-    write (output_unit, '(a)') 'iterative_warm_single_solves = '//to_str(s3%single_solves - s2%single_solves)// &
-      ' of '//to_str(s3%reused - s2%reused)
-    write (output_unit, '(a)') 'iterative_warm_double_ms = '//to_str(1.0e3_wp*best(14), '(f0.3)')
-    write (output_unit, '(a)') 'iterative_warm_double_iterations = '// &
-      to_str(real(s5%cg_iterations - s4%cg_iterations, wp)/real(max(1_i8, s5%reused - s4%reused), wp), '(f0.2)')
+    call warm_calls_interleaved(r, r2, r3, f, e, eps)
     write (output_unit, '(a)') 'copy_products_single_ms = '//to_str(1.0e3_wp*best(12), '(f0.3)')
     write (output_unit, '(a)') 'assembly_with_single_copies_ms = '//to_str(1.0e3_wp*best(15), '(f0.3)')
     write (output_unit, '(a)') 'product_k_single_ms = '//to_str(1.0e3_wp*best(13), '(f0.3)')
@@ -755,6 +736,59 @@ contains
     write (output_unit, '(a)') 'stage_ms = '//to_str(1.0e3_wp*best(8), '(f0.3)')
     write (output_unit, '(a)') 'loadavg_end = '//loadavg()
   end subroutine run_evaluation
+
+  !> Whole 'iterative' calls from the last call's solution (warm_history 1: with a longer history
+  !> the configuration two calls back, the same, would give the exact start), the configuration
+  !> alternating between r2 and r3 (0.001 d apart), by two models: the Krylov loop's products in
+  !> single where the rule allows (the default) and always in double (single_products =
+  !> .false.). The two calls of a pair follow each other, in alternating order, so that both see
+  !> the same state of the machine; warm_pairs pairs after one call each at r. Printed: the
+  !> median processor time of each (ms), the median of the pairs' ratios double / single, the
+  !> GMRES iterations per call and the calls with single products.
+  subroutine warm_calls_interleaved(r, r2, r3, f, e, eps)
+    real(wp), intent(in) :: r(:, :), r2(:, :), r3(:, :), f(:, :), e(3, 3), eps
+    integer, parameter :: warm_pairs = 100
+    type(multipole_iterative_t) :: models(2)
+    type(hydro_stats_t) :: s0(2), s1(2)
+    type(error_t), allocatable :: error
+    real(wp) :: u(3, size(r, 2)), c0, c1, times(warm_pairs, 2)
+    integer :: rep, k, m
+    do m = 1, 2
+      call models(m)%setup(2, .true., eps, error, warm_history=1)
+      if (allocated(error)) call die(program_name, error%message, 2)
+      models(m)%single_products = m == 1
+      call models(m)%velocities(r, f, u, error, e)
+      if (allocated(error)) call die(program_name, error%message, 2)
+      s0(m) = models(m)%statistics()
+    end do
+    do rep = 1, warm_pairs
+      do k = 1, 2
+        m = merge(k, 3 - k, mod(rep, 2) == 1)
+        call cpu_time(c0)
+        if (mod(rep, 2) == 1) then
+          call models(m)%velocities(r2, f, u, error, e)
+        else
+          call models(m)%velocities(r3, f, u, error, e)
+        end if
+        call cpu_time(c1)
+        if (allocated(error)) call die(program_name, error%message, 2)
+        times(rep, m) = c1 - c0
+      end do
+    end do
+    do m = 1, 2
+      s1(m) = models(m)%statistics()
+    end do
+    write (output_unit, '(a)') 'iterative_warm_pairs = '//to_str(warm_pairs)
+    write (output_unit, '(a)') 'iterative_warm_ms = '//to_str(1.0e3_wp*median(times(:, 1)), '(f0.3)')
+    write (output_unit, '(a)') 'iterative_warm_double_ms = '//to_str(1.0e3_wp*median(times(:, 2)), '(f0.3)')
+    write (output_unit, '(a)') 'iterative_warm_ratio_double_over_single = '// &
+      to_str(median(times(:, 2)/times(:, 1)), '(f0.3)')
+    write (output_unit, '(a)') 'iterative_warm_iterations = '// &
+      to_str(real(s1(1)%cg_iterations - s0(1)%cg_iterations, wp)/real(warm_pairs, wp), '(f0.2)')// &
+      ' (double: '//to_str(real(s1(2)%cg_iterations - s0(2)%cg_iterations, wp)/real(warm_pairs, wp), '(f0.2)')//')'
+    write (output_unit, '(a)') 'iterative_warm_single_solves = '//to_str(s1(1)%single_solves - s0(1)%single_solves)// &
+      ' of '//to_str(warm_pairs)
+  end subroutine warm_calls_interleaved
 
   !> Processor time (all threads; cpu_time) of the factorisation of the L = 2 system at r: the
   !> best of 5 factorise calls (assembly + factorisation) less the best of 5 assemblies. Time

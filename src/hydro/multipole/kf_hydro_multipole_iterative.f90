@@ -50,7 +50,10 @@
 !> at 1e-10, below the warm starts of the tests) use the double products. The single copies
 !> are made by the assembly (each sphere's columns from cache, about 1 ms at N = 99; 1.6-2.1 ms
 !> as a separate conversion) when the last call's start satisfied the rule, and used when this
-!> call's does too. Counters: `statistics` (single_solves, single_iterations).
+!> call's does too. Only chains of at least `single_min_beads` beads (component, default
+!> single_min_beads_default = 90) use them: the copies cost about as much as the cheaper products
+!> save below that (K in cache; measured, docs/multipole.md). Counters: `statistics`
+!> (single_solves, single_iterations).
 !> GMRES, not CG: the system is symmetric but indefinite (its Schur complement onto U is
 !> negative definite). One system, not nested solves (CG on the 6N friction, each product an
 !> inner solve with K preconditioned by K_ref): an inner solve alone needs as many iterations,
@@ -127,6 +130,9 @@ module kf_hydro_multipole_iterative
   !> The rule's margin for single-precision products (module header): a call uses them when
   !> |r0| <= solver_tolerance / (single_margin u) |b|, u the single rounding unit.
   real(wp), parameter, public :: single_margin = 100.0_wp
+  !> The fewest beads for single-precision products (module header): below, the single copies
+  !> cost about as much as the products save (docs/multipole.md).
+  integer, parameter, public :: single_min_beads_default = 90
 
   public :: iterative_memory_bytes, affine_weights
 
@@ -142,6 +148,8 @@ module kf_hydro_multipole_iterative
     real(wp) :: friction_change = friction_change_default
     !> .false.: the Krylov loop's products always in double (module header).
     logical :: single_products = .true.
+    !> The fewest beads for them (module header).
+    integer :: single_min_beads = single_min_beads_default
     !> The last GMRES call's start satisfied the rule: the next assembly makes the single copies.
     logical, private :: single_next = .false.
     logical, private :: ready = .false.
@@ -531,7 +539,8 @@ contains
     ! the loop's products in single when the rule of the module header allows
     ! (the copies come from the assembly when the last call's start satisfied the rule too)
     bnorm = norm2(this%rhs)
-    close = beta < bnorm .and. beta <= this%solver_tolerance/(single_margin*0.5_wp*epsilon(1.0_sp))*bnorm
+    close = beta < bnorm .and. beta <= this%solver_tolerance/(single_margin*0.5_wp*epsilon(1.0_sp))*bnorm &
+            .and. nb >= this%single_min_beads
     single = this%single_products .and. close .and. this%cur%has_single_products()
     this%single_next = close
     if (single) this%istats%single_solves = this%istats%single_solves + 1
