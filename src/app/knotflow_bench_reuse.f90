@@ -63,6 +63,9 @@
 !>              --warm-history K: each 'iterative' run followed by the same run with the
 !>              iterative model's warm_history = K (labels <run>_wh<K>.iterative; K = 1: GMRES
 !>              starts from the last call's solution, as before)
+!>              --refactor-iterations K: each 'iterative' run followed by the same run with
+!>              the iterative model's refactor_iterations = K (labels <run>_ri<K>.iterative;
+!>              the next call factorises after a call with more than K GMRES iterations)
 !>              --double-products yes: each 'iterative' run followed by the same run with the
 !>              Krylov loop's products always in double (single_products = .false.; labels
 !>              <run>_double.iterative; the model before the single-precision products)
@@ -104,7 +107,7 @@ program knotflow_bench_reuse
     set_openmp_threads
   use kf_scene_chain, only: chain_params_t
   use kf_multipole_system, only: multipole_system_t
-  use kf_hydro_multipole_iterative, only: multipole_iterative_t, warm_history_max
+  use kf_hydro_multipole_iterative, only: multipole_iterative_t, warm_history_max, max_iterations
   use kf_lubrication, only: lubrication_t
   use kf_pair_blocks, only: pair_blocks_t
   use kf_lapack, only: cholesky_factor
@@ -115,7 +118,7 @@ program knotflow_bench_reuse
   character(len=:), allocatable :: part, config, overlap, update, table, model, steppers
   real(wp) :: t_end, eps_lub, tolerance, friction_change
   logical :: double_products
-  integer :: every, jacobian_steps, jacobian_order, warm_history
+  integer :: every, jacobian_steps, jacobian_order, warm_history, refactor_iterations
   logical :: omp_set, rosenbrock_stage
 
   ! The OpenMP pair loops get the BLAS's thread count (OPENBLAS_NUM_THREADS=1: one core; kf_blas_threads).
@@ -160,7 +163,7 @@ contains
       'overlaps|scaling|rigid|stiffness|threads|rosenbrock|evaluation [--config trefoil|random60|coil|FILE] [--t-end T] [--every K]'// &
       ' [--eps-lub E] [--overlap RULE (one of '//name_list(overlap_names)//')] [--update U] [--tolerance TOL]'// &
       ' [--table FILE] [--model multipole|rpy] [--jacobian-steps K] [--jacobian-order J] [--rosenbrock-stage yes|no]'// &
-      ' [--steppers LIST] [--friction-change F] [--warm-history K] [--double-products yes|no]'//new_line('a')// &
+      ' [--steppers LIST] [--friction-change F] [--warm-history K] [--refactor-iterations K] [--double-products yes|no]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
       'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).')
     config = 'trefoil'
@@ -177,6 +180,7 @@ contains
     rosenbrock_stage = .true.
     friction_change = -1.0_wp
     warm_history = 0
+    refactor_iterations = 0
     double_products = .false.
     steppers = method_ros34pw2//','//method_ros34pw3
     k = 2
@@ -230,6 +234,11 @@ contains
         if (ios /= 0 .or. warm_history < 1 .or. warm_history > warm_history_max) &
           call die(program_name, '--warm-history '//trim(val)//': expected an integer in [1, '// &
                    to_str(warm_history_max)//']', 2)
+      case ('--refactor-iterations')
+        read (val, *, iostat=ios) refactor_iterations
+        if (ios /= 0 .or. refactor_iterations < 1 .or. refactor_iterations >= max_iterations) &
+          call die(program_name, '--refactor-iterations '//trim(val)//': expected an integer in [1, '// &
+                   to_str(max_iterations - 1)//']', 2)
       case ('--double-products')
         if (val /= 'yes' .and. val /= 'no') &
           call die(program_name, '--double-products '//trim(val)//': allowed values are yes, no', 2)
@@ -976,8 +985,9 @@ contains
   !> reference; with --friction-change F and upd 'iterative' the same run follows with the
   !> iterative model's friction_change set to F (label <name>_fc<F>.<upd>), in the same process;
   !> with --warm-history K likewise with its warm_history set to K (label <name>_wh<K>.<upd>);
-  !> with --double-products yes likewise with the Krylov loop's products in double (label
-  !> <name>_double.<upd>).
+  !> with --refactor-iterations K likewise with its refactor_iterations set to K (label
+  !> <name>_ri<K>.<upd>); with --double-products yes likewise with the Krylov loop's products in
+  !> double (label <name>_double.<upd>).
   subroutine run_compared(name, method, upd, keep, tol, jorder, r_ref, wall_ref)
     character(len=*), intent(in) :: name, method, upd
     integer, intent(in) :: keep, jorder
@@ -999,6 +1009,11 @@ contains
       call run_method(label, method, upd, keep, tol, r, wall, jorder, whistory=warm_history)
       call compare_with_reference(label, r, wall, r_ref, wall_ref)
     end if
+    if (refactor_iterations > 0) then
+      label = name//'_ri'//to_str(refactor_iterations)//'.'//upd
+      call run_method(label, method, upd, keep, tol, r, wall, jorder, refactor=refactor_iterations)
+      call compare_with_reference(label, r, wall, r_ref, wall_ref)
+    end if
     if (double_products) then
       label = name//'_double.'//upd
       call run_method(label, method, upd, keep, tol, r, wall, jorder, double=.true.)
@@ -1018,9 +1033,9 @@ contains
   !> --eps-lub) with `method` and `upd`: its figures under `label`; r the final positions.
   !> `jorder` (optional): &hydro jacobian_order; `fchange` (optional): the iterative model's
   !> friction_change, `whistory` (optional): its warm_history, `double` (optional): .true. sets
-  !> its single_products = .false. (the factory's model with those values, taken over by the
-  !> dynamics).
-  subroutine run_method(label, method, upd, keep, tol, r, wall, jorder, fchange, whistory, double)
+  !> its single_products = .false., `refactor` (optional): its refactor_iterations (the
+  !> factory's model with those values, taken over by the dynamics).
+  subroutine run_method(label, method, upd, keep, tol, r, wall, jorder, fchange, whistory, double, refactor)
     character(len=*), intent(in) :: label, method, upd
     integer, intent(in) :: keep
     real(wp), intent(in) :: tol
@@ -1030,6 +1045,7 @@ contains
     real(wp), intent(in), optional :: fchange
     integer, intent(in), optional :: whistory
     logical, intent(in), optional :: double
+    integer, intent(in), optional :: refactor
     type(scene_t) :: scene
     type(dynamics_t) :: dyn
     class(hydro_model_t), allocatable :: hydro
@@ -1041,7 +1057,7 @@ contains
     scene%integrator%method = method
     scene%integrator%jacobian_steps = keep
     if (present(jorder)) scene%hydro%jacobian_order = jorder
-    if (present(fchange) .or. present(whistory) .or. present(double)) then
+    if (present(fchange) .or. present(whistory) .or. present(double) .or. present(refactor)) then
       call make_hydro_model(scene%hydro, scene%integrator%tolerance, hydro, error)
       if (allocated(error)) call die(program_name, error%message, 2)
       select type (hydro)
@@ -1049,8 +1065,10 @@ contains
         if (present(fchange)) hydro%friction_change = fchange
         if (present(whistory)) hydro%warm_history = whistory
         if (present(double)) hydro%single_products = .not. double
+        if (present(refactor)) hydro%refactor_iterations = refactor
       class default
-        call die(program_name, '--friction-change, --warm-history, --double-products: the model is not the iterative one', 2)
+        call die(program_name, '--friction-change, --warm-history, --double-products, --refactor-iterations: '// &
+                 'the model is not the iterative one', 2)
       end select
     end if
     call dyn%init(scene, size(r, 2), error, hydro)
