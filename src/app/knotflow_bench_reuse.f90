@@ -41,8 +41,9 @@
 !>              refactorised where its rule says (the number of such factorisations printed);
 !>              a factorising call) and 'stage' calls; then whole 'iterative' calls from the
 !>              last call's solution, the configuration alternating with one 0.001 d further,
-!>              with the Krylov loop's products in single where the rule allows and always in
-!>              double, the two interleaved in 100 pairs (medians and the median ratio)
+!>              with the Krylov loop's products in single where the rule allows (at any size)
+!>              and always in double, the two interleaved in 100 pairs (medians and the median
+!>              ratio)
 !>   rosenbrock [--config C] [--t-end T] [--model M] [--jacobian-steps K] [--rosenbrock-stage
 !>              yes|no] [--steppers LIST] [--tolerance TOL]: the Rosenbrock-W steppers of LIST
 !>              (comma-separated, default ros34pw2,ros34pw3) at tolerance TOL (default 1e-4)
@@ -749,8 +750,8 @@ contains
   !> Whole 'iterative' calls from the last call's solution (warm_history 1: with a longer history
   !> the configuration two calls back, the same, would give the exact start), the configuration
   !> alternating between r2 and r3 (0.001 d apart), by two models: the Krylov loop's products in
-  !> single where the rule allows (the default) and always in double (single_products =
-  !> .false.). The two calls of a pair follow each other, in alternating order, so that both see
+  !> single where the rule allows, at any size (single_min_beads = 1), and always in double
+  !> (single_products = .false.). The two calls of a pair follow each other, in alternating order, so that both see
   !> the same state of the machine; warm_pairs pairs after one call each at r. Printed: the
   !> median processor time of each (ms), the median of the pairs' ratios double / single, the
   !> GMRES iterations per call and the calls with single products.
@@ -766,6 +767,7 @@ contains
       call models(m)%setup(2, .true., eps, error, warm_history=1)
       if (allocated(error)) call die(program_name, error%message, 2)
       models(m)%single_products = m == 1
+      models(m)%single_min_beads = 1
       call models(m)%velocities(r, f, u, error, e)
       if (allocated(error)) call die(program_name, error%message, 2)
       s0(m) = models(m)%statistics()
