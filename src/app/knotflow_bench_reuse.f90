@@ -649,7 +649,6 @@ contains
     ! interleaved (warm_calls_interleaved)
     best = huge(1.0_wp)
     do what = 1, 15
-      if (what == 9 .or. what == 14) cycle
       select case (what)
       case (3)
         allocate (x(sys%unknowns()), y(sys%unknowns()), xs(sys%unknowns()))
