@@ -104,9 +104,12 @@ for part in "${parts[@]}"; do
       # (L = 2 + lubrication, overlap 'relax' as the study inputs, tolerance 1e-4). Wall and
       # processor seconds and the load average at both ends into $out/<name>.txt.
       # KNOTFLOW_CASE_JACOBIAN_ORDER and KNOTFLOW_CASE_JACOBIAN_STEPS (default 0 and 4, the
-      # scene defaults): &hydro jacobian_order and &integrator jacobian_steps.
+      # scene defaults): &hydro jacobian_order and &integrator jacobian_steps;
+      # KNOTFLOW_CASE_SOLVER_TOLERANCE (default: not given, the scene default): &hydro
+      # solver_tolerance ('iterative' only).
       update="${KNOTFLOW_CASE_UPDATE:-iterative}" method="${KNOTFLOW_CASE_METHOD:-ros34pw2}"
       jorder="${KNOTFLOW_CASE_JACOBIAN_ORDER:-0}" jsteps="${KNOTFLOW_CASE_JACOBIAN_STEPS:-4}"
+      stol="${KNOTFLOW_CASE_SOLVER_TOLERANCE:-}" stol_line=""
       if [ "$part" = case ]; then
         name="case_trefoil_${update}_${method}"
         chain="shape = 'trefoil', orientation = 'c'" a=2.2 t_end=1000.0
@@ -115,6 +118,7 @@ for part in "${parts[@]}"; do
         chain="shape = 'candycane', seed = 20150509" a=1.0 t_end=2000.0
       fi
       if [ "$jorder" != 0 ] || [ "$jsteps" != 4 ]; then name="${name}_jorder${jorder}_jsteps${jsteps}"; fi
+      if [ -n "$stol" ]; then name="${name}_st${stol}" stol_line=", solver_tolerance = $stol"; fi
       dir="$out/$name"
       scene=$(cat <<NML
 &chain
@@ -125,7 +129,7 @@ for part in "${parts[@]}"; do
 /
 &hydro
   model = 'multipole', order = 2, lubrication = .true., update = '$update', overlap = 'relax',
-  jacobian_order = $jorder
+  jacobian_order = $jorder$stol_line
 /
 &integrator
   method = '$method', t_end = $t_end, tolerance = 1.0e-4, jacobian_steps = $jsteps
@@ -187,6 +191,7 @@ NML
            "loadavg_end = $(cat /proc/loadavg); commit = $commit; exit = $status" >> "$dir/segments.txt"
       { echo "part = $part"; echo "update = $update"; echo "method = $method"; echo "t_end = $t_end";
         echo "jacobian_order = $jorder"; echo "jacobian_steps = $jsteps"; echo "overlap = relax";
+        echo "solver_tolerance = ${stol:-default}";
         awk '/^segment/ { w += $4; p += $7 + $10; n++ }
              END { printf "segments = %d\nwall_s = %.1f\nprocessor_s = %.1f (user + system, summed over the segments)\n", n, w, p }' \
           "$dir/segments.txt"

@@ -4,9 +4,10 @@
 !> rule of the multipole campaign (`--overlap`, default relax, a variant of ours).
 !>
 !> Usage: knotflow-bench-reuse PART [options]
-!>   velocity   [--config C] [--t-end T] [--every K] [--update iterative]: integrate with the
-!>              adaptive path (or the iterative one) and, at every K-th stage, compare its
-!>              velocities with the exact ones at the same positions
+!>   velocity   [--config C] [--t-end T] [--every K] [--update iterative] [--solver-tolerance S]:
+!>              integrate with the adaptive path (or the iterative one, with its solver_tolerance
+!>              S) and, at every K-th stage, compare its velocities with the exact ones at the
+!>              same positions
 !>   trajectory [--config C] [--t-end T]: largest bead deviation at T between the two paths at
 !>              tolerance 1e-4, and of the exact path between tolerances 1e-4 and 1e-6
 !>   speed      [--config C] [--t-end T]: wall time of both paths to T and their ratio
@@ -67,6 +68,9 @@
 !>              --refactor-iterations K: each 'iterative' run followed by the same run with
 !>              the iterative model's refactor_iterations = K (labels <run>_ri<K>.iterative;
 !>              the next call factorises after a call with more than K GMRES iterations)
+!>              --solver-tolerance S: each 'iterative' run followed by the same run with the
+!>              iterative model's solver_tolerance = S (labels <run>_st<S>.iterative; the
+!>              default kf_hydro_limits' solver_tolerance_default)
 !>              --double-products yes: each 'iterative' run followed by the same run with the
 !>              Krylov loop's products always in double (single_products = .false.; labels
 !>              <run>_double.iterative; the model before the single-precision products)
@@ -90,7 +94,7 @@ program knotflow_bench_reuse
     update_adaptive, update_iterative
   use kf_scene_integrator, only: jacobian_steps_max, method_dopri45, method_ros34pw2, method_ros34pw3
   use kf_scene_check, only: name_list
-  use kf_hydro_limits, only: eps_lub_in_range, eps_lub_range_text
+  use kf_hydro_limits, only: eps_lub_in_range, eps_lub_range_text, solver_tolerance_min, solver_tolerance_max
   use kf_chain_shapes, only: build_initial_chain
   use kf_dynamics, only: dynamics_t
   use kf_stepper, only: stepper_t
@@ -117,7 +121,7 @@ program knotflow_bench_reuse
   character(len=*), parameter :: program_name = 'knotflow-bench-reuse'
 
   character(len=:), allocatable :: part, config, overlap, update, table, model, steppers
-  real(wp) :: t_end, eps_lub, tolerance, friction_change
+  real(wp) :: t_end, eps_lub, tolerance, friction_change, solver_tolerance
   logical :: double_products
   integer :: every, jacobian_steps, jacobian_order, warm_history, refactor_iterations
   logical :: omp_set, rosenbrock_stage
@@ -164,7 +168,8 @@ contains
       'overlaps|scaling|rigid|stiffness|threads|rosenbrock|evaluation [--config trefoil|random60|coil|FILE] [--t-end T] [--every K]'// &
       ' [--eps-lub E] [--overlap RULE (one of '//name_list(overlap_names)//')] [--update U] [--tolerance TOL]'// &
       ' [--table FILE] [--model multipole|rpy] [--jacobian-steps K] [--jacobian-order J] [--rosenbrock-stage yes|no]'// &
-      ' [--steppers LIST] [--friction-change F] [--warm-history K] [--refactor-iterations K] [--double-products yes|no]'//new_line('a')// &
+      ' [--steppers LIST] [--friction-change F] [--warm-history K] [--refactor-iterations K] [--solver-tolerance S]'// &
+      ' [--double-products yes|no]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
       'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).')
     config = 'trefoil'
@@ -182,6 +187,7 @@ contains
     friction_change = -1.0_wp
     warm_history = 0
     refactor_iterations = 0
+    solver_tolerance = -1.0_wp
     double_products = .false.
     steppers = method_ros34pw2//','//method_ros34pw3
     k = 2
@@ -240,6 +246,11 @@ contains
         if (ios /= 0 .or. refactor_iterations < 1 .or. refactor_iterations >= max_iterations) &
           call die(program_name, '--refactor-iterations '//trim(val)//': expected an integer in [1, '// &
                    to_str(max_iterations - 1)//']', 2)
+      case ('--solver-tolerance')
+        read (val, *, iostat=ios) solver_tolerance
+        if (ios /= 0 .or. .not. (solver_tolerance >= solver_tolerance_min .and. solver_tolerance <= solver_tolerance_max)) &
+          call die(program_name, '--solver-tolerance '//trim(val)//': expected a number in ['// &
+                   to_str(solver_tolerance_min, '(es8.1)')//', '//to_str(solver_tolerance_max, '(es8.1)')//']', 2)
       case ('--double-products')
         if (val /= 'yes' .and. val /= 'no') &
           call die(program_name, '--double-products '//trim(val)//': allowed values are yes, no', 2)
@@ -404,6 +415,10 @@ contains
     fast = update_adaptive
     if (update == update_iterative) fast = update_iterative
     call study_scene(config, 1.0e-4_wp, fast, scene, r)
+    if (solver_tolerance > 0.0_wp .and. fast == update_iterative) then
+      scene%hydro%solver_tolerance = solver_tolerance
+      write (output_unit, '(a)') 'solver_tolerance = '//to_str(solver_tolerance, '(es8.1)')
+    end if
     call sys%init(scene, size(r, 2), error, every, fast)
     if (allocated(error)) call die(program_name, error%message, 2)
     call make_stepper(scene%integrator, integ, error)
@@ -987,7 +1002,8 @@ contains
   !> iterative model's friction_change set to F (label <name>_fc<F>.<upd>), in the same process;
   !> with --warm-history K likewise with its warm_history set to K (label <name>_wh<K>.<upd>);
   !> with --refactor-iterations K likewise with its refactor_iterations set to K (label
-  !> <name>_ri<K>.<upd>); with --double-products yes likewise with the Krylov loop's products in
+  !> <name>_ri<K>.<upd>); with --solver-tolerance S likewise with its solver_tolerance set to S
+  !> (label <name>_st<S>.<upd>); with --double-products yes likewise with the Krylov loop's products in
   !> double (label <name>_double.<upd>).
   subroutine run_compared(name, method, upd, keep, tol, jorder, r_ref, wall_ref)
     character(len=*), intent(in) :: name, method, upd
@@ -1015,6 +1031,11 @@ contains
       call run_method(label, method, upd, keep, tol, r, wall, jorder, refactor=refactor_iterations)
       call compare_with_reference(label, r, wall, r_ref, wall_ref)
     end if
+    if (solver_tolerance > 0.0_wp) then
+      label = name//'_st'//to_str(solver_tolerance, '(es7.1)')//'.'//upd
+      call run_method(label, method, upd, keep, tol, r, wall, jorder, stol=solver_tolerance)
+      call compare_with_reference(label, r, wall, r_ref, wall_ref)
+    end if
     if (double_products) then
       label = name//'_double.'//upd
       call run_method(label, method, upd, keep, tol, r, wall, jorder, double=.true.)
@@ -1034,9 +1055,10 @@ contains
   !> --eps-lub) with `method` and `upd`: its figures under `label`; r the final positions.
   !> `jorder` (optional): &hydro jacobian_order; `fchange` (optional): the iterative model's
   !> friction_change, `whistory` (optional): its warm_history, `double` (optional): .true. sets
-  !> its single_products = .false., `refactor` (optional): its refactor_iterations (the
+  !> its single_products = .false., `refactor` (optional): its refactor_iterations, `stol`
+  !> (optional): its solver_tolerance (the
   !> factory's model with those values, taken over by the dynamics).
-  subroutine run_method(label, method, upd, keep, tol, r, wall, jorder, fchange, whistory, double, refactor)
+  subroutine run_method(label, method, upd, keep, tol, r, wall, jorder, fchange, whistory, double, refactor, stol)
     character(len=*), intent(in) :: label, method, upd
     integer, intent(in) :: keep
     real(wp), intent(in) :: tol
@@ -1047,6 +1069,7 @@ contains
     integer, intent(in), optional :: whistory
     logical, intent(in), optional :: double
     integer, intent(in), optional :: refactor
+    real(wp), intent(in), optional :: stol
     type(scene_t) :: scene
     type(dynamics_t) :: dyn
     class(hydro_model_t), allocatable :: hydro
@@ -1058,7 +1081,7 @@ contains
     scene%integrator%method = method
     scene%integrator%jacobian_steps = keep
     if (present(jorder)) scene%hydro%jacobian_order = jorder
-    if (present(fchange) .or. present(whistory) .or. present(double) .or. present(refactor)) then
+    if (present(fchange) .or. present(whistory) .or. present(double) .or. present(refactor) .or. present(stol)) then
       call make_hydro_model(scene%hydro, scene%integrator%tolerance, hydro, error)
       if (allocated(error)) call die(program_name, error%message, 2)
       select type (hydro)
@@ -1067,8 +1090,10 @@ contains
         if (present(whistory)) hydro%warm_history = whistory
         if (present(double)) hydro%single_products = .not. double
         if (present(refactor)) hydro%refactor_iterations = refactor
+        if (present(stol)) hydro%solver_tolerance = stol
       class default
-        call die(program_name, '--friction-change, --warm-history, --double-products, --refactor-iterations: '// &
+        call die(program_name, '--friction-change, --warm-history, --double-products, --refactor-iterations, '// &
+                 '--solver-tolerance: '// &
                  'the model is not the iterative one', 2)
       end select
     end if

@@ -229,7 +229,8 @@ contains
   !> the ambient flow's gradient on every bead (exact: v0 is linear) and the forces' Jacobian at y
   !> (kf_forces `jacobian`) times a mobility: the model's at y (`mobility_at`: free after a
   !> 'stage' evaluation at y), or, where the model allows it (`mobility_reusable`: 'adaptive',
-  !> 'iterative', whose new mobility costs a factorisation) and it is not at hand, the one of an
+  !> whose new mobility costs a factorisation, and 'iterative', an inversion of its 6N factor) and
+  !> it is not at hand, the one of an
   !> earlier call, kept for &integrator jacobian_steps calls in all. Left out: the change of mu
   !> and of the strain disturbance C:E with y, and the overlap rule's configuration (exact where
   !> the forces vanish, no strain acts and no pair overlaps); a W-method keeps its order with

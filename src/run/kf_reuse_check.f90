@@ -10,6 +10,7 @@ module kf_reuse_check
   use kf_error, only: error_t
   use kf_scene, only: scene_t
   use kf_scene_hydro, only: update_stage, update_adaptive
+  use kf_hydro_limits, only: solver_tolerance_default
   use kf_dynamics, only: dynamics_t
   use kf_ode_system, only: ode_system_t
   use kf_accuracy, only: velocity_error_norms
@@ -53,6 +54,7 @@ contains
     call this%fast%init(sc, n_beads, error)
     if (allocated(error)) return
     sc%hydro%update = update_stage
+    sc%hydro%solver_tolerance = solver_tolerance_default   ! the fast path's setting only
     call this%exact%init(sc, n_beads, error)
     if (allocated(error)) return
     allocate (this%v(3, n_beads), this%v0(3, n_beads))

@@ -9,7 +9,7 @@ module kf_scene_hydro
   use kf_scene_item, only: scene_item_t, add_s, add_i, add_l, add_r, name_len
   use kf_scene_check, only: refuse, name_list, quoted, check_finite
   use kf_hydro_limits, only: eps_lub_max, order_max, lubrication_order_max, eps_lub_range_text, &
-    order_range_text, solver_tolerance_default
+    order_range_text, solver_tolerance_default, solver_tolerance_min, solver_tolerance_max
   implicit none
   private
 
@@ -63,6 +63,9 @@ module kf_scene_hydro
     !> The multipole order of the mobility in a linearly implicit stepper's Jacobian where the
     !> model's own is not at hand (update adaptive or iterative); 0: the model's order
     integer :: jacobian_order = jacobian_order_default
+    !> update iterative: the relative solver tolerance (largest change of a bead velocity per
+    !> GMRES iteration over the largest bead velocity; kf_hydro_limits)
+    real(wp) :: solver_tolerance = solver_tolerance_default
   end type hydro_params_t
 
   public :: read_hydro_group, hydro_items, check_hydro, resolve_hydro, effective_eps_lub
@@ -82,12 +85,16 @@ contains
     character(len=name_len) :: update, overlap
     real(wp) :: overlap_time
     integer :: jacobian_order
-    namelist /hydro/ model, order, lubrication, eps_lub, update, overlap, overlap_time, jacobian_order
+    real(wp) :: solver_tolerance
+    namelist /hydro/ model, order, lubrication, eps_lub, update, overlap, overlap_time, jacobian_order, &
+      solver_tolerance
     model = p%model; order = p%order; lubrication = p%lubrication; eps_lub = p%eps_lub
     update = p%update; overlap = p%overlap; overlap_time = p%overlap_time; jacobian_order = p%jacobian_order
+    solver_tolerance = p%solver_tolerance
     read (text, nml=hydro, iostat=ios, iomsg=msg)
     p%model = model; p%order = order; p%lubrication = lubrication; p%eps_lub = eps_lub
     p%update = update; p%overlap = overlap; p%overlap_time = overlap_time; p%jacobian_order = jacobian_order
+    p%solver_tolerance = solver_tolerance
   end subroutine read_hydro_group
 
   !> The variables of &hydro, in namelist order, appended to `items`.
@@ -107,8 +114,7 @@ contains
       'multipole: adaptive (the many-body part reused between refreshes within an error budget from the '// &
       'tolerance, lubrication exact at every stage), stage (recomputed exactly at every Runge-Kutta stage: '// &
       'the reference) or iterative (the exact system at every stage, solved by GMRES preconditioned with an '// &
-      'earlier factorisation, to a relative velocity tolerance of '//to_str(solver_tolerance_default, '(es7.1)')// &
-      '); ignored by none and rpy')
+      'earlier factorisation, to the relative velocity tolerance solver_tolerance); ignored by none and rpy')
     call add_s(items, 'hydro.overlap', p%overlap, 'one of '//name_list(overlap_names)//'; '// &
       quoted(overlap_pair)//' unless model = '//quoted(model_multipole), &
       'multipole: how overlapping beads are treated. bwe: the study''s BWE rule, only the lubrication '// &
@@ -125,6 +131,10 @@ contains
       'implicit stepper (&integrator method ros34pw2, ros34pw3), made where the model''s own is not at hand '// &
       '(same lubrication and overlap treatment); 0: the model''s order. A W-method keeps its order with any '// &
       'Jacobian; 1 is much cheaper (docs/accuracy.md, "A cheaper Jacobian"); ignored by the other methods')
+    call add_r(items, 'hydro.solver_tolerance', p%solver_tolerance, solver_tolerance_allowed(), &
+      'multipole, update iterative: GMRES stops when no bead velocity changed by more than solver_tolerance '// &
+      'times the largest bead velocity in the last iteration; looser is cheaper (fewer iterations and '// &
+      'factorisations) and moves the trajectory by about its size (docs/accuracy.md, "The solver tolerance")')
   end subroutine hydro_items
 
   !> Check &hydro (`file`: the scene file named in the messages, '' from code).
@@ -175,6 +185,13 @@ contains
         call refuse(error, file, 'hydro', 'jacobian_order', to_str(p%jacobian_order), jacobian_order_allowed()); return
       end if
     end if
+    if (p%solver_tolerance /= solver_tolerance_default) then
+      if (p%model /= model_multipole .or. p%update /= update_iterative .or. &
+          .not. (p%solver_tolerance >= solver_tolerance_min .and. p%solver_tolerance <= solver_tolerance_max)) then
+        call refuse(error, file, 'hydro', 'solver_tolerance', to_str_exact(p%solver_tolerance), &
+          solver_tolerance_allowed()); return
+      end if
+    end if
   end subroutine check_hydro
 
   !> The eps_lub a model uses: the given one, or the integration tolerance when not given (< 0).
@@ -207,6 +224,14 @@ contains
       quoted(model_multipole)//' and update = '//quoted(update_adaptive)//' or '//quoted(update_iterative)// &
       ' (with '//quoted(update_stage)//' the exact mobility is at hand)'
   end function jacobian_order_allowed
+
+  !> The allowed values of solver_tolerance, in the words of the refusals and the reference.
+  function solver_tolerance_allowed() result(text)
+    character(len=:), allocatable :: text
+    text = 'a number from '//to_str_exact(solver_tolerance_min)//' to '//to_str_exact(solver_tolerance_max)// &
+      '; '//to_str_exact(solver_tolerance_default)//' unless model = '//quoted(model_multipole)// &
+      ' and update = '//quoted(update_iterative)
+  end function solver_tolerance_allowed
 
   !> 'an integer from 1 to 8' (the allowed orders).
   function order_allowed() result(text)

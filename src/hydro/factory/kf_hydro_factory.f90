@@ -124,7 +124,8 @@ contains
       block
         type(multipole_iterative_t), allocatable :: mi
         allocate (mi)
-        call mi%setup(params%order, params%lubrication, eps_lub, error, literal_bwe=literal_bwe)
+        call mi%setup(params%order, params%lubrication, eps_lub, error, literal_bwe=literal_bwe, &
+                      solver_tolerance=params%solver_tolerance)
         if (allocated(error)) return
         if (params%jacobian_order > 0) call mi%set_jacobian_order(params%jacobian_order, error)
         if (allocated(error)) return

@@ -87,6 +87,11 @@
 !> uses them), the Krylov bases and the start's history (2 warm_history vectors of the system's
 !> size).
 !>
+!> Jacobian mobility (`mobility_at`, for a linearly implicit stepper): at the model's order, the
+!> inverse of the preconditioner's 6N friction, rotated onto the configuration (no factorisation
+!> of K; exact at the reference and its rigid motions); a lower jacobian_order keeps the exact
+!> model's route (docs/accuracy.md, "The solver tolerance and the preconditioner's Jacobian").
+!>
 !> Checkpoint: the reference and the history of solutions are not in the checkpoint; the
 !> reference is rebuilt (a direct solve) at the first call after a resume, so a resumed run
 !> agrees with an uninterrupted one to the solver tolerance (not bit for bit). Frames, the stresslet and
@@ -95,7 +100,7 @@ module kf_hydro_multipole_iterative
   use kf_kinds, only: wp, sp, i8
   use kf_strings, only: to_str
   use kf_constants, only: pi
-  use kf_lapack, only: cholesky_factor
+  use kf_lapack, only: cholesky_factor, cholesky_invert
   use kf_blas, only: dtrsv
   use kf_error, only: error_t, fatal_error
   use kf_hydro_model, only: hydro_stats_t
@@ -177,6 +182,7 @@ module kf_hydro_multipole_iterative
     procedure :: velocities => iterative_velocities
     procedure :: statistics => iterative_statistics
     procedure :: mobility_reusable => iterative_mobility_reusable
+    procedure :: mobility_at => iterative_mobility_at
   end type multipole_iterative_t
 
 contains
@@ -716,8 +722,47 @@ contains
     w(keep(1:nk)) = b(1:nk)
   end subroutine least_squares
 
-  !> Its calls never prepare, so a mobility costs a factorisation; its reference is rebuilt after
-  !> a resume anyway: an earlier mobility may be kept.
+  !> The 3N x 3N mobility for a linearly implicit stepper's Jacobian at r. At the model's own
+  !> order (jacobian_order = the order, the default) and once a reference exists: the inverse of
+  !> the preconditioner's 6N friction, zeta_L(ref) + dzeta_f (the model's order, lubrication
+  !> included, at the reference; dzeta_f the blocks of the call that last factorised it), its
+  !> translational blocks rotated onto r by the best rigid rotation Q of the reference onto r,
+  !> mu_ij(r) = Q mu_ij(ref) Q^T (Stokes flow is covariant): exact at the reference and at its
+  !> rigid motions, otherwise the mobility of a nearby configuration (a W-method keeps its order
+  !> with any Jacobian). It costs one inversion from the existing 6N factor (dpotri, about
+  !> 2/3 (6N)^3 flops), no factorisation of K. Otherwise (a lower jacobian_order, or no
+  !> reference yet) the exact model's (kf_hydro_multipole `mobility_at`).
+  subroutine iterative_mobility_at(this, r, mu, error)
+    class(multipole_iterative_t), intent(inout) :: this
+    real(wp), intent(in) :: r(:, :)
+    real(wp), intent(out) :: mu(:, :)
+    type(error_t), allocatable, intent(out) :: error
+    real(wp), allocatable :: zinv(:, :)
+    real(wp) :: q(3, 3)
+    integer :: nb, i, j
+    logical :: own
+    nb = size(r, 2)
+    own = this%ready .and. this%jacobian_order == this%order
+    if (own) own = size(this%pos_ref, 2) == nb
+    if (.not. own) then
+      call this%multipole_model_t%mobility_at(r, mu, error)
+      return
+    end if
+    call best_rotation(this%pos_ref, r, q, error)
+    if (allocated(error)) return
+    zinv = this%pre
+    call cholesky_invert(zinv, error, 'preconditioner''s friction')
+    if (allocated(error)) return
+    do j = 1, nb
+      do i = 1, nb
+        mu(3*i - 2:3*i, 3*j - 2:3*j) = matmul(q, matmul(zinv(6*i - 5:6*i - 3, 6*j - 5:6*j - 3), transpose(q)))
+      end do
+    end do
+  end subroutine iterative_mobility_at
+
+  !> Its calls never prepare, so a mobility costs an inversion of the 6N factor (or, of a lower
+  !> jacobian_order, a factorisation); its reference is rebuilt after a resume anyway: an earlier
+  !> mobility may be kept.
   pure logical function iterative_mobility_reusable(this) result(reusable)
     class(multipole_iterative_t), intent(in) :: this
     reusable = .true.
