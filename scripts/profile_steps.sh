@@ -5,10 +5,11 @@
 # (the collapsed candy-cane of inputs/configs/candycane_A1_multipole_t800.xyz, A = 1), with
 # update 'stage' and 'iterative', one thread (OPENBLAS_NUM_THREADS = OMP_NUM_THREADS = 1); and
 # trefoil_case: the path of a whole case as README measures it
-# (`KNOTFLOW_CASE_JACOBIAN_ORDER=1 bash scripts/bench_reuse.sh case`: 'iterative' with ros34pw2,
-# the L = 1 Jacobian, a frame with its knot analysis every unit time) over t = 0-10, where the
-# phases of a whole step show: the Rosenbrock Jacobian (the mobility kept jacobian_steps = 4
-# steps), the stepper's LU and the frames.
+# (`KNOTFLOW_CASE_JACOBIAN_ORDER=0 KNOTFLOW_CASE_JACOBIAN_STEPS=1
+# KNOTFLOW_CASE_SOLVER_TOLERANCE=1e-4 bash scripts/bench_reuse.sh case`: 'iterative' at solver
+# tolerance 1e-4 with ros34pw2, the preconditioner's Jacobian renewed every step, a frame with
+# its knot analysis every unit time) over t = 0-10, where the phases of a whole step show: the
+# Rosenbrock Jacobian, the stepper's LU and the frames.
 # For each run: the samples grouped by the phase of the evaluation they fall in (from the call
 # chains, perf --call-graph dwarf: the first phase routine found walking from the caller end),
 # the self time grouped by kind of code, the 25 hottest symbols, the wall time and the load
@@ -135,10 +136,10 @@ categorise() {
 }
 
 for run in "${runs[@]}"; do
-  method=dopri45 update="${run#*_}" jorder=""
+  method=dopri45 update="${run#*_}" jorder="" isteps=""
   case "$run" in
     trefoil_case) shape="shape = 'trefoil', orientation = 'c'"; a=2.2; t_end="${KNOTFLOW_PROFILE_T:-10.0}"
-                  method=ros34pw2 update=iterative jorder=", jacobian_order = 1" ;;
+                  method=ros34pw2 update=iterative jorder=", solver_tolerance = 1.0e-4" isteps=", jacobian_steps = 1" ;;
     trefoil_stage | trefoil_iterative) shape="shape = 'trefoil', orientation = 'c'"; a=2.2; t_end="${KNOTFLOW_PROFILE_T:-1.0}" ;;
     candycane_stage | candycane_iterative)
       shape="shape = 'file', coordinate_file = '$KF_ROOT/inputs/configs/candycane_A1_multipole_t800.xyz'"
@@ -163,7 +164,7 @@ for run in "${runs[@]}"; do
   model = 'multipole', order = 2, lubrication = .true., update = '$update', overlap = 'relax'$jorder
 /
 &integrator
-  method = '$method', t_end = $t_end, tolerance = 1.0e-4
+  method = '$method', t_end = $t_end, tolerance = 1.0e-4$isteps
 /
 &output
   directory = '$dir/case', frame_interval = $frames, progress_interval = 0.0

@@ -30,24 +30,38 @@ contains
     if (odd .and. alpha == 2) fam = -fam
   end function fam
 
-  !> Levi-Civita symbol.
-  pure real(wp) function levi(i, j, k)
-    integer, intent(in) :: i, j, k
-    levi = real((i - j)*(j - k)*(k - i), wp)/2.0_wp
-  end function levi
-
   !> Friction (12x12, symmetric) and strain coupling (12,3,3) of the pair from the functions f.
+  !> The direction's tensors are formed once per pair: dd = d d, ed_ij = eps_ijk d_k and the three
+  !> strain-coupling forms t1..t3 (below); each block is then a combination of them with the
+  !> pair's functions.
   pure subroutine pair_tensors(f, dhat, zeta, xe)
     real(wp), intent(in) :: f(n_functions)   !< resistance functions (or their differences)
     real(wp), intent(in) :: dhat(3)          !< unit vector from sphere i to sphere j
     real(wp), intent(out) :: zeta(12, 12)    !< friction, project units
     real(wp), intent(out) :: xe(12, 3, 3)    !< strain coupling, project units
-    integer :: alpha, beta, i, j, k, l, rf, rt, cu, co
-    real(wp) :: delta(3, 3), xa, ya, yb, xc, yc, xg, yg, yh, bsum, hsum
+    integer :: alpha, beta, i, j, k, rf, rt, cu, co
+    real(wp) :: delta(3, 3), dd(3, 3), ed(3, 3), t1(3, 3, 3), t2(3, 3, 3), t3(3, 3, 3)
+    real(wp) :: xa, ya, yb, xc, yc, xg, yg, yh
 
     delta = 0.0_wp
     do i = 1, 3
       delta(i, i) = 1.0_wp
+    end do
+    do j = 1, 3
+      dd(:, j) = dhat*dhat(j)
+    end do
+    ! ed_ij = sum_k eps_ijk d_k
+    ed = reshape([0.0_wp, -dhat(3), dhat(2), dhat(3), 0.0_wp, -dhat(1), -dhat(2), dhat(1), 0.0_wp], [3, 3])
+    ! t1 = (d_j d_k - delta_jk / 3) d_i (X^G), t2 = d_j delta_ki + d_k delta_ji - 2 d_i d_j d_k
+    ! (Y^G), t3 = sum_l (eps_jil d_l d_k + eps_kil d_l d_j) = ed_ji d_k + ed_ki d_j (Y^H)
+    do k = 1, 3
+      do j = 1, 3
+        do i = 1, 3
+          t1(i, j, k) = (dd(j, k) - delta(j, k)/3.0_wp)*dhat(i)
+          t2(i, j, k) = dhat(j)*delta(k, i) + dhat(k)*delta(j, i) - 2.0_wp*dhat(i)*dd(j, k)
+          t3(i, j, k) = ed(j, i)*dhat(k) + ed(k, i)*dhat(j)
+        end do
+      end do
     end do
     zeta = 0.0_wp
     xe = 0.0_wp
@@ -57,59 +71,30 @@ contains
       do beta = 1, 2
         cu = 6*(beta - 1)
         co = cu + 3
+        ! A^{alpha beta}, C^{alpha beta}, and B^{alpha beta}_ij = Y^B eps_ijk d_k (torque alpha <-
+        ! velocity beta)
         xa = 3.0_wp*fam(f, i_xa11, alpha, beta, .false.)
         ya = 3.0_wp*fam(f, i_ya11, alpha, beta, .false.)
         xc = fam(f, i_xc11, alpha, beta, .false.)
         yc = fam(f, i_yc11, alpha, beta, .false.)
-        do i = 1, 3
-          do j = 1, 3
-            ! A^{alpha beta}_ij and C^{alpha beta}_ij.
-            zeta(rf + i, cu + j) = xa*dhat(i)*dhat(j) + ya*(delta(i, j) - dhat(i)*dhat(j))
-            zeta(rt + i, co + j) = xc*dhat(i)*dhat(j) + yc*(delta(i, j) - dhat(i)*dhat(j))
-            ! B^{alpha beta}_ij = Y^B_{alpha beta} eps_ijk d_k (torque alpha <- velocity beta).
-            yb = fam(f, i_yb11, alpha, beta, .true.)
-            bsum = 0.0_wp
-            do k = 1, 3
-              bsum = bsum + levi(i, j, k)*dhat(k)
-            end do
-            zeta(rt + i, cu + j) = yb*bsum
-          end do
-        end do
+        yb = fam(f, i_yb11, alpha, beta, .true.)
+        zeta(rf + 1:rf + 3, cu + 1:cu + 3) = xa*dd + ya*(delta - dd)
+        zeta(rt + 1:rt + 3, co + 1:co + 3) = xc*dd + yc*(delta - dd)
+        zeta(rt + 1:rt + 3, cu + 1:cu + 3) = yb*ed
+        ! strain coupling: x(F_alpha,i) = sum_beta G^{beta alpha}_{jki} E_jk,
+        ! x(T_alpha,i) = sum_beta H^{beta alpha}_{jki} E_jk
+        xg = fam(f, i_xg11, beta, alpha, .true.)
+        yg = fam(f, i_yg11, beta, alpha, .true.)
+        yh = fam(f, i_yh11, beta, alpha, .false.)
+        xe(rf + 1:rf + 3, :, :) = xe(rf + 1:rf + 3, :, :) + xg*t1 + yg*t2
+        xe(rt + 1:rt + 3, :, :) = xe(rt + 1:rt + 3, :, :) + yh*t3
       end do
     end do
     ! Btilde^{alpha beta}_ij = B^{beta alpha}_ji: the force <- rotation blocks by symmetry.
     do alpha = 1, 2
       do beta = 1, 2
-        do i = 1, 3
-          do j = 1, 3
-            zeta(6*(alpha - 1) + i, 6*(beta - 1) + 3 + j) = zeta(6*(beta - 1) + 3 + j, 6*(alpha - 1) + i)
-          end do
-        end do
-      end do
-    end do
-    ! Strain coupling: x(F_alpha,i) = sum_beta G^{beta alpha}_{jki} E_jk,
-    ! x(T_alpha,i) = sum_beta H^{beta alpha}_{jki} E_jk.
-    do alpha = 1, 2
-      rf = 6*(alpha - 1)
-      rt = rf + 3
-      do beta = 1, 2
-        xg = fam(f, i_xg11, beta, alpha, .true.)
-        yg = fam(f, i_yg11, beta, alpha, .true.)
-        yh = fam(f, i_yh11, beta, alpha, .false.)
-        do i = 1, 3
-          do j = 1, 3
-            do k = 1, 3
-              xe(rf + i, j, k) = xe(rf + i, j, k) &
-                + xg*(dhat(j)*dhat(k) - delta(j, k)/3.0_wp)*dhat(i) &
-                + yg*(dhat(j)*delta(k, i) + dhat(k)*delta(j, i) - 2.0_wp*dhat(j)*dhat(k)*dhat(i))
-              hsum = 0.0_wp
-              do l = 1, 3
-                hsum = hsum + levi(j, i, l)*dhat(l)*dhat(k) + levi(k, i, l)*dhat(l)*dhat(j)
-              end do
-              xe(rt + i, j, k) = xe(rt + i, j, k) + yh*hsum
-            end do
-          end do
-        end do
+        zeta(6*(alpha - 1) + 1:6*(alpha - 1) + 3, 6*(beta - 1) + 4:6*(beta - 1) + 6) = &
+          transpose(zeta(6*(beta - 1) + 4:6*(beta - 1) + 6, 6*(alpha - 1) + 1:6*(alpha - 1) + 3))
       end do
     end do
   end subroutine pair_tensors

@@ -88,7 +88,8 @@
 !> size).
 !>
 !> Jacobian mobility (`mobility_at`, for a linearly implicit stepper): at the model's order, the
-!> inverse of the preconditioner's 6N friction, rotated onto the configuration (no factorisation
+!> translational part of the inverse of the preconditioner's 6N friction (solves with its
+!> factor), rotated onto the configuration (no factorisation
 !> of K; exact at the reference and its rigid motions); a lower jacobian_order keeps the exact
 !> model's route (docs/accuracy.md, "The solver tolerance and the preconditioner's Jacobian").
 !>
@@ -100,8 +101,8 @@ module kf_hydro_multipole_iterative
   use kf_kinds, only: wp, sp, i8
   use kf_strings, only: to_str
   use kf_constants, only: pi
-  use kf_lapack, only: cholesky_factor, cholesky_invert
-  use kf_blas, only: dtrsv
+  use kf_lapack, only: cholesky_factor
+  use kf_blas, only: dtrsv, dtrsm, dsyrk
   use kf_error, only: error_t, fatal_error
   use kf_hydro_model, only: hydro_stats_t
   use kf_hydro_multipole, only: multipole_model_t, multipole_memory_bytes, largest_velocity
@@ -729,17 +730,18 @@ contains
   !> translational blocks rotated onto r by the best rigid rotation Q of the reference onto r,
   !> mu_ij(r) = Q mu_ij(ref) Q^T (Stokes flow is covariant): exact at the reference and at its
   !> rigid motions, otherwise the mobility of a nearby configuration (a W-method keeps its order
-  !> with any Jacobian). It costs one inversion from the existing 6N factor (dpotri, about
-  !> 2/3 (6N)^3 flops), no factorisation of K. Otherwise (a lower jacobian_order, or no
+  !> with any Jacobian). It costs one triangular solve with 3N right-hand sides and one
+  !> symmetric product with the existing 6N factor (about 3/4 (6N)^3 flops of level-3 BLAS), no
+  !> factorisation of K. Otherwise (a lower jacobian_order, or no
   !> reference yet) the exact model's (kf_hydro_multipole `mobility_at`).
   subroutine iterative_mobility_at(this, r, mu, error)
     class(multipole_iterative_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     real(wp), intent(out) :: mu(:, :)
     type(error_t), allocatable, intent(out) :: error
-    real(wp), allocatable :: zinv(:, :)
+    real(wp), allocatable :: x(:, :)
     real(wp) :: q(3, 3)
-    integer :: nb, i, j
+    integer :: nb, i, j, c, n3, n6
     logical :: own
     nb = size(r, 2)
     own = this%ready .and. this%jacobian_order == this%order
@@ -750,17 +752,31 @@ contains
     end if
     call best_rotation(this%pos_ref, r, q, error)
     if (allocated(error)) return
-    zinv = this%pre
-    call cholesky_invert(zinv, error, 'preconditioner''s friction')
-    if (allocated(error)) return
+    ! the translational blocks of Z^-1 = L^-T L^-1 (Z = L L^T the 6N factor): X = L^-1 E with E
+    ! the 3N translational unit columns, mu(ref) = X^T X (level-3 BLAS; a whole inverse by
+    ! dpotri costs about three times as much)
+    n3 = 3*nb
+    n6 = 6*nb
+    allocate (x(n6, n3))
+    x = 0.0_wp
+    do i = 1, nb
+      do c = 1, 3
+        x(6*i - 6 + c, 3*i - 3 + c) = 1.0_wp
+      end do
+    end do
+    call dtrsm('L', 'L', 'N', 'N', n6, n3, 1.0_wp, this%pre, n6, x, n6)
+    call dsyrk('L', 'T', n3, n6, 1.0_wp, x, n6, 0.0_wp, mu, n3)
+    do j = 1, n3
+      mu(j, j + 1:n3) = mu(j + 1:n3, j)
+    end do
     do j = 1, nb
       do i = 1, nb
-        mu(3*i - 2:3*i, 3*j - 2:3*j) = matmul(q, matmul(zinv(6*i - 5:6*i - 3, 6*j - 5:6*j - 3), transpose(q)))
+        mu(3*i - 2:3*i, 3*j - 2:3*j) = matmul(q, matmul(mu(3*i - 2:3*i, 3*j - 2:3*j), transpose(q)))
       end do
     end do
   end subroutine iterative_mobility_at
 
-  !> Its calls never prepare, so a mobility costs an inversion of the 6N factor (or, of a lower
+  !> Its calls never prepare, so a mobility costs solves with the 6N factor (or, of a lower
   !> jacobian_order, a factorisation); its reference is rebuilt after a resume anyway: an earlier
   !> mobility may be kept.
   pure logical function iterative_mobility_reusable(this) result(reusable)
