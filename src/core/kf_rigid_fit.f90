@@ -11,7 +11,7 @@ module kf_rigid_fit
   implicit none
   private
 
-  public :: best_rotation, centroid
+  public :: best_rotation, centroid, rotate_blocks
 
 contains
 
@@ -47,5 +47,20 @@ contains
     q(2, :) = [2*(e(3)*e(2) + e(1)*e(4)), e(1)**2 - e(2)**2 + e(3)**2 - e(4)**2, 2*(e(3)*e(4) - e(1)*e(2))]
     q(3, :) = [2*(e(4)*e(2) - e(1)*e(3)), 2*(e(4)*e(3) + e(1)*e(2)), e(1)**2 - e(2)**2 - e(3)**2 + e(4)**2]
   end subroutine best_rotation
+
+  !> zo = Q zi Q^T for every 3 x 3 block of zi (square, of size a multiple of 3): a matrix that
+  !> maps per-point 3-vectors onto per-point 3-vectors (a mobility, a friction with translations
+  !> and rotations alike) for the point set rotated by q.
+  pure subroutine rotate_blocks(q, zi, zo)
+    real(wp), intent(in) :: q(3, 3), zi(:, :)
+    real(wp), intent(out) :: zo(:, :)
+    integer :: a, b, nb3
+    nb3 = size(zi, 1)/3
+    do b = 1, nb3
+      do a = 1, nb3
+        zo(3*a - 2:3*a, 3*b - 2:3*b) = matmul(q, matmul(zi(3*a - 2:3*a, 3*b - 2:3*b), transpose(q)))
+      end do
+    end do
+  end subroutine rotate_blocks
 
 end module kf_rigid_fit

@@ -38,7 +38,7 @@ module kf_hydro_multipole_adaptive
   use kf_strain_basis, only: strain_coefficients, strain_basis
   use kf_pair_blocks, only: pair_blocks_t
   use kf_pair_geometry, only: pair_geometry_t
-  use kf_rigid_fit, only: best_rotation, centroid
+  use kf_rigid_fit, only: best_rotation, centroid, rotate_blocks
   implicit none
   private
 
@@ -343,11 +343,11 @@ contains
       call best_rotation(this%r_ref, r, qrot, error)
       if (allocated(error)) return
       if (this%n_hist > 0) then
-        call rotate_friction(qrot, this%zh, this%zh2)
+        call rotate_blocks(qrot, this%zh, this%zh2)
         call rotate_coupling(qrot, this%xh, this%xh2)
         this%t_hist(2) = this%t_hist(1)
       end if
-      call rotate_friction(qrot, this%zl, this%zh)
+      call rotate_blocks(qrot, this%zl, this%zh)
       call rotate_coupling(qrot, this%xl, this%xh)
       this%n_hist = min(this%n_hist + 1, 2)
       this%t_hist(1) = this%t_ref
@@ -375,20 +375,6 @@ contains
     this%has_ref = .true.
     this%rstats%refreshes = this%rstats%refreshes + 1
   end subroutine refresh
-
-  !> zo = Q zi Q^T blockwise: the friction of a configuration rotated by q (every 3 x 3
-  !> block of the 6N x 6N matrix, translations and rotations alike).
-  subroutine rotate_friction(q, zi, zo)
-    real(wp), intent(in) :: q(3, 3), zi(:, :)
-    real(wp), intent(out) :: zo(:, :)
-    integer :: a, b, nb3
-    nb3 = size(zi, 1)/3
-    do b = 1, nb3
-      do a = 1, nb3
-        zo(3*a - 2:3*a, 3*b - 2:3*b) = matmul(q, matmul(zi(3*a - 2:3*a, 3*b - 2:3*b), transpose(q)))
-      end do
-    end do
-  end subroutine rotate_friction
 
   !> xo = the strain coupling (6N x 5, basis strains) of a configuration rotated by q:
   !> x(Q r)[E] = Q x(r)[Q^T E Q] blockwise.

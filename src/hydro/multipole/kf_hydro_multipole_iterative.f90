@@ -110,7 +110,7 @@ module kf_hydro_multipole_iterative
   use kf_strain_basis, only: strain_coefficients
   use kf_pair_blocks, only: pair_blocks_t
   use kf_pair_geometry, only: pair_geometry_t
-  use kf_rigid_fit, only: best_rotation, centroid
+  use kf_rigid_fit, only: best_rotation, centroid, rotate_blocks
   use kf_hydro_limits, only: solver_tolerance_default, solver_tolerance_min, solver_tolerance_max
   implicit none
   private
@@ -739,7 +739,7 @@ contains
     real(wp), intent(in) :: r(:, :)
     real(wp), intent(out) :: mu(:, :)
     type(error_t), allocatable, intent(out) :: error
-    real(wp), allocatable :: x(:, :)
+    real(wp), allocatable :: x(:, :), mref(:, :)
     real(wp) :: q(3, 3)
     integer :: nb, i, j, c, n3, n6
     logical :: own
@@ -765,15 +765,12 @@ contains
       end do
     end do
     call dtrsm('L', 'L', 'N', 'N', n6, n3, 1.0_wp, this%pre, n6, x, n6)
-    call dsyrk('L', 'T', n3, n6, 1.0_wp, x, n6, 0.0_wp, mu, n3)
+    allocate (mref(n3, n3))
+    call dsyrk('L', 'T', n3, n6, 1.0_wp, x, n6, 0.0_wp, mref, n3)
     do j = 1, n3
-      mu(j, j + 1:n3) = mu(j + 1:n3, j)
+      mref(j, j + 1:n3) = mref(j + 1:n3, j)
     end do
-    do j = 1, nb
-      do i = 1, nb
-        mu(3*i - 2:3*i, 3*j - 2:3*j) = matmul(q, matmul(mu(3*i - 2:3*i, 3*j - 2:3*j), transpose(q)))
-      end do
-    end do
+    call rotate_blocks(q, mref, mu)
   end subroutine iterative_mobility_at
 
   !> Its calls never prepare, so a mobility costs solves with the 6N factor (or, of a lower
