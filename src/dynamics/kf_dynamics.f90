@@ -229,7 +229,7 @@ contains
   !> the ambient flow's gradient on every bead (exact: v0 is linear) and the forces' Jacobian at y
   !> (kf_forces `jacobian`) times a mobility: the model's at y (`mobility_at`: free after a
   !> 'stage' evaluation at y), or, where the model allows it (`mobility_reusable`: 'adaptive',
-  !> whose new mobility costs a factorisation, and 'iterative', an inversion of its 6N factor) and
+  !> whose new mobility costs a factorisation, and 'iterative', solves with its 6N factor) and
   !> it is not at hand, the one of an
   !> earlier call, kept for &integrator jacobian_steps calls in all. Left out: the change of mu
   !> and of the strain disturbance C:E with y, and the overlap rule's configuration (exact where

@@ -89,9 +89,8 @@
 !>
 !> Jacobian mobility (`mobility_at`, for a linearly implicit stepper): at the model's order, the
 !> translational part of the inverse of the preconditioner's 6N friction (solves with its
-!> factor), rotated onto the configuration (no factorisation
-!> of K; exact at the reference and its rigid motions); a lower jacobian_order keeps the exact
-!> model's route (docs/accuracy.md, "The solver tolerance and the preconditioner's Jacobian").
+!> factor), rotated onto the configuration (no factorisation of K; exact at the reference and its
+!> rigid motions); a lower jacobian_order keeps the exact model's route (docs/accuracy.md, "The solver tolerance and the preconditioner's Jacobian").
 !>
 !> Checkpoint: the reference and the history of solutions are not in the checkpoint; the
 !> reference is rebuilt (a direct solve) at the first call after a resume, so a resumed run
@@ -731,9 +730,9 @@ contains
   !> mu_ij(r) = Q mu_ij(ref) Q^T (Stokes flow is covariant): exact at the reference and at its
   !> rigid motions, otherwise the mobility of a nearby configuration (a W-method keeps its order
   !> with any Jacobian). It costs one triangular solve with 3N right-hand sides and one
-  !> symmetric product with the existing 6N factor (about 3/4 (6N)^3 flops of level-3 BLAS), no
-  !> factorisation of K. Otherwise (a lower jacobian_order, or no
-  !> reference yet) the exact model's (kf_hydro_multipole `mobility_at`).
+  !> symmetric product with the existing 6N factor (level-3 BLAS, about 6 ms at N = 99), no
+  !> factorisation of K. Otherwise (a lower jacobian_order, or no reference yet) the exact
+  !> model's (kf_hydro_multipole `mobility_at`).
   subroutine iterative_mobility_at(this, r, mu, error)
     class(multipole_iterative_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
@@ -753,8 +752,8 @@ contains
     call best_rotation(this%pos_ref, r, q, error)
     if (allocated(error)) return
     ! the translational blocks of Z^-1 = L^-T L^-1 (Z = L L^T the 6N factor): X = L^-1 E with E
-    ! the 3N translational unit columns, mu(ref) = X^T X (level-3 BLAS; a whole inverse by
-    ! dpotri costs about three times as much)
+    ! the 3N translational unit columns, mu(ref) = X^T X (a whole inverse by dpotri took 1.6
+    ! times as long at N = 99)
     n3 = 3*nb
     n6 = 6*nb
     allocate (x(n6, n3))
