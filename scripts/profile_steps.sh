@@ -136,10 +136,10 @@ categorise() {
 }
 
 for run in "${runs[@]}"; do
-  method=dopri45 update="${run#*_}" jorder="" isteps=""
+  method=dopri45 update="${run#*_}" hydro_extra="" isteps=""
   case "$run" in
     trefoil_case) shape="shape = 'trefoil', orientation = 'c'"; a=2.2; t_end="${KNOTFLOW_PROFILE_T:-10.0}"
-                  method=ros34pw2 update=iterative jorder=", solver_tolerance = 1.0e-4" isteps=", jacobian_steps = 1" ;;
+                  method=ros34pw2 update=iterative hydro_extra=", solver_tolerance = 1.0e-4" isteps=", jacobian_steps = 1" ;;
     trefoil_stage | trefoil_iterative) shape="shape = 'trefoil', orientation = 'c'"; a=2.2; t_end="${KNOTFLOW_PROFILE_T:-1.0}" ;;
     candycane_stage | candycane_iterative)
       shape="shape = 'file', coordinate_file = '$KF_ROOT/inputs/configs/candycane_A1_multipole_t800.xyz'"
@@ -161,7 +161,7 @@ for run in "${runs[@]}"; do
   flow_type = 'shear', shear_rate = 1.0
 /
 &hydro
-  model = 'multipole', order = 2, lubrication = .true., update = '$update', overlap = 'relax'$jorder
+  model = 'multipole', order = 2, lubrication = .true., update = '$update', overlap = 'relax'$hydro_extra
 /
 &integrator
   method = '$method', t_end = $t_end, tolerance = 1.0e-4$isteps

@@ -1055,9 +1055,9 @@ contains
   !> --eps-lub) with `method` and `upd`: its figures under `label`; r the final positions.
   !> `jorder` (optional): &hydro jacobian_order; `fchange` (optional): the iterative model's
   !> friction_change, `whistory` (optional): its warm_history, `double` (optional): .true. sets
-  !> its single_products = .false., `refactor` (optional): its refactor_iterations, `stol`
-  !> (optional): its solver_tolerance (the
-  !> factory's model with those values, taken over by the dynamics).
+  !> its single_products = .false., `refactor` (optional): its refactor_iterations (the
+  !> factory's model with those values, taken over by the dynamics); `stol` (optional): the
+  !> scene's &hydro solver_tolerance.
   subroutine run_method(label, method, upd, keep, tol, r, wall, jorder, fchange, whistory, double, refactor, stol)
     character(len=*), intent(in) :: label, method, upd
     integer, intent(in) :: keep
@@ -1081,7 +1081,8 @@ contains
     scene%integrator%method = method
     scene%integrator%jacobian_steps = keep
     if (present(jorder)) scene%hydro%jacobian_order = jorder
-    if (present(fchange) .or. present(whistory) .or. present(double) .or. present(refactor) .or. present(stol)) then
+    if (present(stol)) scene%hydro%solver_tolerance = stol
+    if (present(fchange) .or. present(whistory) .or. present(double) .or. present(refactor)) then
       call make_hydro_model(scene%hydro, scene%integrator%tolerance, hydro, error)
       if (allocated(error)) call die(program_name, error%message, 2)
       select type (hydro)
@@ -1090,10 +1091,8 @@ contains
         if (present(whistory)) hydro%warm_history = whistory
         if (present(double)) hydro%single_products = .not. double
         if (present(refactor)) hydro%refactor_iterations = refactor
-        if (present(stol)) hydro%solver_tolerance = stol
       class default
-        call die(program_name, '--friction-change, --warm-history, --double-products, --refactor-iterations, '// &
-                 '--solver-tolerance: '// &
+        call die(program_name, '--friction-change, --warm-history, --double-products, --refactor-iterations: '// &
                  'the model is not the iterative one', 2)
       end select
     end if
