@@ -398,6 +398,7 @@ contains
     write (output_unit, '(a)') prefix//'single_solves = '//to_str(s%single_solves)
     write (output_unit, '(a)') prefix//'single_iterations = '//to_str(s%single_iterations)
     write (output_unit, '(a)') prefix//'preconditioners = '//to_str(s%preconditioners)
+    write (output_unit, '(a)') prefix//'mobilities = '//to_str(s%mobilities)
     write (output_unit, '(a)') prefix//'max_error_ratio = '//to_str(s%max_error_ratio, '(es10.3)')
     write (output_unit, '(a)') prefix//'refresh_seconds = '//to_str(s%refresh_seconds, '(f0.3)')
     write (output_unit, '(a)') prefix//'reused_seconds = '//to_str(s%reused_seconds, '(f0.3)')

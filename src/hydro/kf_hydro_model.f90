@@ -41,6 +41,7 @@ module kf_hydro_model
     integer(i8) :: preconditioners = 0 !< factorisations of the preconditioner between refreshes
     integer(i8) :: single_solves = 0   !< reused evaluations whose iterations used single-precision products
     integer(i8) :: single_iterations = 0 !< their iterations (part of cg_iterations)
+    integer(i8) :: mobilities = 0      !< Jacobian mobilities made from a factor (not from one kept since it)
     real(wp) :: max_error_ratio = 0.0_wp !< largest measured reuse error / error budget
     real(wp) :: refresh_seconds = 0.0_wp !< wall time of the evaluations that refreshed
     real(wp) :: reused_seconds = 0.0_wp  !< wall time of the evaluations that reused

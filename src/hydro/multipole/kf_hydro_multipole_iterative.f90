@@ -91,6 +91,8 @@
 !> translational part of the inverse of the preconditioner's 6N friction (solves with its
 !> factor), rotated onto the configuration (no factorisation of K; exact at the reference and its
 !> rigid motions); a lower jacobian_order keeps the exact model's route (docs/accuracy.md, "The solver tolerance and the preconditioner's Jacobian").
+!> The unrotated blocks are kept until the 6N factor changes, so a Jacobian between two
+!> factorisations of it costs a rotation (counter `mobilities`: those made from a factor).
 !>
 !> Checkpoint: the reference and the history of solutions are not in the checkpoint; the
 !> reference is rebuilt (a direct solve) at the first call after a resume, so a resumed run
@@ -167,6 +169,10 @@ module kf_hydro_multipole_iterative
     real(wp), allocatable, private :: zref(:, :)    !< zeta_L(ref), full storage
     real(wp), allocatable, private :: pre(:, :)     !< Cholesky factor of zeta_L(ref) + dzeta_f
     real(wp), allocatable, private :: pscale(:)     !< 1/sqrt of the diagonal of zeta_L(ref) + dzeta_f
+    !> The translational blocks of the inverse of the 6N friction in `pre` (3N x 3N; the Jacobian
+    !> mobility at the reference), made by the first `mobility_at` after each factorisation of pre.
+    real(wp), allocatable, private :: mref(:, :)
+    logical, private :: mref_valid = .false.
     integer, allocatable, private :: slot(:, :)     !< (N, N) work of largest_scaled_change
     real(wp), allocatable, private :: v(:, :)      !< Krylov basis
     real(wp), allocatable, private :: hm(:, :)     !< Hessenberg matrix (Givens-rotated)
@@ -258,6 +264,7 @@ contains
     this%ready = .false.
     this%hn = 0
     this%refactor_next = .false.
+    this%mref_valid = .false.
     this%istats = hydro_stats_t()
     this%single_next = .true.
   end subroutine iterative_setup
@@ -265,7 +272,8 @@ contains
   !> The work counters, evaluations, refreshes (factorisations), reused (iterative solves),
   !> cg_iterations (their GMRES iterations), single_solves and single_iterations (the GMRES
   !> calls whose loop used the single-precision products, and their iterations), preconditioners (the iterative solves that
-  !> refactorised the 6N friction factor) and the wall time of both kinds.
+  !> refactorised the 6N friction factor), mobilities (Jacobian mobilities made from a 6N factor,
+  !> not served from the kept ones) and the wall time of both kinds.
   function iterative_statistics(this) result(s)
     class(multipole_iterative_t), intent(in) :: this
     type(hydro_stats_t) :: s
@@ -390,6 +398,7 @@ contains
     do a = 1, size(this%pscale)
       this%pscale(a) = 1.0_wp/sqrt(this%pre(a, a))
     end do
+    this%mref_valid = .false.
     call cholesky_factor(this%pre, error, 'lubrication-corrected friction')
     if (allocated(error)) return
     this%fb = this%ib
@@ -729,16 +738,17 @@ contains
   !> translational blocks rotated onto r by the best rigid rotation Q of the reference onto r,
   !> mu_ij(r) = Q mu_ij(ref) Q^T (Stokes flow is covariant): exact at the reference and at its
   !> rigid motions, otherwise the mobility of a nearby configuration (a W-method keeps its order
-  !> with any Jacobian). It costs one triangular solve with 3N right-hand sides and one
-  !> symmetric product with the existing 6N factor (level-3 BLAS, about 6 ms at N = 99), no
-  !> factorisation of K. Otherwise (a lower jacobian_order, or no reference yet) the exact
+  !> with any Jacobian). The first call after a factorisation of the 6N factor costs one
+  !> triangular solve with 3N right-hand sides and one symmetric product with it (level-3 BLAS,
+  !> about 6 ms at N = 99), no factorisation of K; the blocks mu(ref) are kept, so later calls
+  !> with the same factor cost the rotation (the same numbers as made anew). Otherwise (a lower jacobian_order, or no reference yet) the exact
   !> model's (kf_hydro_multipole `mobility_at`).
   subroutine iterative_mobility_at(this, r, mu, error)
     class(multipole_iterative_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     real(wp), intent(out) :: mu(:, :)
     type(error_t), allocatable, intent(out) :: error
-    real(wp), allocatable :: x(:, :), mref(:, :)
+    real(wp), allocatable :: x(:, :)
     real(wp) :: q(3, 3)
     integer :: nb, i, j, c, n3, n6
     logical :: own
@@ -751,25 +761,35 @@ contains
     end if
     call best_rotation(this%pos_ref, r, q, error)
     if (allocated(error)) return
-    ! the translational blocks of Z^-1 = L^-T L^-1 (Z = L L^T the 6N factor): X = L^-1 E with E
-    ! the 3N translational unit columns, mu(ref) = X^T X (a whole inverse by dpotri took 1.6
-    ! times as long at N = 99)
     n3 = 3*nb
-    n6 = 6*nb
-    allocate (x(n6, n3))
-    x = 0.0_wp
-    do i = 1, nb
-      do c = 1, 3
-        x(6*i - 6 + c, 3*i - 3 + c) = 1.0_wp
+    if (allocated(this%mref)) then
+      if (size(this%mref, 1) /= n3) then
+        deallocate (this%mref)
+        this%mref_valid = .false.
+      end if
+    end if
+    if (.not. this%mref_valid) then
+      ! the translational blocks of Z^-1 = L^-T L^-1 (Z = L L^T the 6N factor): X = L^-1 E with
+      ! E the 3N translational unit columns, mu(ref) = X^T X (a whole inverse by dpotri took 1.6
+      ! times as long at N = 99)
+      n6 = 6*nb
+      allocate (x(n6, n3))
+      x = 0.0_wp
+      do i = 1, nb
+        do c = 1, 3
+          x(6*i - 6 + c, 3*i - 3 + c) = 1.0_wp
+        end do
       end do
-    end do
-    call dtrsm('L', 'L', 'N', 'N', n6, n3, 1.0_wp, this%pre, n6, x, n6)
-    allocate (mref(n3, n3))
-    call dsyrk('L', 'T', n3, n6, 1.0_wp, x, n6, 0.0_wp, mref, n3)
-    do j = 1, n3
-      mref(j, j + 1:n3) = mref(j + 1:n3, j)
-    end do
-    call rotate_blocks(q, mref, mu)
+      call dtrsm('L', 'L', 'N', 'N', n6, n3, 1.0_wp, this%pre, n6, x, n6)
+      if (.not. allocated(this%mref)) allocate (this%mref(n3, n3))
+      call dsyrk('L', 'T', n3, n6, 1.0_wp, x, n6, 0.0_wp, this%mref, n3)
+      do j = 1, n3
+        this%mref(j, j + 1:n3) = this%mref(j + 1:n3, j)
+      end do
+      this%mref_valid = .true.
+      this%istats%mobilities = this%istats%mobilities + 1
+    end if
+    call rotate_blocks(q, this%mref, mu)
   end subroutine iterative_mobility_at
 
   !> Its calls never prepare, so a mobility costs solves with the 6N factor (or, of a lower
