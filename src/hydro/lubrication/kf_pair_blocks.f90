@@ -142,13 +142,17 @@ contains
     end do
   end subroutine apply
 
-  !> zeta = zeta + the pair blocks, for a dense 6N x 6N friction (full storage).
-  subroutine add_friction(this, zeta)
+  !> zeta = zeta + the pair blocks, for a dense 6N x 6N friction (full storage); with `position`
+  !> the friction's rows and columns are permuted: entry (a, b) of the 6N ordering
+  !> [U_1, Omega_1, U_2, ...] is stored at (position(a), position(b)).
+  subroutine add_friction(this, zeta, position)
     class(pair_blocks_t), intent(in) :: this
     real(wp), intent(inout) :: zeta(:, :)
+    integer, intent(in), optional :: position(:)
     integer :: k, ii(12)
     do k = 1, this%count
       ii = rows(this, k)
+      if (present(position)) ii = position(ii)
       zeta(ii, ii) = zeta(ii, ii) + this%zeta(:, :, k)
     end do
   end subroutine add_friction

@@ -79,8 +79,9 @@
 !> max_iterations factorises at once. The first call and a change of bead number factorise.
 !> A factorising call solves directly with the double factors (the exact inverse there).
 !>
-!> Memory (besides the parent's arrays): zeta_L(ref) and the 6N factor (6N x 6N each), the
-!> factor's diagonal scale (6N), two lists of lubrication blocks (the call's and the factor's),
+!> Memory (besides the parent's arrays): zeta_L(ref) and the 6N factor (6N x 6N each, in the
+!> permuted order of `ordering`), the Jacobian's 3N x 3N mobility blocks, the factor's diagonal
+!> scale (6N), two lists of lubrication blocks (the call's and the factor's),
 !> an N x N integer map for the rule's pair matching, the two many-body systems (the reference
 !> factor with its single-precision copy, and the assembled one with the single copies of K0
 !> and B, 5 nr^2 bytes (K0 full, 4 nr^2; B, nr^2): 12.5 MB at N = 99, made at the first call that
@@ -88,11 +89,14 @@
 !> size).
 !>
 !> Jacobian mobility (`mobility_at`, for a linearly implicit stepper): at the model's order, the
-!> translational part of the inverse of the preconditioner's 6N friction (solves with its
-!> factor), rotated onto the configuration (no factorisation of K; exact at the reference and its
-!> rigid motions); a lower jacobian_order keeps the exact model's route (docs/accuracy.md, "The solver tolerance and the preconditioner's Jacobian").
-!> The unrotated blocks are kept until the 6N factor changes, so a Jacobian between two
-!> factorisations of it costs a rotation (counter `mobilities`: those made from a factor).
+!> translational part of the inverse of the preconditioner's 6N friction, rotated onto the
+!> configuration (no factorisation of K; exact at the reference and its rigid motions); a lower
+!> jacobian_order keeps the exact model's route (docs/accuracy.md, "The solver tolerance and the
+!> preconditioner's Jacobian"). The 6N friction and its factor are kept with the rotations first
+!> and the translations last (`ordering`), so that part is the inverse of the factor's trailing
+!> 3N x 3N block times its transpose (one dpotri of size 3N). The unrotated blocks are kept until
+!> the 6N factor changes, so a Jacobian between two factorisations of it costs a rotation
+!> (counter `mobilities`: those made from a factor).
 !>
 !> Checkpoint: the reference and the history of solutions are not in the checkpoint; the
 !> reference is rebuilt (a direct solve) at the first call after a resume, so a resumed run
@@ -103,7 +107,7 @@ module kf_hydro_multipole_iterative
   use kf_strings, only: to_str
   use kf_constants, only: pi
   use kf_lapack, only: cholesky_factor
-  use kf_blas, only: dtrsv, dtrsm, dsyrk
+  use kf_blas, only: dtrsv, dpotri
   use kf_error, only: error_t, fatal_error
   use kf_hydro_model, only: hydro_stats_t
   use kf_hydro_multipole, only: multipole_model_t, multipole_memory_bytes, largest_velocity
@@ -166,9 +170,13 @@ module kf_hydro_multipole_iterative
     integer, private :: nr = 0                 !< unknowns of K
     real(wp), private :: cen_ref(3) = 0.0_wp
     real(wp), allocatable, private :: pos_ref(:, :), rp(:, :), frot(:, :)
-    real(wp), allocatable, private :: zref(:, :)    !< zeta_L(ref), full storage
-    real(wp), allocatable, private :: pre(:, :)     !< Cholesky factor of zeta_L(ref) + dzeta_f
+    !> The 6N friction's permuted order (`ordering`): position k holds unknown perm(k) of the
+    !> order [U_1, Omega_1, U_2, ...]; pos is the inverse map.
+    integer, allocatable, private :: perm(:), pos(:)
+    real(wp), allocatable, private :: zref(:, :)    !< zeta_L(ref), full storage, permuted order
+    real(wp), allocatable, private :: pre(:, :)     !< Cholesky factor of zeta_L(ref) + dzeta_f, permuted order
     real(wp), allocatable, private :: pscale(:)     !< 1/sqrt of the diagonal of zeta_L(ref) + dzeta_f
+    real(wp), allocatable, private :: s6p(:)        !< 6N work in the permuted order
     !> The translational blocks of the inverse of the 6N friction in `pre` (3N x 3N; the Jacobian
     !> mobility at the reference), made by the first `mobility_at` after each factorisation of pre.
     real(wp), allocatable, private :: mref(:, :)
@@ -194,14 +202,14 @@ module kf_hydro_multipole_iterative
 contains
 
   !> The model's dense arrays for n beads (bytes; a lower bound): the exact model's, one more
-  !> 6N x 6N matrix (288 N^2), the preconditioner's friction factor, and the N x N integer map
-  !> of its rule (4 N^2); its two many-body systems (the reference factor with its
+  !> 6N x 6N matrix (288 N^2), the preconditioner's friction factor, the N x N integer map of its
+  !> rule (4 N^2) and the Jacobian's 3N x 3N mobility blocks (72 N^2); its two many-body systems (the reference factor with its
   !> single-precision copy, and the assembled one with the single copies of its products) and
   !> the Krylov bases come on top.
   pure integer(i8) function iterative_memory_bytes(n, stresslet_lubrication) result(bytes)
     integer(i8), intent(in) :: n
     logical, intent(in) :: stresslet_lubrication
-    bytes = multipole_memory_bytes(n, stresslet_lubrication) + 292_i8*n*n
+    bytes = multipole_memory_bytes(n, stresslet_lubrication) + 364_i8*n*n
   end function iterative_memory_bytes
 
   !> Order L, lubrication, overlap shift eps_lub and `literal_bwe` (as the exact model), the
@@ -364,8 +372,9 @@ contains
     if (allocated(error)) return
     this%n_overlaps = this%ref%n_clamped
     call ensure_work(this, nb)
-    call this%ref%grand_friction(this%zref, error)
+    call this%ref%grand_friction(this%pre, error)
     if (allocated(error)) return
+    this%zref = this%pre(this%perm, this%perm)
     if (this%lubrication) then
       this%ib = 3 - this%fb
       call this%lub%pair_blocks(r, this%blocks(this%ib), pairs)
@@ -394,9 +403,9 @@ contains
     type(error_t), allocatable, intent(out) :: error
     integer :: a
     this%pre = this%zref
-    if (this%lubrication) call this%blocks(this%ib)%add_friction(this%pre)
+    if (this%lubrication) call this%blocks(this%ib)%add_friction(this%pre, this%pos)
     do a = 1, size(this%pscale)
-      this%pscale(a) = 1.0_wp/sqrt(this%pre(a, a))
+      this%pscale(a) = 1.0_wp/sqrt(this%pre(this%pos(a), this%pos(a)))
     end do
     this%mref_valid = .false.
     call cholesky_factor(this%pre, error, 'lubrication-corrected friction')
@@ -413,16 +422,36 @@ contains
     nt = this%nr + 6*nb
     if (allocated(this%rhs)) then
       if (size(this%rhs) == nt .and. size(this%rp, 2) == nb) return
-      deallocate (this%pos_ref, this%rp, this%frot, this%pre, this%pscale, this%slot, this%zref, this%v, this%hm, this%rhs, this%wk, &
+      deallocate (this%pos_ref, this%rp, this%frot, this%pre, this%pscale, this%slot, this%zref, this%perm, this%pos, &
+                  this%s6p, this%v, this%hm, this%rhs, this%wk, &
                   this%m0, this%s6, this%uk, this%uprev, this%u0, this%zb, this%xs, this%zs, this%ms)
     end if
     allocate (this%pos_ref(3, nb), this%rp(3, nb), this%frot(3, nb), this%pre(6*nb, 6*nb), this%pscale(6*nb), &
-              this%slot(nb, nb), this%zref(6*nb, 6*nb))
+              this%slot(nb, nb), this%zref(6*nb, 6*nb), this%s6p(6*nb), this%perm(6*nb), this%pos(6*nb))
+    call ordering(nb, this%perm, this%pos)
     this%slot = 0
     allocate (this%v(nt, max_iterations + 1), this%hm(max_iterations + 1, max_iterations + 2))
     allocate (this%rhs(nt), this%wk(nt), this%m0(6*nb), this%s6(6*nb), this%uk(6*nb), this%uprev(6*nb), &
               this%u0(6*nb), this%zb(nt, max_iterations), this%xs(nt), this%zs(this%nr), this%ms(6*nb))
   end subroutine ensure_work
+
+  !> The order of the preconditioner's 6N friction and its factor: the rotations of all beads
+  !> first, then the translations ([Omega_1, ..., Omega_N, U_1, ..., U_N], each bead's three
+  !> components together), so that the translational block of the inverse comes from the
+  !> factor's trailing 3N x 3N block alone (`mobility_at`). perm(k): the unknown of the order
+  !> [U_1, Omega_1, U_2, ...] at position k; pos: the inverse map.
+  pure subroutine ordering(nb, perm, pos)
+    integer, intent(in) :: nb
+    integer, intent(out) :: perm(:), pos(:)
+    integer :: i, c
+    do i = 1, nb
+      do c = 1, 3
+        perm(3*(i - 1) + c) = 6*(i - 1) + 3 + c
+        perm(3*nb + 3*(i - 1) + c) = 6*(i - 1) + c
+      end do
+    end do
+    pos(perm) = [(i, i = 1, 6*nb)]
+  end subroutine ordering
 
   !> b = [rhs_Q(e); 0; f, torques 0, + dx : e] (lubrication blocks of the current call).
   subroutine right_hand_side(this, f, e)
@@ -501,8 +530,10 @@ contains
       end do
     end do
     n6 = size(this%s6)
-    call dtrsv('L', 'N', 'N', n6, this%pre, n6, this%s6, 1)
-    call dtrsv('L', 'T', 'N', n6, this%pre, n6, this%s6, 1)
+    this%s6p = this%s6(this%perm)
+    call dtrsv('L', 'N', 'N', n6, this%pre, n6, this%s6p, 1)
+    call dtrsv('L', 'T', 'N', n6, this%pre, n6, this%s6p, 1)
+    this%s6(this%perm) = this%s6p
     do i = 1, size(this%rp, 2)
       do c = 1, 6
         this%m0(this%ref%p_row(i, c) - nq) = this%s6(6*(i - 1) + c)/this%ref%moment_scale(c)
@@ -738,19 +769,18 @@ contains
   !> translational blocks rotated onto r by the best rigid rotation Q of the reference onto r,
   !> mu_ij(r) = Q mu_ij(ref) Q^T (Stokes flow is covariant): exact at the reference and at its
   !> rigid motions, otherwise the mobility of a nearby configuration (a W-method keeps its order
-  !> with any Jacobian). The first call after a factorisation of the 6N factor costs one
-  !> triangular solve with 3N right-hand sides and one symmetric product with it (level-3 BLAS,
-  !> about 6 ms at N = 99), no factorisation of K; the blocks mu(ref) are kept, so later calls
-  !> with the same factor cost the rotation (the same numbers as made anew). Otherwise (a lower jacobian_order, or no reference yet) the exact
+  !> with any Jacobian). The first call after a factorisation of the 6N factor costs one dpotri
+  !> of size 3N with the factor's trailing block (the translations, `ordering`), no factorisation
+  !> of K; the blocks mu(ref) are kept, so later calls with the same factor cost the rotation (the
+  !> same numbers as made anew). Otherwise (a lower jacobian_order, or no reference yet) the exact
   !> model's (kf_hydro_multipole `mobility_at`).
   subroutine iterative_mobility_at(this, r, mu, error)
     class(multipole_iterative_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     real(wp), intent(out) :: mu(:, :)
     type(error_t), allocatable, intent(out) :: error
-    real(wp), allocatable :: x(:, :)
     real(wp) :: q(3, 3)
-    integer :: nb, i, j, c, n3, n6
+    integer :: nb, j, n3, n6, info
     logical :: own
     nb = size(r, 2)
     own = this%ready .and. this%jacobian_order == this%order
@@ -769,20 +799,18 @@ contains
       end if
     end if
     if (.not. this%mref_valid) then
-      ! the translational blocks of Z^-1 = L^-T L^-1 (Z = L L^T the 6N factor): X = L^-1 E with
-      ! E the 3N translational unit columns, mu(ref) = X^T X (a whole inverse by dpotri took 1.6
-      ! times as long at N = 99)
+      ! the translations are the trailing 3N unknowns of the factor Z = L L^T (`ordering`), so
+      ! the translational block of Z^-1 is (L_TT L_TT^T)^-1, L_TT the trailing 3N x 3N block of L
+      ! (L^-1 is block lower triangular): one dpotri of size 3N
       n6 = 6*nb
-      allocate (x(n6, n3))
-      x = 0.0_wp
-      do i = 1, nb
-        do c = 1, 3
-          x(6*i - 6 + c, 3*i - 3 + c) = 1.0_wp
-        end do
-      end do
-      call dtrsm('L', 'L', 'N', 'N', n6, n3, 1.0_wp, this%pre, n6, x, n6)
       if (.not. allocated(this%mref)) allocate (this%mref(n3, n3))
-      call dsyrk('L', 'T', n3, n6, 1.0_wp, x, n6, 0.0_wp, this%mref, n3)
+      this%mref = this%pre(n3 + 1:n6, n3 + 1:n6)
+      call dpotri('L', n3, this%mref, n3, info)
+      if (info /= 0) then
+        call fatal_error(error, 'multipole iterative: the Jacobian mobility''s inverse failed (dpotri info = '// &
+                         to_str(info)//')')
+        return
+      end if
       do j = 1, n3
         this%mref(j, j + 1:n3) = this%mref(j + 1:n3, j)
       end do
