@@ -110,6 +110,11 @@ ledger="$(cd "$ledger" && pwd)"
 [ -e "$workdir/inputs" ] || ln -s "$KF_ROOT/inputs" "$workdir/inputs"
 cd "$workdir"
 results=results
+# The scene variables' defaults of the program that runs the cases: a continuation run by a
+# later version writes the variables added since with their defaults (knotflow-campaign digest
+# --scene-reference).
+mkdir -p "$results"
+"$knotflow" --scene-reference >"$results/scene-reference.md"
 
 # One line "sweep case action scene" per case still to run, cases with progress first.
 queue() {
@@ -191,7 +196,8 @@ digest_all() {
       fi
       mv "$copies/$rel.new.h5" "$copies/$rel"
       if ! knotflow-campaign digest "$copies/$rel" --copies "$copies" --results "$results" \
-          --ledger "$ledger" --sweep "$sweep" --closures "$closures" --positions-every "$every"; then
+          --ledger "$ledger" --sweep "$sweep" --closures "$closures" --positions-every "$every" \
+          --scene-reference "$results/scene-reference.md"; then
         kf_log "not digested: $f (above)"
         continue
       fi

@@ -60,7 +60,7 @@ def test_continuation_scene_changes_only_what_it_must():
         "  case_name = 'A1.00'": "  case_name = 'A1.00_from1234.5'",
     }
     # The core of the scene (what a continuation must not change) is the same.
-    assert campaign._scene_core(text) == campaign._scene_core(SCENE)
+    assert campaign.scene_differences(SCENE, text, {}) == []
 
 
 def test_continuation_refused_when_nothing_is_left():
@@ -335,3 +335,57 @@ def test_ledger_keeps_the_elastic_viscosity_and_reads_version_1(tmp_path):
     case = campaign.ledger_case(str(jpath))
     assert "viscosity_elastic" not in case.stresslet
     assert np.allclose(case.stresslet["viscosity"], 6.0 * (2.0 + 0.5 * k) / n, rtol=1e-6)
+
+
+HYDRO = "&hydro\n  model = 'multipole'\n  overlap = 'relax'\n/\n"
+
+
+def test_scene_differences_and_the_programs_defaults():
+    """A scene variable written in one scene only (added by a later version of the program,
+    which writes its default) is the same as its default, taken from the program's own
+    `--scene-reference` (docs/scenes.md is that output, checked by the docs tests); a different
+    value, or a variable the reference does not know, is another scene, named."""
+    reference = (__import__("pathlib").Path(__file__).resolve().parents[2] / "docs" / "scenes.md")
+    defaults = campaign.scene_defaults(reference.read_text(encoding="utf-8"))
+    assert ("hydro", "solver_tolerance") in defaults and ("integrator", "method") in defaults
+    old = SCENE + HYDRO
+    new = SCENE.replace("1.0000000000000000", "1.0") + HYDRO.replace(
+        "  overlap = 'relax'\n", "  overlap = 'relax'\n  solver_tolerance = 0.99999999999999995E-6\n")
+    assert campaign.scene_differences(old, new, defaults) == []
+    assert campaign.scene_differences(old, new, {}) == [
+        "&hydro solver_tolerance: (not written), 0.99999999999999995E-6"]
+    looser = new.replace("0.99999999999999995E-6", "0.1E-3")
+    assert campaign.scene_differences(old, looser, defaults) == [
+        "&hydro solver_tolerance: (not written), 0.1E-3"]
+    other = new.replace("'relax'", "'pair'")
+    assert campaign.scene_differences(old, other, defaults) == ["&hydro overlap: 'relax', 'pair'"]
+    unknown = new.replace("  model = 'multipole'\n", "  model = 'multipole'\n  no_such_variable = 1\n")
+    assert campaign.scene_differences(old, unknown, defaults) == [
+        "&hydro no_such_variable: (not written), 1"]
+
+
+def test_continuation_with_a_new_default_is_digested(tmp_path):
+    """A continuation run by a later program writes a new scene variable with its default: the
+    ledger takes it with the program's defaults and refuses it, naming the variable, without."""
+    ledger = str(tmp_path / "ledger")
+    old = SCENE + HYDRO
+    new = old.replace("  overlap = 'relax'\n", "  overlap = 'relax'\n  solver_tolerance = 0.1E-5\n")
+    frames = unknotting_trefoil_frames(6)
+    for name, scene, t0 in (("A1.00", old, 0.0), ("A1.00_from5", new, 5.0)):
+        part = frames if t0 == 0.0 else frames[:3]
+        path = str(write_case(tmp_path / f"{name}.h5", part, status="running",
+                              attrs={"integrator.t_end": 10.0 - t0, "scene": scene,
+                                     "case_name": name}))
+        with h5py.File(path, "r+") as f:
+            g = f.create_group("analysis/knots")
+            g.attrs["closures"] = np.int64(10)
+            g["frame_index"] = np.arange(len(part), dtype=np.int64)
+            g["time"] = np.arange(float(len(part)))
+            g["kf"] = np.zeros(len(part))
+        if t0 == 0.0:
+            campaign.digest(path, ledger, "cc", 10)
+    with pytest.raises(ValueError, match="another scene.*&hydro solver_tolerance: \\(not written\\), 0.1E-5"):
+        campaign.digest(path, ledger, "cc", 10)
+    defaults = {("hydro", "solver_tolerance"): "0.1E-5"}
+    e = campaign.digest(path, ledger, "cc", 10, defaults=defaults)
+    assert len(e["segments"]) == 2 and e["t_reached"] == 7.0, e

@@ -207,12 +207,13 @@ def _json_value(v):
 
 
 def digest(path: str, ledger: str, sweep: str, closures: int, positions_every: float = 0.0,
-           source: str | None = None) -> dict:
+           source: str | None = None, defaults: dict | None = None) -> dict:
     """Add an analysed case file (`path`; `source`: where the file it copies runs, recorded
     as the segment's file) to the ledger and return the case's entry.
 
     Refused (ValueError, nothing written): k_f not from `closures` closures per frame, a file
-    that would leave a gap or rewrite an earlier segment than the newest, another scene, a
+    that would leave a gap or rewrite an earlier segment than the newest, another scene (a new
+    segment's scene against the ledger's, `same_scene`; `defaults` from `scene_defaults`), a
     case name that is not a case name by the scene's rule (knotflow_tools.names): the ledger's
     file names are derived from it, so it must not be a path."""
     case = read_case(path)
@@ -242,8 +243,10 @@ def digest(path: str, ledger: str, sweep: str, closures: int, positions_every: f
             raise ValueError(f"{path}: starts at t = {offset:g}, the ledger of {sweep}/{name} "
                              f"reaches t = {reached:g}: a segment must go on where it ends")
     if entry is not None and segments and not same:
-        if _scene_core(entry["scene"]) != _scene_core(str(case.attrs.get("scene", ""))):
-            raise ValueError(f"{path}: another scene than the ledger's {sweep}/{name}")
+        differ = scene_differences(entry["scene"], str(case.attrs.get("scene", "")), defaults or {})
+        if differ:
+            raise ValueError(f"{path}: another scene than the ledger's {sweep}/{name}: "
+                             + "; ".join(differ))
     p = _paths(ledger, sweep, name)
     os.makedirs(os.path.dirname(p["json"]), exist_ok=True)
     old = read_rows(ledger, sweep, name)
@@ -292,17 +295,82 @@ def _every(times: np.ndarray, every: float) -> list:
     return idx
 
 
-def _scene_core(text: str) -> str:
-    """A scene without what a continuation changes (&chain, t_end, dt_initial, &output)."""
-    groups = re.findall(r"&(\w+)\n(.*?)\n/", text, flags=re.S)
-    keep = []
-    for g, body in groups:
-        if g in ("chain", "output"):
+def scene_defaults(reference: str) -> dict:
+    """{(group, variable): default} from the Markdown of `knotflow --scene-reference` (its
+    sections "## `&group`" and table rows "| `variable` | `default` | ..."): the defaults of
+    the program that wrote it, the one source of them."""
+    out: dict = {}
+    group = None
+    for line in reference.splitlines():
+        m = re.match(r"## `&(\w+)`", line)
+        if m:
+            group = m.group(1)
             continue
-        lines = [ln for ln in body.splitlines()
-                 if not re.match(r"\s*(t_end|dt_initial)\s*=", ln)]
-        keep.append(g + ":" + "\n".join(lines))
-    return "\n".join(keep)
+        m = re.match(r"\| `(\w+)` \| `([^`]*)` \|", line)
+        if m and group:
+            out[(group, m.group(1))] = m.group(2)
+    return out
+
+
+def _scene_values(text: str) -> dict:
+    """{(group, variable): value text} of a scene text (one `variable = value` a line, as
+    knotflow writes scenes; a line without `=` continues the value before it), without what a
+    continuation changes: &chain, &output, t_end and dt_initial."""
+    out: dict = {}
+    for group, body in re.findall(r"&(\w+)\n(.*?)\n/", text, flags=re.S):
+        if group in ("chain", "output"):
+            continue
+        key = None
+        for line in body.splitlines():
+            m = re.match(r"\s*(\w+)\s*=\s*(.*)$", line)
+            if m:
+                key = (group, m.group(1))
+                out[key] = m.group(2).strip()
+            elif key is not None and line.strip():
+                out[key] += " " + line.strip()
+    for key in [k for k in out if k[1] in ("t_end", "dt_initial")]:
+        del out[key]
+    return out
+
+
+def _same_value(a: str, b: str) -> bool:
+    """Two value texts of one variable are the same value: numbers (also lists of them, in any
+    of Fortran's real formats) to 1e-12 relative, anything else as text without quotes, spaces
+    and case."""
+    def numbers(v):
+        try:
+            return [float(x.replace("d", "e").replace("D", "e")) for x in v.rstrip(",").split(",")]
+        except ValueError:
+            return None
+    na, nb = numbers(a), numbers(b)
+    if na is not None and nb is not None:
+        return len(na) == len(nb) and all(math.isclose(x, y, rel_tol=1e-12, abs_tol=0.0)
+                                          for x, y in zip(na, nb))
+    def norm(v):
+        return v.replace("'", "").replace('"', "").replace(" ", "").lower()
+    return norm(a) == norm(b)
+
+
+def scene_differences(ledger_scene: str, case_scene: str, defaults: dict) -> list:
+    """What makes a new segment's scene another scene than the ledger's (empty: the same),
+    each as '&group variable: ledger value, segment value'; &chain, &output, t_end and
+    dt_initial are what a continuation changes and are not compared. A variable written in one
+    text only (a scene variable added to, or written by, a later version of the program) is
+    the same when its value is the program's default (`defaults`, `scene_defaults`): the older
+    text ran with that value."""
+    a, b = _scene_values(ledger_scene), _scene_values(case_scene)
+    out = []
+    for key in sorted(set(a) | set(b)):
+        va, vb = a.get(key), b.get(key)
+        if va is not None and vb is not None:
+            same = _same_value(va, vb)
+        else:
+            d = defaults.get(key)
+            same = d is not None and _same_value(va if va is not None else vb, d)
+        if not same:
+            out.append(f"&{key[0]} {key[1]}: {va if va is not None else '(not written)'}, "
+                       f"{vb if vb is not None else '(not written)'}")
+    return out
 
 
 def _scene_setting(group: str, var: str):

@@ -619,6 +619,10 @@ def _campaign(argv: Argv) -> int:
                     help="closures per frame the files were analysed with")
     dg.add_argument("--positions-every", type=float, default=0.0, metavar="T",
                     help="keep the positions of the frames at multiples of T (0: only the newest)")
+    dg.add_argument("--scene-reference", metavar="FILE",
+                    help="what `knotflow --scene-reference` printed (the defaults of the program "
+                    "that ran the files): a variable written in one scene only is the same as "
+                    "its default (a variable added by a later version)")
     st = sub.add_parser("status", help="one line per case of the ledger's sweeps, then one per "
                         "sweep (cases, measured rate, time left) and one for the campaign")
     st.add_argument("--scenes", metavar="DIR",
@@ -666,10 +670,17 @@ def _campaign(argv: Argv) -> int:
     elif args.command == "digest":
         if args.closures < 1 or not args.positions_every >= 0.0:
             p.error("--closures needs a positive integer, --positions-every T >= 0")
+        defaults = {}
+        if args.scene_reference:
+            with open(args.scene_reference, encoding="utf-8") as fh:
+                defaults = campaign.scene_defaults(fh.read())
+            if not defaults:
+                p.error(f"--scene-reference {args.scene_reference}: no scene variables in it "
+                        "(expected the output of knotflow --scene-reference)")
         for f in args.files:
             source = os.path.join(args.results, os.path.relpath(f, args.copies))
             e = campaign.digest(f, args.ledger, args.sweep, args.closures,
-                                args.positions_every, source)
+                                args.positions_every, source, defaults)
             print(f"{args.sweep}/{e['case']}: {e['status']}, t = {e['t_reached']:g} of "
                   f"{e['t_end']:g}, {len(e['segments'])} segment(s)")
     elif args.command == "windows":
