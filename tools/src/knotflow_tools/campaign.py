@@ -366,7 +366,8 @@ def scene_differences(ledger_scene: str, case_scene: str, defaults: dict) -> lis
             same = _same_value(va, vb)
         else:
             d = defaults.get(key)
-            same = d is not None and _same_value(va if va is not None else vb, d)
+            written = va if va is not None else vb
+            same = d is not None and written is not None and _same_value(written, d)
         if not same:
             out.append(f"&{key[0]} {key[1]}: {va if va is not None else '(not written)'}, "
                        f"{vb if vb is not None else '(not written)'}")
