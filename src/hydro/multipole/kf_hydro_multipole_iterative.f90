@@ -81,12 +81,11 @@
 !>
 !> Memory (besides the parent's arrays): zeta_L(ref) and the 6N factor (6N x 6N each, in the
 !> permuted order of `ordering`), the Jacobian's 3N x 3N mobility blocks, the factor's diagonal
-!> scale (6N), two lists of lubrication blocks (the call's and the factor's),
-!> an N x N integer map for the rule's pair matching, the two many-body systems (the reference
-!> factor with its single-precision copy, and the assembled one with the single copies of K0
-!> and B, 5 nr^2 bytes (K0 full, 4 nr^2; B, nr^2): 12.5 MB at N = 99, made at the first call that
-!> uses them), the Krylov bases and the start's history (2 warm_history vectors of the system's
-!> size).
+!> scale (6N), two lists of lubrication blocks (the call's and the factor's), an N x N integer
+!> map for the rule's pair matching, the two many-body systems (the reference factor with its
+!> single-precision copy, and the assembled one with the single copies of K0 and B, 5 nr^2 bytes
+!> (K0 full, 4 nr^2; B, nr^2): 12.5 MB at N = 99, made at the first call that uses them), the
+!> Krylov bases and the start's history (2 warm_history vectors of the system's size).
 !>
 !> Jacobian mobility (`mobility_at`, for a linearly implicit stepper): at the model's order, the
 !> translational part of the inverse of the preconditioner's 6N friction, rotated onto the
@@ -203,9 +202,9 @@ contains
 
   !> The model's dense arrays for n beads (bytes; a lower bound): the exact model's, one more
   !> 6N x 6N matrix (288 N^2), the preconditioner's friction factor, the N x N integer map of its
-  !> rule (4 N^2) and the Jacobian's 3N x 3N mobility blocks (72 N^2); its two many-body systems (the reference factor with its
-  !> single-precision copy, and the assembled one with the single copies of its products) and
-  !> the Krylov bases come on top.
+  !> rule (4 N^2) and the Jacobian's 3N x 3N mobility blocks (72 N^2); its two many-body systems
+  !> (the reference factor with its single-precision copy, and the assembled one with the single
+  !> copies of its products) and the Krylov bases come on top.
   pure integer(i8) function iterative_memory_bytes(n, stresslet_lubrication) result(bytes)
     integer(i8), intent(in) :: n
     logical, intent(in) :: stresslet_lubrication
