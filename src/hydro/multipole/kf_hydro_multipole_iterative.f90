@@ -177,7 +177,8 @@ module kf_hydro_multipole_iterative
     real(wp), allocatable, private :: pscale(:)     !< 1/sqrt of the diagonal of zeta_L(ref) + dzeta_f
     real(wp), allocatable, private :: s6p(:)        !< 6N work in the permuted order
     !> The translational blocks of the inverse of the 6N friction in `pre` (3N x 3N; the Jacobian
-    !> mobility at the reference), made by the first `mobility_at` after each factorisation of pre.
+    !> mobility at the reference; sized by ensure_work), made by the first `mobility_at` after each
+    !> factorisation of pre.
     real(wp), allocatable, private :: mref(:, :)
     logical, private :: mref_valid = .false.
     integer, allocatable, private :: slot(:, :)     !< (N, N) work of largest_scaled_change
@@ -422,11 +423,12 @@ contains
     if (allocated(this%rhs)) then
       if (size(this%rhs) == nt .and. size(this%rp, 2) == nb) return
       deallocate (this%pos_ref, this%rp, this%frot, this%pre, this%pscale, this%slot, this%zref, this%perm, this%pos, &
-                  this%s6p, this%v, this%hm, this%rhs, this%wk, &
+                  this%s6p, this%mref, this%v, this%hm, this%rhs, this%wk, &
                   this%m0, this%s6, this%uk, this%uprev, this%u0, this%zb, this%xs, this%zs, this%ms)
     end if
     allocate (this%pos_ref(3, nb), this%rp(3, nb), this%frot(3, nb), this%pre(6*nb, 6*nb), this%pscale(6*nb), &
-              this%slot(nb, nb), this%zref(6*nb, 6*nb), this%s6p(6*nb), this%perm(6*nb), this%pos(6*nb))
+              this%slot(nb, nb), this%zref(6*nb, 6*nb), this%s6p(6*nb), this%perm(6*nb), this%pos(6*nb), &
+              this%mref(3*nb, 3*nb))
     call ordering(nb, this%perm, this%pos)
     this%slot = 0
     allocate (this%v(nt, max_iterations + 1), this%hm(max_iterations + 1, max_iterations + 2))
@@ -791,18 +793,11 @@ contains
     call best_rotation(this%pos_ref, r, q, error)
     if (allocated(error)) return
     n3 = 3*nb
-    if (allocated(this%mref)) then
-      if (size(this%mref, 1) /= n3) then
-        deallocate (this%mref)
-        this%mref_valid = .false.
-      end if
-    end if
     if (.not. this%mref_valid) then
       ! the translations are the trailing 3N unknowns of the factor Z = L L^T (`ordering`), so
       ! the translational block of Z^-1 is (L_TT L_TT^T)^-1, L_TT the trailing 3N x 3N block of L
       ! (L^-1 is block lower triangular): one dpotri of size 3N
       n6 = 6*nb
-      if (.not. allocated(this%mref)) allocate (this%mref(n3, n3))
       this%mref = this%pre(n3 + 1:n6, n3 + 1:n6)
       call dpotri('L', n3, this%mref, n3, info)
       if (info /= 0) then
