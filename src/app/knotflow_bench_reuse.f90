@@ -4,10 +4,11 @@
 !> rule of the multipole campaign (`--overlap`, default relax, a variant of ours).
 !>
 !> Usage: knotflow-bench-reuse PART [options]
-!>   velocity   [--config C] [--t-end T] [--every K] [--update iterative] [--solver-tolerance S]:
-!>              integrate with the adaptive path (or the iterative one, with its solver_tolerance
-!>              S) and, at every K-th stage, compare its velocities with the exact ones at the
-!>              same positions
+!>   velocity   [--config C] [--t-end T] [--every K] [--update iterative] [--solver-tolerance S]
+!>              [--single-operator yes|no]: integrate with the adaptive path (or the iterative
+!>              one, with its solver_tolerance S; --single-operator yes: its whole operator in
+!>              single at any S and chain length, no: never) and, at every K-th stage, compare
+!>              its velocities with the exact ones at the same positions
 !>   trajectory [--config C] [--t-end T]: largest bead deviation at T between the two paths at
 !>              tolerance 1e-4, and of the exact path between tolerances 1e-4 and 1e-6
 !>   speed      [--config C] [--t-end T]: wall time of both paths to T and their ratio
@@ -74,6 +75,11 @@
 !>              --double-products yes: each 'iterative' run followed by the same run with the
 !>              Krylov loop's products always in double (single_products = .false.; labels
 !>              <run>_double.iterative; the model before the single-precision products)
+!>              --single-operator no: each 'iterative' run followed by the same run with K0
+!>              assembled in double and the start's residual in double at every solver tolerance
+!>              (single_operator_tolerance = huge; labels <run>_loopsingle.iterative, with
+!>              --solver-tolerance S at S: <run>_st<S>_loopsingle.iterative; the model before
+!>              the whole operator in single)
 !>   rigid      [--config C]: the reused part at rigidly moved and at deformed configurations
 !>              (overlap rule pair only: the model's reused part against its exact one, both
 !>              without the dynamics' configuration rules separate and relax)
@@ -122,7 +128,7 @@ program knotflow_bench_reuse
 
   character(len=:), allocatable :: part, config, overlap, update, table, model, steppers
   real(wp) :: t_end, eps_lub, tolerance, friction_change, solver_tolerance
-  logical :: double_products
+  logical :: double_products, loop_single, force_single
   integer :: every, jacobian_steps, jacobian_order, warm_history, refactor_iterations
   logical :: omp_set, rosenbrock_stage
 
@@ -169,7 +175,7 @@ contains
       ' [--eps-lub E] [--overlap RULE (one of '//name_list(overlap_names)//')] [--update U] [--tolerance TOL]'// &
       ' [--table FILE] [--model multipole|rpy] [--jacobian-steps K] [--jacobian-order J] [--rosenbrock-stage yes|no]'// &
       ' [--steppers LIST] [--friction-change F] [--warm-history K] [--refactor-iterations K] [--solver-tolerance S]'// &
-      ' [--double-products yes|no]'//new_line('a')// &
+      ' [--double-products yes|no] [--single-operator yes|no]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
       'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).')
     config = 'trefoil'
@@ -189,6 +195,8 @@ contains
     refactor_iterations = 0
     solver_tolerance = -1.0_wp
     double_products = .false.
+    loop_single = .false.
+    force_single = .false.
     steppers = method_ros34pw2//','//method_ros34pw3
     k = 2
     do while (k <= command_argument_count())
@@ -255,6 +263,11 @@ contains
         if (val /= 'yes' .and. val /= 'no') &
           call die(program_name, '--double-products '//trim(val)//': allowed values are yes, no', 2)
         double_products = val == 'yes'
+      case ('--single-operator')
+        if (val /= 'yes' .and. val /= 'no') &
+          call die(program_name, '--single-operator '//trim(val)//': allowed values are yes, no', 2)
+        loop_single = val == 'no'
+        force_single = val == 'yes'
       case ('--steppers')
         steppers = trim(val)
         call check_steppers(steppers)
@@ -412,6 +425,7 @@ contains
     real(wp), allocatable :: r(:, :)
     real(wp) :: t, w0
     character(len=:), allocatable :: fast
+    class(hydro_model_t), allocatable :: hydro
     call header()
     fast = update_adaptive
     if (update == update_iterative) fast = update_iterative
@@ -420,7 +434,19 @@ contains
       scene%hydro%solver_tolerance = solver_tolerance
       write (output_unit, '(a)') 'solver_tolerance = '//to_str(solver_tolerance, '(es8.1)')
     end if
-    call sys%init(scene, size(r, 2), error, every, fast)
+    if (force_single .or. loop_single) then
+      call make_hydro_model(scene%hydro, scene%integrator%tolerance, hydro, error)
+      if (allocated(error)) call die(program_name, error%message, 2)
+      select type (hydro)
+      type is (multipole_iterative_t)
+        hydro%single_operator_tolerance = merge(0.0_wp, huge(1.0_wp), force_single)
+        if (force_single) hydro%single_min_beads = 1
+      class default
+        call die(program_name, '--single-operator: the model is not the iterative one', 2)
+      end select
+      write (output_unit, '(a)') 'single_operator = '//merge('yes', 'no ', force_single)
+    end if
+    call sys%init(scene, size(r, 2), error, every, fast, hydro)
     if (allocated(error)) call die(program_name, error%message, 2)
     call make_stepper(scene%integrator, integ, error)
     if (allocated(error)) call die(program_name, error%message, 2)
@@ -1005,7 +1031,9 @@ contains
   !> with --refactor-iterations K likewise with its refactor_iterations set to K (label
   !> <name>_ri<K>.<upd>); with --solver-tolerance S likewise with its solver_tolerance set to S
   !> (label <name>_st<S>.<upd>); with --double-products yes likewise with the Krylov loop's products in
-  !> double (label <name>_double.<upd>).
+  !> double (label <name>_double.<upd>); with --single-operator no likewise with K0 and the start's
+  !> residual in double (label <name>_loopsingle.<upd>; with --solver-tolerance S at S, label
+  !> <name>_st<S>_loopsingle.<upd>).
   subroutine run_compared(name, method, upd, keep, tol, jorder, r_ref, wall_ref)
     character(len=*), intent(in) :: name, method, upd
     integer, intent(in) :: keep, jorder
@@ -1042,6 +1070,16 @@ contains
       call run_method(label, method, upd, keep, tol, r, wall, jorder, double=.true.)
       call compare_with_reference(label, r, wall, r_ref, wall_ref)
     end if
+    if (loop_single) then
+      if (solver_tolerance > 0.0_wp) then
+        label = name//'_st'//to_str(solver_tolerance, '(es7.1)')//'_loopsingle.'//upd
+        call run_method(label, method, upd, keep, tol, r, wall, jorder, stol=solver_tolerance, loopsingle=.true.)
+      else
+        label = name//'_loopsingle.'//upd
+        call run_method(label, method, upd, keep, tol, r, wall, jorder, loopsingle=.true.)
+      end if
+      call compare_with_reference(label, r, wall, r_ref, wall_ref)
+    end if
   end subroutine run_compared
 
   !> The wall-time ratio and the largest bead deviation of a run (r, wall) from the reference.
@@ -1056,10 +1094,12 @@ contains
   !> --eps-lub) with `method` and `upd`: its figures under `label`; r the final positions.
   !> `jorder` (optional): &hydro jacobian_order; `fchange` (optional): the iterative model's
   !> friction_change, `whistory` (optional): its warm_history, `double` (optional): .true. sets
-  !> its single_products = .false., `refactor` (optional): its refactor_iterations (the
+  !> its single_products = .false., `loopsingle` (optional): .true. sets its
+  !> single_operator_tolerance = huge, `refactor` (optional): its refactor_iterations (the
   !> factory's model with those values, taken over by the dynamics); `stol` (optional): the
   !> scene's &hydro solver_tolerance.
-  subroutine run_method(label, method, upd, keep, tol, r, wall, jorder, fchange, whistory, double, refactor, stol)
+  subroutine run_method(label, method, upd, keep, tol, r, wall, jorder, fchange, whistory, double, refactor, stol, &
+                        loopsingle)
     character(len=*), intent(in) :: label, method, upd
     integer, intent(in) :: keep
     real(wp), intent(in) :: tol
@@ -1071,6 +1111,7 @@ contains
     logical, intent(in), optional :: double
     integer, intent(in), optional :: refactor
     real(wp), intent(in), optional :: stol
+    logical, intent(in), optional :: loopsingle
     type(scene_t) :: scene
     type(dynamics_t) :: dyn
     class(hydro_model_t), allocatable :: hydro
@@ -1083,7 +1124,8 @@ contains
     scene%integrator%jacobian_steps = keep
     if (present(jorder)) scene%hydro%jacobian_order = jorder
     if (present(stol)) scene%hydro%solver_tolerance = stol
-    if (present(fchange) .or. present(whistory) .or. present(double) .or. present(refactor)) then
+    if (present(fchange) .or. present(whistory) .or. present(double) .or. present(refactor) .or. &
+        present(loopsingle)) then
       call make_hydro_model(scene%hydro, scene%integrator%tolerance, hydro, error)
       if (allocated(error)) call die(program_name, error%message, 2)
       select type (hydro)
@@ -1092,8 +1134,12 @@ contains
         if (present(whistory)) hydro%warm_history = whistory
         if (present(double)) hydro%single_products = .not. double
         if (present(refactor)) hydro%refactor_iterations = refactor
+        if (present(loopsingle)) then
+          if (loopsingle) hydro%single_operator_tolerance = huge(1.0_wp)
+        end if
       class default
-        call die(program_name, '--friction-change, --warm-history, --double-products, --refactor-iterations: '// &
+        call die(program_name, '--friction-change, --warm-history, --double-products, --refactor-iterations, '// &
+                 '--single-operator: '// &
                  'the model is not the iterative one', 2)
       end select
     end if

@@ -12,6 +12,7 @@ module kf_reuse_check
   use kf_scene_hydro, only: update_stage, update_adaptive
   use kf_hydro_limits, only: solver_tolerance_default
   use kf_dynamics, only: dynamics_t
+  use kf_hydro_model, only: hydro_model_t
   use kf_ode_system, only: ode_system_t
   use kf_accuracy, only: velocity_error_norms
   implicit none
@@ -39,19 +40,21 @@ module kf_reuse_check
 contains
 
   !> The scene with update = 'adaptive' (or fast_update, e.g. 'iterative') integrates, the same
-  !> with 'stage' is the reference.
-  subroutine checked_init(this, scene, n_beads, error, every, fast_update)
+  !> with 'stage' is the reference; `fast_model` (optional): the integrating path's model, made
+  !> by the caller (kf_dynamics `init`'s `model`).
+  subroutine checked_init(this, scene, n_beads, error, every, fast_update, fast_model)
     class(checked_dynamics_t), intent(inout) :: this
     type(scene_t), intent(in) :: scene
     integer, intent(in) :: n_beads
     type(error_t), allocatable, intent(out) :: error
     integer, intent(in), optional :: every
     character(len=*), intent(in), optional :: fast_update
+    class(hydro_model_t), allocatable, intent(inout), optional :: fast_model
     type(scene_t) :: sc
     sc = scene
     sc%hydro%update = update_adaptive
     if (present(fast_update)) sc%hydro%update = fast_update
-    call this%fast%init(sc, n_beads, error)
+    call this%fast%init(sc, n_beads, error, fast_model)
     if (allocated(error)) return
     sc%hydro%update = update_stage
     sc%hydro%solver_tolerance = solver_tolerance_default   ! the fast path's setting only

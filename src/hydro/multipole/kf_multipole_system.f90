@@ -26,7 +26,9 @@
 !> arithmetic, BLAS stpsv) of a preconditioner; the exact solves keep the double factor.
 !>
 !> Single-precision products (`apply_single`, after `copy_products_single` or an `assemble` with
-!> `single`, which converts each sphere's columns right after writing them, from cache):
+!> `single`, which converts each sphere's columns right after writing them, from cache; or with
+!> `only_single`, which writes K0's columns in single alone, each through a double column in
+!> cache, so `apply` is not available until the next assemble without it):
 !> the single copies of K0's lower triangle (full storage, nr^2 4 bytes, the upper part not
 !> touched) and of B (its size in 4 bytes) give y = K x in single arithmetic (BLAS ssymv and
 !> sgemv, x rounded to single, y returned in double) from half the bytes of `apply`. Each
@@ -77,6 +79,7 @@ module kf_multipole_system
     real(sp), allocatable :: bps(:, :)   !< B in single (copy_products_single)
     real(sp), allocatable :: xw(:), yw(:), tw(:) !< single work of apply_single
     logical :: single_current = .false. !< k0s and bps hold the last assembly's K0 and B
+    logical :: double_current = .false. !< k and bp hold the last assembly's K0 and B (`apply`)
     real(wp), allocatable :: bp(:, :)    !< phi <- p couplings (rows phi, columns p)
     real(wp), allocatable :: w6(:, :)    !< 6N x 6N work
     real(wp), allocatable :: bq(:, :)    !< nqt x 5 work
@@ -97,6 +100,7 @@ module kf_multipole_system
     procedure :: copy_products_single => system_copy_products_single
     procedure :: apply_single => system_apply_single
     procedure :: has_single_products => system_has_single_products
+    procedure :: has_double_products => system_has_double_products
     procedure :: forward => system_forward
     procedure :: backward => system_backward
     procedure :: forward_p => system_forward_p
@@ -175,18 +179,18 @@ contains
   !> block K0 (lower triangle) and the phi <- p couplings B, so that K = K0 - B B^T (`apply`).
   !> `single` (optional, default .false.): also the single copies of `copy_products_single`,
   !> each sphere's columns converted right after they are written (from cache).
-  subroutine system_assemble(this, r, error, single)
+  subroutine system_assemble(this, r, error, single, only_single)
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
     type(error_t), allocatable, intent(out) :: error
-    logical, intent(in), optional :: single
+    logical, intent(in), optional :: single, only_single
     integer :: nsph, h, i, x, yr, n, q, t, s, t0, nt, pc, n_over, n_clamp
     integer :: lo(5), hi(5), ks(4), bs(4), ps
     integer, allocatable :: first_coincident(:)
     integer(8) :: c0, c1, crate
     real(wp) :: d(3), dist, dd(3, assembly_chunk)
-    real(wp), allocatable :: yw(:, :), vt(:, :)
-    logical :: conv
+    real(wp), allocatable :: yw(:, :), vt(:, :), wcol(:)
+    logical :: conv, alone
 
     nsph = size(r, 2)
     if (nsph < 1) then
@@ -212,7 +216,11 @@ contains
     end if
     conv = .false.
     if (present(single)) conv = single
+    alone = .false.
+    if (present(only_single)) alone = only_single
+    conv = conv .or. alone
     this%single_current = .false.
+    this%double_current = .false.
     if (conv) call allocate_single(this)
     associate (idx => this%idx)
       lo = idx%lo
@@ -251,9 +259,9 @@ contains
       n_over = 0
       n_clamp = 0
       first_coincident = 0
-      !$omp parallel default(none) shared(this, r, nsph, first_coincident, conv) &
-      !$omp private(s, t, t0, nt, d, dist, dd, yw, vt) reduction(+:n_over, n_clamp)
-      allocate (yw(assembly_chunk, 2*this%lay%nslot), vt(nsph, 0:this%lay%nhalf))
+      !$omp parallel default(none) shared(this, r, nsph, first_coincident, conv, alone) &
+      !$omp private(s, t, t0, nt, d, dist, dd, yw, vt, wcol) reduction(+:n_over, n_clamp)
+      allocate (yw(assembly_chunk, 2*this%lay%nslot), vt(nsph, 0:this%lay%nhalf), wcol(this%nr))
       vt(:, 0) = 0.0_wp
       !$omp do schedule(dynamic)
       do s = 1, nsph
@@ -284,11 +292,16 @@ contains
           end do
           call pair_entries(this%lay, nt, dd, yw, vt(t0:t0 + nt - 1, 1:))
         end do
-        call write_columns(s, vt)
-        if (conv) call single_columns(this, s)
+        if (alone) then
+          call write_columns_single(s, vt, wcol)
+          call single_columns(this, s, only_b=.true.)
+        else
+          call write_columns(s, vt)
+          if (conv) call single_columns(this, s)
+        end if
       end do
       !$omp end do
-      deallocate (yw, vt)
+      deallocate (yw, vt, wcol)
       !$omp end parallel
       this%n_overlapping = n_over
       this%n_clamped = n_clamp
@@ -302,6 +315,7 @@ contains
       end do
     end associate
     this%single_current = conv
+    this%double_current = .not. alone
     call system_clock(c1)
     this%t_assembly = real(c1 - c0, wp)/real(crate, wp)
 
@@ -332,6 +346,37 @@ contains
         end do
       end associate
     end subroutine write_columns
+
+    !> As write_columns, K0's columns of sphere so in single alone (k0s, from the diagonal
+    !> down), each written first into the double column wcol (in cache) with its own sphere's
+    !> rows (zero, the diagonal 1, as the self block set above), then rounded; B's p columns in
+    !> double as write_columns.
+    subroutine write_columns_single(so, vt, wcol)
+      integer, intent(in) :: so
+      real(wp), intent(in) :: vt(:, 0:)
+      real(wp), intent(inout) :: wcol(:)
+      integer :: rc, rr, b, c, col
+      associate (idx => this%idx)
+        do rc = 1, 4
+          do b = 0, idx%hi(rc) - idx%lo(rc)
+            c = idx%lo(rc) + b
+            col = idx%k_start(rc, so) + b
+            wcol(col:) = 0.0_wp
+            do rr = rc, 4
+              call write_run(so, vt, wcol, idx%k_start(rr, 1), rr, c, rr /= rc)
+            end do
+            wcol(col) = 1.0_wp
+            this%k0s(col:, col) = real(wcol(col:), sp)
+          end do
+        end do
+        do b = 0, h - 1
+          c = idx%lo(5) + b
+          do rr = 1, 3, 2
+            call write_run(so, vt, this%bp(:, idx%p_start(so) + b), idx%b_start(rr, 1), rr, c, .true.)
+          end do
+        end do
+      end associate
+    end subroutine write_columns_single
 
     !> Into column dst, the run of group rr (rows k0 + ln (t - 1) + a, a = 0..ln-1) of every
     !> sphere t > so from element (row, c) of the pair entries vt(t, :) of (so, t), and with
@@ -410,6 +455,7 @@ contains
 
     call this%assemble(r, error)
     if (allocated(error)) return
+    this%double_current = .false.   ! K0 becomes the eliminated system and its factor
     call system_clock(c1, crate)
     ! The offsets are the index map's (kf_multipole_index): rows of B in run 1 (na, from row 1
     ! of K) and in run 3 (nc, from row b3 of B and row k3 of K), all rows and columns of B.
@@ -457,7 +503,8 @@ contains
     end if
   end subroutine system_factorise
 
-  !> y = K x for the assembled, not factorised system (after `assemble`): K0 x - B (B^T x),
+  !> y = K x for the assembled, not factorised system (after `assemble` without `only_single`:
+  !> `has_double_products`): K0 x - B (B^T x),
   !> the p-moments eliminated by products instead of the dense update of `factorise`.
   !> x, y: the nr unknowns of K (`unknowns`), in its global order.
   subroutine system_apply(this, x, y)
@@ -485,10 +532,12 @@ contains
   end subroutine system_apply
 
   !> The single-precision copies of K0 (lower triangle) and B of the last `assemble` for
-  !> `apply_single` (module header); to be called after each `assemble` that they should follow.
+  !> `apply_single` (module header); to be called after each `assemble` that they should follow
+  !> (nothing when the double ones are not held: `has_double_products`).
   subroutine system_copy_products_single(this)
     class(multipole_system_t), intent(inout) :: this
     integer :: so
+    if (.not. this%double_current) return
     call allocate_single(this)
     do so = 1, this%n
       call single_columns(this, so)
@@ -497,19 +546,25 @@ contains
   end subroutine system_copy_products_single
 
   !> The columns of sphere so in K0 (lower triangle from the diagonal) and in B, in single
-  !> (what the single copies hold; `assemble` calls it per sphere from cache).
-  subroutine single_columns(this, so)
+  !> (what the single copies hold; `assemble` calls it per sphere from cache); `only_b`: B's.
+  subroutine single_columns(this, so, only_b)
     class(multipole_system_t), intent(inout) :: this
     integer, intent(in) :: so
+    logical, intent(in), optional :: only_b
     integer :: rc, b, c, nr
+    logical :: k0
     nr = this%nr
+    k0 = .true.
+    if (present(only_b)) k0 = .not. only_b
     associate (idx => this%idx)
-      do rc = 1, 4
-        do b = 0, idx%hi(rc) - idx%lo(rc)
-          c = idx%k_start(rc, so) + b
-          this%k0s(c:nr, c) = real(this%k(c:nr, c), sp)
+      if (k0) then
+        do rc = 1, 4
+          do b = 0, idx%hi(rc) - idx%lo(rc)
+            c = idx%k_start(rc, so) + b
+            this%k0s(c:nr, c) = real(this%k(c:nr, c), sp)
+          end do
         end do
-      end do
+      end if
       do b = 0, this%lay%h - 1
         c = idx%p_start(so) + b
         this%bps(:, c) = real(this%bp(:, c), sp)
@@ -523,6 +578,13 @@ contains
     class(multipole_system_t), intent(in) :: this
     yes = this%single_current
   end function system_has_single_products
+
+  !> True when K0 and B of the last assembly are held in double (`apply`): not after an
+  !> assemble with `only_single`, nor after a factorisation.
+  pure logical function system_has_double_products(this) result(yes)
+    class(multipole_system_t), intent(in) :: this
+    yes = this%double_current
+  end function system_has_double_products
 
   !> The single copies and work of apply_single, sized for the current system.
   subroutine allocate_single(this)
