@@ -293,7 +293,7 @@ contains
           call pair_entries(this%lay, nt, dd, yw, vt(t0:t0 + nt - 1, 1:))
         end do
         if (alone) then
-          call write_columns_single(s, vt, wcol)
+          call write_columns(s, vt, wcol)
           call single_columns(this, s, only_b=.true.)
         else
           call write_columns(s, vt)
@@ -325,17 +325,31 @@ contains
     !> in B from the entries vt(t, :) of the pairs (so, t). Row t of a run holds element
     !> G(row of t, column of so) of the block with receiver t and source so: for t > so the
     !> pair's element (row, column), for t < so (the pair (t, so)) its element (column, row).
-    subroutine write_columns(so, vt)
+    !> With `wcol` (`only_single`): K0's columns in single alone (k0s, from the diagonal down),
+    !> each written first into the double column wcol (in cache) with its own sphere's rows
+    !> (zero, the diagonal 1, as the self block set above), then rounded.
+    subroutine write_columns(so, vt, wcol)
       integer, intent(in) :: so
       real(wp), intent(in) :: vt(:, 0:)
-      integer :: rc, rr, b, c
+      real(wp), intent(inout), optional :: wcol(:)
+      integer :: rc, rr, b, c, col
       associate (idx => this%idx)
         do rc = 1, 4
           do b = 0, idx%hi(rc) - idx%lo(rc)
             c = idx%lo(rc) + b
-            do rr = rc, 4
-              call write_run(so, vt, this%k(:, idx%k_start(rc, so) + b), idx%k_start(rr, 1), rr, c, rr /= rc)
-            end do
+            col = idx%k_start(rc, so) + b
+            if (present(wcol)) then
+              wcol(col:) = 0.0_wp
+              do rr = rc, 4
+                call write_run(so, vt, wcol, idx%k_start(rr, 1), rr, c, rr /= rc)
+              end do
+              wcol(col) = 1.0_wp
+              this%k0s(col:, col) = real(wcol(col:), sp)
+            else
+              do rr = rc, 4
+                call write_run(so, vt, this%k(:, col), idx%k_start(rr, 1), rr, c, rr /= rc)
+              end do
+            end if
           end do
         end do
         do b = 0, h - 1
@@ -346,37 +360,6 @@ contains
         end do
       end associate
     end subroutine write_columns
-
-    !> As write_columns, K0's columns of sphere so in single alone (k0s, from the diagonal
-    !> down), each written first into the double column wcol (in cache) with its own sphere's
-    !> rows (zero, the diagonal 1, as the self block set above), then rounded; B's p columns in
-    !> double as write_columns.
-    subroutine write_columns_single(so, vt, wcol)
-      integer, intent(in) :: so
-      real(wp), intent(in) :: vt(:, 0:)
-      real(wp), intent(inout) :: wcol(:)
-      integer :: rc, rr, b, c, col
-      associate (idx => this%idx)
-        do rc = 1, 4
-          do b = 0, idx%hi(rc) - idx%lo(rc)
-            c = idx%lo(rc) + b
-            col = idx%k_start(rc, so) + b
-            wcol(col:) = 0.0_wp
-            do rr = rc, 4
-              call write_run(so, vt, wcol, idx%k_start(rr, 1), rr, c, rr /= rc)
-            end do
-            wcol(col) = 1.0_wp
-            this%k0s(col:, col) = real(wcol(col:), sp)
-          end do
-        end do
-        do b = 0, h - 1
-          c = idx%lo(5) + b
-          do rr = 1, 3, 2
-            call write_run(so, vt, this%bp(:, idx%p_start(so) + b), idx%b_start(rr, 1), rr, c, .true.)
-          end do
-        end do
-      end associate
-    end subroutine write_columns_single
 
     !> Into column dst, the run of group rr (rows k0 + ln (t - 1) + a, a = 0..ln-1) of every
     !> sphere t > so from element (row, c) of the pair entries vt(t, :) of (so, t), and with
