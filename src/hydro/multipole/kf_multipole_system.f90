@@ -326,8 +326,8 @@ contains
     !> G(row of t, column of so) of the block with receiver t and source so: for t > so the
     !> pair's element (row, column), for t < so (the pair (t, so)) its element (column, row).
     !> With `wcol` (`only_single`): K0's columns in single alone (k0s, from the diagonal down),
-    !> each written first into the double column wcol (in cache) with its own sphere's rows
-    !> (zero, the diagonal 1, as the self block set above), then rounded.
+    !> each written first into the double column wcol (in cache; the runs fill every row but
+    !> those of its own sphere, set to the self block's zero and diagonal 1), then rounded.
     subroutine write_columns(so, vt, wcol)
       integer, intent(in) :: so
       real(wp), intent(in) :: vt(:, 0:)
@@ -339,8 +339,9 @@ contains
             c = idx%lo(rc) + b
             col = idx%k_start(rc, so) + b
             if (present(wcol)) then
-              wcol(col:) = 0.0_wp
+              ! the runs write every row from col down but those of so itself: zero them
               do rr = rc, 4
+                wcol(max(col, idx%k_start(rr, so)):idx%k_start(rr, so) + idx%hi(rr) - idx%lo(rr)) = 0.0_wp
                 call write_run(so, vt, wcol, idx%k_start(rr, 1), rr, c, rr /= rc)
               end do
               wcol(col) = 1.0_wp
