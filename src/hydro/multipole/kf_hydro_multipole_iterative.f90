@@ -54,10 +54,11 @@
 !> single_min_beads_default = 90) use them: the copies cost about as much as the cheaper products
 !> save below that (K in cache; measured, docs/multipole.md). Counters: `statistics`
 !> (single_solves, single_iterations).
-!> The whole operator in single at loose tolerances: with solver_tolerance >= single_operator_tolerance
-!> (component, default single_operator_tolerance_default = 1e-5) and at least single_min_beads beads (and `single_products`), the assembly writes K0
-!> only in single (kf_multipole_system `assemble` with `only_single`: no double K0 written nor
-!> read, the memory traffic of K halved) and every product with K, the start's residual too,
+!> The whole operator in single at loose tolerances: with solver_tolerance >=
+!> single_operator_tolerance (component, default single_operator_tolerance_default = 1e-5), at
+!> least single_min_beads beads and `single_products`, the assembly writes K0 only in single
+!> (kf_multipole_system `assemble` with `only_single`: no double K0 written nor read, half the
+!> bytes of K0 moved) and every product with K, the start's residual too,
 !> uses the single copies; the solution is then that of A + E (|E| <= eta |A|, module header),
 !> off by at most kappa eta relative. Measured along dopri45 (every stage against 'stage', solver
 !> tolerance 1e-8 so the rounding shows, docs/multipole.md): relative RMS velocity error at most

@@ -178,7 +178,10 @@ contains
   !> Assemble the scaled real system for centres r(3, N) without factorising: the (phi, chi)
   !> block K0 (lower triangle) and the phi <- p couplings B, so that K = K0 - B B^T (`apply`).
   !> `single` (optional, default .false.): also the single copies of `copy_products_single`,
-  !> each sphere's columns converted right after they are written (from cache).
+  !> each sphere's columns converted right after they are written (from cache). `only_single`
+  !> (optional, default .false.): K0 in single alone (the copies; B in double and single), no
+  !> double K0, so `apply` is not available (`has_double_products`) until the next assembly
+  !> without it.
   subroutine system_assemble(this, r, error, single, only_single)
     class(multipole_system_t), intent(inout) :: this
     real(wp), intent(in) :: r(:, :)
