@@ -80,6 +80,10 @@
 !>              (single_operator_tolerance = huge; labels <run>_loopsingle.iterative, with
 !>              --solver-tolerance S at S: <run>_st<S>_loopsingle.iterative; the model before
 !>              the whole operator in single)
+!>              --single-min-beads K: each 'iterative' run followed by the same run with the
+!>              iterative model's single_min_beads = K (labels <run>_smb<K>.iterative, with
+!>              --solver-tolerance S at S: <run>_st<S>_smb<K>.iterative; the single products and
+!>              the whole operator in single on chains shorter than the default's)
 !>   rigid      [--config C]: the reused part at rigidly moved and at deformed configurations
 !>              (overlap rule pair only: the model's reused part against its exact one, both
 !>              without the dynamics' configuration rules separate and relax)
@@ -129,7 +133,7 @@ program knotflow_bench_reuse
   character(len=:), allocatable :: part, config, overlap, update, table, model, steppers
   real(wp) :: t_end, eps_lub, tolerance, friction_change, solver_tolerance
   logical :: double_products, loop_single, force_single
-  integer :: every, jacobian_steps, jacobian_order, warm_history, refactor_iterations
+  integer :: every, jacobian_steps, jacobian_order, warm_history, refactor_iterations, min_beads_single
   logical :: omp_set, rosenbrock_stage
 
   ! The OpenMP pair loops get the BLAS's thread count (OPENBLAS_NUM_THREADS=1: one core; kf_blas_threads).
@@ -175,7 +179,7 @@ contains
       ' [--eps-lub E] [--overlap RULE (one of '//name_list(overlap_names)//')] [--update U] [--tolerance TOL]'// &
       ' [--table FILE] [--model multipole|rpy] [--jacobian-steps K] [--jacobian-order J] [--rosenbrock-stage yes|no]'// &
       ' [--steppers LIST] [--friction-change F] [--warm-history K] [--refactor-iterations K] [--solver-tolerance S]'// &
-      ' [--double-products yes|no] [--single-operator yes|no]'//new_line('a')// &
+      ' [--double-products yes|no] [--single-operator yes|no] [--single-min-beads K]'//new_line('a')// &
       '       knotflow-bench-reuse --help | --version'//new_line('a')// &
       'The adaptive multipole path against the exact one (scripts/bench_reuse.sh, docs/accuracy.md).')
     config = 'trefoil'
@@ -197,6 +201,7 @@ contains
     double_products = .false.
     loop_single = .false.
     force_single = .false.
+    min_beads_single = 0
     steppers = method_ros34pw2//','//method_ros34pw3
     k = 2
     do while (k <= command_argument_count())
@@ -268,6 +273,10 @@ contains
           call die(program_name, '--single-operator '//trim(val)//': allowed values are yes, no', 2)
         loop_single = val == 'no'
         force_single = val == 'yes'
+      case ('--single-min-beads')
+        read (val, *, iostat=ios) min_beads_single
+        if (ios /= 0 .or. min_beads_single < 1) &
+          call die(program_name, '--single-min-beads '//trim(val)//': expected an integer >= 1', 2)
       case ('--steppers')
         steppers = trim(val)
         call check_steppers(steppers)
@@ -1033,7 +1042,8 @@ contains
   !> (label <name>_st<S>.<upd>); with --double-products yes likewise with the Krylov loop's products in
   !> double (label <name>_double.<upd>); with --single-operator no likewise with K0 and the start's
   !> residual in double (label <name>_loopsingle.<upd>; with --solver-tolerance S at S, label
-  !> <name>_st<S>_loopsingle.<upd>).
+  !> <name>_st<S>_loopsingle.<upd>); with --single-min-beads K likewise with its single_min_beads
+  !> set to K (label <name>_smb<K>.<upd>, with --solver-tolerance S <name>_st<S>_smb<K>.<upd>).
   subroutine run_compared(name, method, upd, keep, tol, jorder, r_ref, wall_ref)
     character(len=*), intent(in) :: name, method, upd
     integer, intent(in) :: keep, jorder
@@ -1080,6 +1090,16 @@ contains
       end if
       call compare_with_reference(label, r, wall, r_ref, wall_ref)
     end if
+    if (min_beads_single > 0) then
+      if (solver_tolerance > 0.0_wp) then
+        label = name//'_st'//to_str(solver_tolerance, '(es7.1)')//'_smb'//to_str(min_beads_single)//'.'//upd
+        call run_method(label, method, upd, keep, tol, r, wall, jorder, stol=solver_tolerance, smb=min_beads_single)
+      else
+        label = name//'_smb'//to_str(min_beads_single)//'.'//upd
+        call run_method(label, method, upd, keep, tol, r, wall, jorder, smb=min_beads_single)
+      end if
+      call compare_with_reference(label, r, wall, r_ref, wall_ref)
+    end if
   end subroutine run_compared
 
   !> The wall-time ratio and the largest bead deviation of a run (r, wall) from the reference.
@@ -1095,11 +1115,12 @@ contains
   !> `jorder` (optional): &hydro jacobian_order; `fchange` (optional): the iterative model's
   !> friction_change, `whistory` (optional): its warm_history, `double` (optional): .true. sets
   !> its single_products = .false., `loopsingle` (optional): .true. sets its
-  !> single_operator_tolerance = huge, `refactor` (optional): its refactor_iterations (the
+  !> single_operator_tolerance = huge, `smb` (optional): its single_min_beads, `refactor`
+  !> (optional): its refactor_iterations (the
   !> factory's model with those values, taken over by the dynamics); `stol` (optional): the
   !> scene's &hydro solver_tolerance.
   subroutine run_method(label, method, upd, keep, tol, r, wall, jorder, fchange, whistory, double, refactor, stol, &
-                        loopsingle)
+                        loopsingle, smb)
     character(len=*), intent(in) :: label, method, upd
     integer, intent(in) :: keep
     real(wp), intent(in) :: tol
@@ -1112,6 +1133,7 @@ contains
     integer, intent(in), optional :: refactor
     real(wp), intent(in), optional :: stol
     logical, intent(in), optional :: loopsingle
+    integer, intent(in), optional :: smb
     type(scene_t) :: scene
     type(dynamics_t) :: dyn
     class(hydro_model_t), allocatable :: hydro
@@ -1125,7 +1147,7 @@ contains
     if (present(jorder)) scene%hydro%jacobian_order = jorder
     if (present(stol)) scene%hydro%solver_tolerance = stol
     if (present(fchange) .or. present(whistory) .or. present(double) .or. present(refactor) .or. &
-        present(loopsingle)) then
+        present(loopsingle) .or. present(smb)) then
       call make_hydro_model(scene%hydro, scene%integrator%tolerance, hydro, error)
       if (allocated(error)) call die(program_name, error%message, 2)
       select type (hydro)
@@ -1134,12 +1156,13 @@ contains
         if (present(whistory)) hydro%warm_history = whistory
         if (present(double)) hydro%single_products = .not. double
         if (present(refactor)) hydro%refactor_iterations = refactor
+        if (present(smb)) hydro%single_min_beads = smb
         if (present(loopsingle)) then
           if (loopsingle) hydro%single_operator_tolerance = huge(1.0_wp)
         end if
       class default
         call die(program_name, '--friction-change, --warm-history, --double-products, --refactor-iterations, '// &
-                 '--single-operator: '// &
+                 '--single-operator, --single-min-beads: '// &
                  'the model is not the iterative one', 2)
       end select
     end if

@@ -180,3 +180,79 @@ def test_knotflow_study_samples_and_rotations_end_to_end(tmp_path):
         assert f.attrs["case_name"] == "A1.40_orb_s1"
     with pytest.raises(SystemExit):
         main_study(["--rotations", str(cane), "--window", "0", "--out", str(out)])
+
+
+def _path_scene(method, update="iterative", solver_tolerance=None, jacobian_steps=4):
+    """A scene text as knotflow echoes it, with the variables of campaign.integration_path."""
+    hydro = f"  update = '{update}'\n"
+    if solver_tolerance is not None:
+        hydro += f"  solver_tolerance = {solver_tolerance}\n"
+    hydro += "  jacobian_order = 0\n"
+    return ("&chain\n  shape = 'trefoil'\n  orientation = 'b'\n/\n&forces\n  bending_a = 1.4\n/\n"
+            f"&hydro\n  model = 'multipole'\n{hydro}/\n"
+            f"&integrator\n  method = '{method}'\n  tolerance = 0.10000000000000000E-3\n"
+            f"  jacobian_steps = {jacobian_steps}\n/\n")
+
+
+def test_integration_path_names_what_the_path_reads():
+    from knotflow_tools.campaign import integration_path
+    dopri = integration_path(_path_scene("dopri45", "adaptive", 0.1e-5))
+    # dopri45 reads neither the Jacobian's variables nor, with 'adaptive', solver_tolerance
+    assert dopri == "method = 'dopri45', tolerance = 0.0001, update = 'adaptive'"
+    ros = integration_path(_path_scene("ros34pw2", solver_tolerance="0.10000000000000000E-3",
+                                       jacobian_steps=1))
+    assert ros == ("method = 'ros34pw2', tolerance = 0.0001, jacobian_steps = 1, "
+                   "update = 'iterative', solver_tolerance = 0.0001, jacobian_order = 0")
+    # a scene written before solver_tolerance existed says so; it is its own path
+    old = integration_path(_path_scene("dopri45"))
+    assert "solver_tolerance not in the scene" in old
+    assert old != integration_path(_path_scene("dopri45", solver_tolerance="0.1E-5"))
+
+
+def test_knotflow_study_samples_apart_by_integration_path(tmp_path):
+    """Four samples of (1.4, b): two on dopri45 (one re-knots), two on ros34pw2 (both re-knot).
+    Pooled 3 of 4; by path 1 of 2 and 2 of 2, each with its own exact interval and scores; one
+    path alone gives no by_path part."""
+    import json
+
+    from analysis_fixture import write_knots
+
+    from knotflow_tools.cli import main_study
+
+    from conftest import unknotting_trefoil_frames, write_case
+    reknot = [0.98, 0.9, 0.05, 0.02, 0.95, 0.97, 0.96, 0.95]
+    stays = [0.98, 0.9, 0.05, 0.02, 0.03, 0.01, 0.02, 0.02]
+    dopri = _path_scene("dopri45")
+    ros = _path_scene("ros34pw2", solver_tolerance="0.10000000000000000E-3", jacobian_steps=1)
+    t = np.arange(8) * 10.0
+    samples = tmp_path / "samples"
+    samples.mkdir()
+    for s, (scene, kf) in enumerate(((dopri, reknot), (dopri, stays), (ros, reknot),
+                                     (ros, reknot)), start=1):
+        path = write_case(samples / f"A1.40_orb_s{s}.h5", unknotting_trefoil_frames(8), time=t,
+                          attrs={"forces.bending_a": 1.4, "chain.orientation": "b",
+                                 "case_name": f"A1.40_orb_s{s}", "scene": scene})
+        write_knots(path, np.arange(8), t, kf, np.zeros((8, 10)), ["3_1"] * 8, closures=10, seed=s)
+    out = tmp_path / "out"
+    assert main_study(["--samples", str(samples), "--out", str(out)]) == 0
+    res = json.loads((out / "results.json").read_text())["samples"]
+    (pooled,) = res["cells"]
+    assert (pooled["samples"], pooled["transitions"]) == (4, 3)
+    by = {p["path"].split(",")[0]: p for p in res["by_path"]}
+    assert sorted(by) == ["method = 'dopri45'", "method = 'ros34pw2'"]
+    (d,) = by["method = 'dopri45'"]["cells"]
+    (r,) = by["method = 'ros34pw2'"]["cells"]
+    assert (d["samples"], d["transitions"], d["uncertain"]) == (2, 1, True)
+    assert (r["samples"], r["transitions"], r["uncertain"]) == (2, 2, False)
+    assert r["interval"] == pytest.approx(list(st.clopper_pearson(2, 2)))
+    # Table 2 says a transition for (1.4, b): Brier 1/2 on the dopri45 samples, 0 on ros34pw2's
+    assert by["method = 'dopri45'"]["scores"]["brier"]["table2"] == pytest.approx(0.5)
+    assert by["method = 'ros34pw2'"]["scores"]["brier"]["table2"] == pytest.approx(0.0)
+    md = (out / "results.md").read_text()
+    assert "### By integration path" in md and "pools them" in md
+    # the ros34pw2 samples alone: one path, no by_path part
+    for s in (1, 2):
+        (samples / f"A1.40_orb_s{s}.h5").unlink()
+    assert main_study(["--samples", str(samples), "--out", str(out)]) == 0
+    res = json.loads((out / "results.json").read_text())["samples"]
+    assert "by_path" not in res and res["cells"][0]["samples"] == 2

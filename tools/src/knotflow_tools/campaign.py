@@ -693,6 +693,35 @@ def sample_cell(scene: str) -> tuple:
     return tuple(_scene_value(scene, g, v) for g, v in CELL_VARIABLES) + (_drawn_seed(scene),)
 
 
+#: What makes a case's integration path (scene group, variable): the stepper, its tolerance and
+#: how the model's velocities are solved. Samples of one cell (CELL_VARIABLES) may differ in it.
+PATH_VARIABLES = (("integrator", "method"), ("integrator", "tolerance"),
+                  ("integrator", "jacobian_steps"), ("hydro", "update"),
+                  ("hydro", "solver_tolerance"), ("hydro", "jacobian_order"))
+
+
+def integration_path(scene: str) -> str:
+    """The integration path of a case by its scene names (PATH_VARIABLES, as written in its scene
+    text; a variable the scene does not hold, written by a knotflow before it existed, is named
+    as such), e.g. "method = 'ros34pw2', tolerance = 0.0001, jacobian_steps = 1, ...". The
+    Rosenbrock variables (jacobian_steps, jacobian_order) only with a linearly implicit method,
+    solver_tolerance only with update 'iterative': elsewhere nothing reads them."""
+    method = _scene_value(scene, "integrator", "method")
+    update = _scene_value(scene, "hydro", "update")
+    parts = []
+    for group, var in PATH_VARIABLES:
+        if var in ("jacobian_steps", "jacobian_order") and not str(method).startswith("ros"):
+            continue
+        if var == "solver_tolerance" and update != "iterative":
+            continue
+        v = _scene_value(scene, group, var)
+        if v is None:
+            parts.append(f"{var} not in the scene (its knotflow's default)")
+        else:
+            parts.append(f"{var} = {v!r}" if isinstance(v, str) else f"{var} = {v:g}")
+    return ", ".join(parts)
+
+
 def combined_totals(segments: list) -> dict | None:
     """The overlap and passage totals of a case run in segments: sums, extremes, the mean
     duration weighted by episodes, the first passage at the case's time (None without any)."""

@@ -275,7 +275,8 @@ def _study(argv: Argv) -> int:
     p.add_argument("--samples", nargs="+", metavar="DIR",
                    help="sweeps of perturbed Table 2 samples (several per cell): Table 2 as "
                    "probabilities with exact 95 %% intervals and the scores of the study's "
-                   "table and of 'never' (study_statistics)")
+                   "table and of 'never' (study_statistics); pooled and per integration path "
+                   "when the samples ran on more than one (campaign.integration_path)")
     p.add_argument("--rotations", nargs="+", metavar="DIR",
                    help="sweeps of candy-canes from many starts: case and frame fractions in "
                    "modes I and II per A with 95 %% intervals, late shape distributions, and "

@@ -576,14 +576,33 @@ def _sweep_files(dirs) -> list:
 
 
 def samples_section(dirs, closures=200):
-    """Markdown and the results.json part of Table 2 as probabilities (study_statistics)."""
+    """Markdown and the results.json part of Table 2 as probabilities (study_statistics); when
+    the samples ran on more than one integration path (campaign.integration_path), the table is
+    pooled over them and repeated for each path ("by_path")."""
     rows = trefoil_rows(_sweep_files(dirs), closures)
     cells = study_statistics.cell_probabilities(rows)
     scores = study_statistics.table2_scores(cells)
+    paths: dict = {}
+    for r in rows:
+        paths.setdefault(r["path"], []).append(r)
     lines = ["## Table 2 as probabilities", "", f"Sweeps: {', '.join(f'`{d}`' for d in dirs)}.",
              "", finished_line(rows), ""]
-    lines += study_statistics.probability_table(cells, scores) + [""] + sweep_records(rows)
-    return lines, {"cells": cells, "scores": scores, "level": study_statistics.LEVEL}
+    if len(paths) > 1:
+        lines += [f"The samples ran on {len(paths)} integration paths (below, each apart); this "
+                  "table pools them.", ""]
+    lines += study_statistics.probability_table(cells, scores) + [""]
+    part = {"cells": cells, "scores": scores, "level": study_statistics.LEVEL}
+    if len(paths) > 1:
+        part["by_path"] = []
+        lines += ["### By integration path", ""]
+        for path, group in sorted(paths.items(), key=lambda kv: str(kv[0])):
+            c = study_statistics.cell_probabilities(group)
+            sc = study_statistics.table2_scores(c)
+            lines += [f"#### {path or 'no scene text'}", "", finished_line(group), ""]
+            lines += study_statistics.probability_table(c, sc) + [""]
+            part["by_path"].append({"path": path, "cells": c, "scores": sc})
+    lines += sweep_records(rows)
+    return lines, part
 
 
 def _start(row):

@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from .analysis import analyze_case
-from .campaign import load_case
+from .campaign import integration_path, load_case
 from .plot import mode_name
 from .study_reference import in_study
 from .study_slipknots import slipknot_scan
@@ -129,6 +129,13 @@ def _analysed(files, closures, matrices_dir=None):
             yield case, analyze_case(case, closures=closures)
 
 
+def _path(case):
+    """The integration path of a case (campaign.integration_path of its scene text; None
+    without one)."""
+    scene = case.attrs.get("scene")
+    return integration_path(scene) if isinstance(scene, str) and scene else None
+
+
 def trefoil_rows(files, closures=200):
     rows = []
     for case, ana in _analysed(files, closures):
@@ -146,6 +153,7 @@ def trefoil_rows(files, closures=200):
             "study_transition": in_study(a, o), "mode": mode_name(ana.case_mode),
             "overlap": overlap_stats(case), "runs": runs_summary(case.runs),
             "time": ana.time.tolist(), "kf": ana.kf.tolist(), "kf_source": ana.kf_source,
+            "path": _path(case),
         })
     rows.sort(key=lambda r: (r["A"], r["orientation"]))
     return rows
