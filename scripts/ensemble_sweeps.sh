@@ -24,8 +24,6 @@
 #   trefoil_samples_multipole_first   the six cells of trefoil_samples_first, seeds 1, 2   12
 #   candycane_haar_multipole          A = 1, 3, four Haar starts each (the file says which) 8
 #   trefoil_samples_multipole_rest    the six cells, seeds 3..10                          48
-#     (on the case path: ros34pw2, solver_tolerance 1e-4; the two above run dopri45 at the
-#     default solver tolerance 1e-6)
 
 kf_ensemble_sweeps() {
   printf '%s\n' "ensemble candycane_haar_A1_A3" \
