@@ -203,10 +203,14 @@ def test_integration_path_names_what_the_path_reads():
                                        jacobian_steps=1))
     assert ros == ("method = 'ros34pw2', tolerance = 0.0001, jacobian_steps = 1, "
                    "update = 'iterative', solver_tolerance = 0.0001, jacobian_order = 0")
-    # a scene written before solver_tolerance existed says so; it is its own path
+    # a scene written before solver_tolerance existed says so; it is its own path, unless the
+    # program's defaults (campaign.scene_defaults) complete it
     old = integration_path(_path_scene("dopri45"))
     assert "solver_tolerance not in the scene" in old
-    assert old != integration_path(_path_scene("dopri45", solver_tolerance="0.1E-5"))
+    new = integration_path(_path_scene("dopri45", solver_tolerance="0.1E-5"))
+    assert old != new
+    assert integration_path(_path_scene("dopri45"), {("hydro", "solver_tolerance"): "0.1E-5"}) == new
+    assert integration_path(_path_scene("dopri45"), {("hydro", "solver_tolerance"): "0.1E-3"}) != new
 
 
 def test_knotflow_study_samples_apart_by_integration_path(tmp_path):
@@ -256,3 +260,45 @@ def test_knotflow_study_samples_apart_by_integration_path(tmp_path):
     assert main_study(["--samples", str(samples), "--out", str(out)]) == 0
     res = json.loads((out / "results.json").read_text())["samples"]
     assert "by_path" not in res and res["cells"][0]["samples"] == 2
+
+
+def test_knotflow_study_samples_scene_reference_completes_older_scenes(tmp_path):
+    """Two samples on dopri45 'iterative', one scene without solver_tolerance (an older
+    knotflow), one with it at 1e-6: two paths without --scene-reference, one with a reference
+    whose default is 1e-6, two again with one whose default differs; the option is refused
+    without --samples and with a file holding no scene variables."""
+    import json
+
+    from analysis_fixture import write_knots
+
+    from knotflow_tools.cli import main_study
+
+    from conftest import unknotting_trefoil_frames, write_case
+    stays = [0.98, 0.9, 0.05, 0.02, 0.03, 0.01, 0.02, 0.02]
+    t = np.arange(8) * 10.0
+    samples = tmp_path / "samples"
+    samples.mkdir()
+    for s, scene in enumerate((_path_scene("dopri45"), _path_scene("dopri45", solver_tolerance="0.1E-5")),
+                              start=1):
+        path = write_case(samples / f"A1.40_orb_s{s}.h5", unknotting_trefoil_frames(8), time=t,
+                          attrs={"forces.bending_a": 1.4, "chain.orientation": "b",
+                                 "case_name": f"A1.40_orb_s{s}", "scene": scene})
+        write_knots(path, np.arange(8), t, stays, np.zeros((8, 10)), ["3_1"] * 8, closures=10, seed=s)
+    ref = tmp_path / "reference.md"
+    out = tmp_path / "out"
+
+    def paths(*extra):
+        assert main_study(["--samples", str(samples), "--out", str(out), *extra]) == 0
+        res = json.loads((out / "results.json").read_text())["samples"]
+        return len(res.get("by_path", [None]))
+    assert paths() == 2
+    ref.write_text("## `&hydro`\n\n| variable | default |\n|---|---|\n"
+                   "| `solver_tolerance` | `0.1E-5` | a number |\n")
+    assert paths("--scene-reference", str(ref)) == 1
+    ref.write_text(ref.read_text().replace("0.1E-5", "0.1E-3"))
+    assert paths("--scene-reference", str(ref)) == 2
+    with pytest.raises(SystemExit):
+        main_study(["--rotations", str(samples), "--scene-reference", str(ref), "--out", str(out)])
+    ref.write_text("no table here\n")
+    with pytest.raises(SystemExit):
+        main_study(["--samples", str(samples), "--scene-reference", str(ref), "--out", str(out)])

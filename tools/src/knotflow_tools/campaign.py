@@ -641,7 +641,12 @@ def _scene_value(scene: str, group: str, var: str):
     m = _scene_setting(group, var).search(scene)
     if m is None:
         return None
-    v = m.group(2).strip()
+    return _value(m.group(2))
+
+
+def _value(text: str):
+    """A scene value's text as a str (quoted), a number or, failing both, the text."""
+    v = text.strip()
     if v.startswith("'"):
         return v.strip("'")
     try:
@@ -700,14 +705,17 @@ PATH_VARIABLES = (("integrator", "method"), ("integrator", "tolerance"),
                   ("hydro", "solver_tolerance"), ("hydro", "jacobian_order"))
 
 
-def integration_path(scene: str) -> str:
-    """The integration path of a case by its scene names (PATH_VARIABLES, as written in its scene
-    text; a variable the scene does not hold, written by a knotflow before it existed, is named
-    as such), e.g. "method = 'ros34pw2', tolerance = 0.0001, jacobian_steps = 1, ...". The
-    Rosenbrock variables (jacobian_steps, jacobian_order) only with a linearly implicit method,
-    solver_tolerance only with update 'iterative': elsewhere nothing reads them."""
+def integration_path(scene: str, defaults: dict | None = None) -> str:
+    """The integration path of a case by its scene names (PATH_VARIABLES as written in its scene
+    text), e.g. "method = 'ros34pw2', tolerance = 0.0001, jacobian_steps = 1, ...". A variable
+    the scene does not hold (written by a knotflow before the variable existed) takes its value
+    from `defaults` (`scene_defaults`: the program's defaults, as the digest's scene comparison)
+    or, without one there, is named as missing. The Rosenbrock variables (jacobian_steps,
+    jacobian_order) only with a linearly implicit method, solver_tolerance only with update
+    'iterative': elsewhere nothing reads them."""
     method = _scene_value(scene, "integrator", "method")
     update = _scene_value(scene, "hydro", "update")
+    known = defaults or {}
     parts = []
     for group, var in PATH_VARIABLES:
         if var in ("jacobian_steps", "jacobian_order") and not str(method).startswith("ros"):
@@ -715,8 +723,10 @@ def integration_path(scene: str) -> str:
         if var == "solver_tolerance" and update != "iterative":
             continue
         v = _scene_value(scene, group, var)
+        if v is None and (group, var) in known:
+            v = _value(known[(group, var)])
         if v is None:
-            parts.append(f"{var} not in the scene (its knotflow's default)")
+            parts.append(f"{var} not in the scene")
         else:
             parts.append(f"{var} = {v!r}" if isinstance(v, str) else f"{var} = {v:g}")
     return ", ".join(parts)

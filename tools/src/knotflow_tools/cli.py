@@ -266,6 +266,22 @@ def main_study(argv: Argv = None) -> int:
     return run_reporting_errors("knotflow-study", _study, argv)
 
 
+def _scene_reference(p, path) -> dict:
+    """The program's scene defaults (campaign.scene_defaults) from the file of
+    `knotflow --scene-reference` output at path; an unreadable file or one without scene
+    variables is refused (parser p)."""
+    from . import campaign
+    try:
+        with open(path, encoding="utf-8") as fh:
+            defaults = campaign.scene_defaults(fh.read())
+    except (OSError, UnicodeDecodeError) as e:
+        p.error(f"--scene-reference {path}: {e}")
+    if not defaults:
+        p.error(f"--scene-reference {path}: no scene variables in it "
+                "(expected the output of knotflow --scene-reference)")
+    return defaults
+
+
 def _study(argv: Argv) -> int:
     from . import study, study_compare, study_slipknots
     p = make_parser("knotflow-study", (study.__doc__ or "").splitlines()[0])
@@ -277,6 +293,11 @@ def _study(argv: Argv) -> int:
                    "probabilities with exact 95 %% intervals and the scores of the study's "
                    "table and of 'never' (study_statistics); pooled and per integration path "
                    "when the samples ran on more than one (campaign.integration_path)")
+    p.add_argument("--scene-reference", metavar="FILE",
+                   help="with --samples: what `knotflow --scene-reference` printed; a scene "
+                   "written by a knotflow before one of the integration path's variables "
+                   "existed takes its default from it (without: the variable is named as "
+                   "missing, and that scene's path differs from those that hold it)")
     p.add_argument("--rotations", nargs="+", metavar="DIR",
                    help="sweeps of candy-canes from many starts: case and frame fractions in "
                    "modes I and II per A with 95 %% intervals, late shape distributions, and "
@@ -357,6 +378,8 @@ def _study(argv: Argv) -> int:
         p.error(f"--window {args.window:g} is not allowed (a positive number)")
     if args.same_starts and not args.rotations:
         p.error("--same-starts needs --rotations DIR ... (the starts it is compared with)")
+    if args.scene_reference and not args.samples:
+        p.error("--scene-reference FILE needs --samples DIR ...")
     for d in (args.trefoil, args.candycane, args.ensemble, *(args.samples or []),
               *(args.rotations or []), *(args.same_starts or [])):
         if d and not os.path.isdir(d):
@@ -365,14 +388,18 @@ def _study(argv: Argv) -> int:
         p.error("--rpy-trefoil needs --trefoil DIR (the run it is compared with)")
     if args.rpy_candycane and not args.candycane:
         p.error("--rpy-candycane needs --candycane DIR (the run it is compared with)")
-    # the earlier results are read before anything is written
+    # the earlier results and the defaults are read before anything is written
+    defaults = None
+    if args.scene_reference:
+        defaults = _scene_reference(p, args.scene_reference)
     rpy_trefoil = study_compare.load_rpy(args.rpy_trefoil, ("trefoil",)) if args.rpy_trefoil else None
     rpy_candycane = (study_compare.load_rpy(args.rpy_candycane, ("candycane", "ensemble"))
                      if args.rpy_candycane else None)
     res = study.write_study(args.trefoil, args.candycane, args.out, args.closures, args.ensemble,
                             rpy_trefoil, rpy_candycane, args.ledger_matrices,
                             samples_dirs=args.samples, rotation_dirs=args.rotations,
-                            window=args.window, same_starts=args.same_starts)
+                            window=args.window, same_starts=args.same_starts,
+                            scene_defaults=defaults)
     if "trefoil" in res:
         t, k = res["trefoil"], res["trefoil"]["reknottings"]
         print(f"trefoils: {t['agreement']} agree with the study on "
@@ -671,13 +698,7 @@ def _campaign(argv: Argv) -> int:
     elif args.command == "digest":
         if args.closures < 1 or not args.positions_every >= 0.0:
             p.error("--closures needs a positive integer, --positions-every T >= 0")
-        defaults = {}
-        if args.scene_reference:
-            with open(args.scene_reference, encoding="utf-8") as fh:
-                defaults = campaign.scene_defaults(fh.read())
-            if not defaults:
-                p.error(f"--scene-reference {args.scene_reference}: no scene variables in it "
-                        "(expected the output of knotflow --scene-reference)")
+        defaults = _scene_reference(p, args.scene_reference) if args.scene_reference else {}
         for f in args.files:
             source = os.path.join(args.results, os.path.relpath(f, args.copies))
             e = campaign.digest(f, args.ledger, args.sweep, args.closures,

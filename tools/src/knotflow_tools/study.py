@@ -484,7 +484,7 @@ def no_case_files(directory) -> str:
 
 def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None,
                 rpy_trefoil=None, rpy_candycane=None, ledger_matrices=None, samples_dirs=None,
-                rotation_dirs=None, window=250.0, same_starts=None):
+                rotation_dirs=None, window=250.0, same_starts=None, scene_defaults=None):
     """Write figures, results.md, results.json and the per-frame CSV files into `out`.
     rpy_trefoil, rpy_candycane: `load_rpy` of earlier RPY + EV results (or None): three-column
     comparison tables and a "comparison" part in results.json. A sweep directory without case
@@ -493,7 +493,8 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
     (campaign.ledger_case). samples_dirs: sweeps of perturbed Table 2 samples, rotation_dirs:
     sweeps of candy-canes from many starts (study_statistics; `window` the width of the
     close-pair ratio's time windows; `same_starts`: sweeps of the same starts with another
-    model, compared start by start)."""
+    model, compared start by start; `scene_defaults`: campaign.scene_defaults, for the samples'
+    integration paths)."""
     confirm_dir = os.path.join(out, "confirm")
     os.makedirs(out, exist_ok=True)
     md = ["# knotflow-study: generated results", ""]
@@ -557,7 +558,7 @@ def write_study(trefoil_dir, candycane_dir, out, closures=200, ensemble_dir=None
         md += sweep_records(ensemble)
         result["ensemble"] = _public(ensemble)
     if samples_dirs:
-        lines, result["samples"] = samples_section(samples_dirs, closures)
+        lines, result["samples"] = samples_section(samples_dirs, closures, scene_defaults)
         md += lines
     if rotation_dirs:
         lines, result["rotations"] = rotations_section(rotation_dirs, closures, window,
@@ -575,11 +576,12 @@ def _sweep_files(dirs) -> list:
     return [f for d in dirs for f in (find_case_files(d) or find_ledger_cases(d))]
 
 
-def samples_section(dirs, closures=200):
+def samples_section(dirs, closures=200, defaults=None):
     """Markdown and the results.json part of Table 2 as probabilities (study_statistics); when
-    the samples ran on more than one integration path (campaign.integration_path), the table is
-    pooled over them and repeated for each path ("by_path")."""
-    rows = trefoil_rows(_sweep_files(dirs), closures)
+    the samples ran on more than one integration path (campaign.integration_path, `defaults`
+    for scenes written before a variable existed), the table is pooled over them and repeated
+    for each path ("by_path")."""
+    rows = trefoil_rows(_sweep_files(dirs), closures, defaults)
     cells = study_statistics.cell_probabilities(rows)
     scores = study_statistics.table2_scores(cells)
     paths: dict = {}

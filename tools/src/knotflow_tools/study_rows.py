@@ -129,14 +129,16 @@ def _analysed(files, closures, matrices_dir=None):
             yield case, analyze_case(case, closures=closures)
 
 
-def _path(case):
-    """The integration path of a case (campaign.integration_path of its scene text; None
-    without one)."""
+def _path(case, defaults=None):
+    """The integration path of a case (campaign.integration_path of its scene text with the
+    program's `defaults`; None without a scene text)."""
     scene = case.attrs.get("scene")
-    return integration_path(scene) if isinstance(scene, str) and scene else None
+    return integration_path(scene, defaults) if isinstance(scene, str) and scene else None
 
 
-def trefoil_rows(files, closures=200):
+def trefoil_rows(files, closures=200, defaults=None):
+    """One row per trefoil case; `defaults` (campaign.scene_defaults) complete the integration
+    path ("path") of scenes written before a variable existed."""
     rows = []
     for case, ana in _analysed(files, closures):
         a, o = float(case.bending_a), str(case.orientation)
@@ -153,7 +155,7 @@ def trefoil_rows(files, closures=200):
             "study_transition": in_study(a, o), "mode": mode_name(ana.case_mode),
             "overlap": overlap_stats(case), "runs": runs_summary(case.runs),
             "time": ana.time.tolist(), "kf": ana.kf.tolist(), "kf_source": ana.kf_source,
-            "path": _path(case),
+            "path": _path(case, defaults),
         })
     rows.sort(key=lambda r: (r["A"], r["orientation"]))
     return rows
