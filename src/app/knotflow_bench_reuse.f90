@@ -81,9 +81,10 @@
 !>              --solver-tolerance S at S: <run>_st<S>_loopsingle.iterative; the model before
 !>              the whole operator in single)
 !>              --single-min-beads K: each 'iterative' run followed by the same run with the
-!>              iterative model's single_min_beads = K (labels <run>_smb<K>.iterative, with
-!>              --solver-tolerance S at S: <run>_st<S>_smb<K>.iterative; the single products and
-!>              the whole operator in single on chains shorter than the default's)
+!>              iterative model's single_min_beads and single_operator_min_beads = K (labels
+!>              <run>_smb<K>.iterative, with --solver-tolerance S at S:
+!>              <run>_st<S>_smb<K>.iterative; the single products and the whole operator in
+!>              single on chains shorter than the defaults')
 !>   rigid      [--config C]: the reused part at rigidly moved and at deformed configurations
 !>              (overlap rule pair only: the model's reused part against its exact one, both
 !>              without the dynamics' configuration rules separate and relax)
@@ -449,7 +450,10 @@ contains
       select type (hydro)
       type is (multipole_iterative_t)
         hydro%single_operator_tolerance = merge(0.0_wp, huge(1.0_wp), force_single)
-        if (force_single) hydro%single_min_beads = 1
+        if (force_single) then
+          hydro%single_min_beads = 1
+          hydro%single_operator_min_beads = 1
+        end if
       class default
         call die(program_name, '--single-operator: the model is not the iterative one', 2)
       end select
@@ -1043,7 +1047,7 @@ contains
   !> double (label <name>_double.<upd>); with --single-operator no likewise with K0 and the start's
   !> residual in double (label <name>_loopsingle.<upd>; with --solver-tolerance S at S, label
   !> <name>_st<S>_loopsingle.<upd>); with --single-min-beads K likewise with its single_min_beads
-  !> set to K (label <name>_smb<K>.<upd>, with --solver-tolerance S <name>_st<S>_smb<K>.<upd>).
+  !> and single_operator_min_beads set to K (label <name>_smb<K>.<upd>, with --solver-tolerance S <name>_st<S>_smb<K>.<upd>).
   subroutine run_compared(name, method, upd, keep, tol, jorder, r_ref, wall_ref)
     character(len=*), intent(in) :: name, method, upd
     integer, intent(in) :: keep, jorder
@@ -1115,7 +1119,8 @@ contains
   !> `jorder` (optional): &hydro jacobian_order; `fchange` (optional): the iterative model's
   !> friction_change, `whistory` (optional): its warm_history, `double` (optional): .true. sets
   !> its single_products = .false., `loopsingle` (optional): .true. sets its
-  !> single_operator_tolerance = huge, `smb` (optional): its single_min_beads, `refactor`
+  !> single_operator_tolerance = huge, `smb` (optional): its single_min_beads and
+  !> single_operator_min_beads, `refactor`
   !> (optional): its refactor_iterations (the
   !> factory's model with those values, taken over by the dynamics); `stol` (optional): the
   !> scene's &hydro solver_tolerance.
@@ -1156,7 +1161,10 @@ contains
         if (present(whistory)) hydro%warm_history = whistory
         if (present(double)) hydro%single_products = .not. double
         if (present(refactor)) hydro%refactor_iterations = refactor
-        if (present(smb)) hydro%single_min_beads = smb
+        if (present(smb)) then
+          hydro%single_min_beads = smb
+          hydro%single_operator_min_beads = smb
+        end if
         if (present(loopsingle)) then
           if (loopsingle) hydro%single_operator_tolerance = huge(1.0_wp)
         end if

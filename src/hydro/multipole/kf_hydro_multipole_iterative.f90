@@ -56,7 +56,10 @@
 !> (single_solves, single_iterations).
 !> The whole operator in single at loose tolerances: with solver_tolerance >=
 !> single_operator_tolerance (component, default single_operator_tolerance_default = 1e-5), at
-!> least single_min_beads beads and `single_products`, the assembly writes K0 only in single
+!> least single_operator_min_beads beads (component, default single_operator_min_beads_default =
+!> 60: no copies are made, so single_min_beads' reason does not apply; measured faster at 60
+!> beads, docs/multipole.md, and not measured below) and `single_products`, the assembly writes
+!> K0 only in single
 !> (kf_multipole_system `assemble` with `only_single`: no double K0 written nor read, half the
 !> bytes of K0 moved) and every product with K, the start's residual too,
 !> uses the single copies; the solution is then that of A + E (|E| <= eta |A|, module header),
@@ -154,6 +157,9 @@ module kf_hydro_multipole_iterative
   !> The fewest beads for single-precision products (module header): below, the single copies
   !> cost about as much as the products save (docs/multipole.md).
   integer, parameter, public :: single_min_beads_default = 90
+  !> The fewest beads for the whole operator in single (module header): the smallest chain it
+  !> was measured on (docs/multipole.md).
+  integer, parameter, public :: single_operator_min_beads_default = 60
   !> The default smallest solver tolerance at which the whole operator is in single (module
   !> header).
   real(wp), parameter, public :: single_operator_tolerance_default = 1.0e-5_wp
@@ -174,6 +180,8 @@ module kf_hydro_multipole_iterative
     logical :: single_products = .true.
     !> The fewest beads for them (module header).
     integer :: single_min_beads = single_min_beads_default
+    !> The fewest beads for the whole operator in single (module header).
+    integer :: single_operator_min_beads = single_operator_min_beads_default
     !> The smallest solver tolerance at which the whole operator is in single (module header).
     real(wp) :: single_operator_tolerance = single_operator_tolerance_default
     !> The last GMRES call's start satisfied the rule: the next assembly makes the single copies.
@@ -340,7 +348,7 @@ contains
       this%frot(:, i) = matmul(qt, f(:, i))
     end do
     call this%cur%assemble(this%rp, error, single=this%single_products .and. this%single_next, &
-                           only_single=this%single_products .and. nb >= this%single_min_beads .and. &
+                           only_single=this%single_products .and. nb >= this%single_operator_min_beads .and. &
                                        this%solver_tolerance >= this%single_operator_tolerance)
     if (allocated(error)) return
     this%n_overlaps = this%cur%n_clamped
