@@ -1047,7 +1047,8 @@ contains
   !> double (label <name>_double.<upd>); with --single-operator no likewise with K0 and the start's
   !> residual in double (label <name>_loopsingle.<upd>; with --solver-tolerance S at S, label
   !> <name>_st<S>_loopsingle.<upd>); with --single-min-beads K likewise with its single_min_beads
-  !> and single_operator_min_beads set to K (label <name>_smb<K>.<upd>, with --solver-tolerance S <name>_st<S>_smb<K>.<upd>).
+  !> and single_operator_min_beads set to K (label <name>_smb<K>.<upd>, with --solver-tolerance S
+  !> <name>_st<S>_smb<K>.<upd>).
   subroutine run_compared(name, method, upd, keep, tol, jorder, r_ref, wall_ref)
     character(len=*), intent(in) :: name, method, upd
     integer, intent(in) :: keep, jorder
@@ -1120,10 +1121,9 @@ contains
   !> friction_change, `whistory` (optional): its warm_history, `double` (optional): .true. sets
   !> its single_products = .false., `loopsingle` (optional): .true. sets its
   !> single_operator_tolerance = huge, `smb` (optional): its single_min_beads and
-  !> single_operator_min_beads, `refactor`
-  !> (optional): its refactor_iterations (the
-  !> factory's model with those values, taken over by the dynamics); `stol` (optional): the
-  !> scene's &hydro solver_tolerance.
+  !> single_operator_min_beads, `refactor` (optional): its refactor_iterations (the factory's
+  !> model with those values, taken over by the dynamics); `stol` (optional): the scene's &hydro
+  !> solver_tolerance.
   subroutine run_method(label, method, upd, keep, tol, r, wall, jorder, fchange, whistory, double, refactor, stol, &
                         loopsingle, smb)
     character(len=*), intent(in) :: label, method, upd

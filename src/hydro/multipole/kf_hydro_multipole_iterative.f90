@@ -59,10 +59,9 @@
 !> least single_operator_min_beads beads (component, default single_operator_min_beads_default =
 !> 60: no copies are made, so single_min_beads' reason does not apply; measured faster at 60
 !> beads, docs/multipole.md, and not measured below) and `single_products`, the assembly writes
-!> K0 only in single
-!> (kf_multipole_system `assemble` with `only_single`: no double K0 written nor read, half the
-!> bytes of K0 moved) and every product with K, the start's residual too,
-!> uses the single copies; the solution is then that of A + E (|E| <= eta |A|, module header),
+!> K0 only in single (kf_multipole_system `assemble` with `only_single`: no double K0 written nor
+!> read, half the bytes of K0 moved) and every product with K, the start's residual too, uses
+!> the single copies; the solution is then that of A + E (|E| <= eta |A|, module header),
 !> off by at most kappa eta relative. Measured along dopri45 (every stage against 'stage', solver
 !> tolerance 1e-8 so the rounding shows, docs/multipole.md): relative RMS velocity error at most
 !> 3.8e-7 to 6.2e-7 (trefoil, a random chain of 60 beads, the compact coil of 152; largest bead
