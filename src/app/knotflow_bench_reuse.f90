@@ -1055,7 +1055,7 @@ contains
     real(wp), intent(in) :: tol, r_ref(:, :), wall_ref
     real(wp), allocatable :: r(:, :)
     real(wp) :: wall
-    character(len=:), allocatable :: label
+    character(len=:), allocatable :: label, st
     label = name//'.'//upd
     call run_method(label, method, upd, keep, tol, r, wall, jorder)
     call compare_with_reference(label, r, wall, r_ref, wall_ref)
@@ -1085,24 +1085,17 @@ contains
       call run_method(label, method, upd, keep, tol, r, wall, jorder, double=.true.)
       call compare_with_reference(label, r, wall, r_ref, wall_ref)
     end if
+    ! the next two at --solver-tolerance S when given (stol <= 0: the scene's)
+    st = ''
+    if (solver_tolerance > 0.0_wp) st = '_st'//to_str(solver_tolerance, '(es7.1)')
     if (loop_single) then
-      if (solver_tolerance > 0.0_wp) then
-        label = name//'_st'//to_str(solver_tolerance, '(es7.1)')//'_loopsingle.'//upd
-        call run_method(label, method, upd, keep, tol, r, wall, jorder, stol=solver_tolerance, loopsingle=.true.)
-      else
-        label = name//'_loopsingle.'//upd
-        call run_method(label, method, upd, keep, tol, r, wall, jorder, loopsingle=.true.)
-      end if
+      label = name//st//'_loopsingle.'//upd
+      call run_method(label, method, upd, keep, tol, r, wall, jorder, stol=solver_tolerance, loopsingle=.true.)
       call compare_with_reference(label, r, wall, r_ref, wall_ref)
     end if
     if (min_beads_single > 0) then
-      if (solver_tolerance > 0.0_wp) then
-        label = name//'_st'//to_str(solver_tolerance, '(es7.1)')//'_smb'//to_str(min_beads_single)//'.'//upd
-        call run_method(label, method, upd, keep, tol, r, wall, jorder, stol=solver_tolerance, smb=min_beads_single)
-      else
-        label = name//'_smb'//to_str(min_beads_single)//'.'//upd
-        call run_method(label, method, upd, keep, tol, r, wall, jorder, smb=min_beads_single)
-      end if
+      label = name//st//'_smb'//to_str(min_beads_single)//'.'//upd
+      call run_method(label, method, upd, keep, tol, r, wall, jorder, stol=solver_tolerance, smb=min_beads_single)
       call compare_with_reference(label, r, wall, r_ref, wall_ref)
     end if
   end subroutine run_compared
@@ -1123,7 +1116,7 @@ contains
   !> single_operator_tolerance = huge, `smb` (optional): its single_min_beads and
   !> single_operator_min_beads, `refactor` (optional): its refactor_iterations (the factory's
   !> model with those values, taken over by the dynamics); `stol` (optional): the scene's &hydro
-  !> solver_tolerance.
+  !> solver_tolerance (<= 0: the scene's own).
   subroutine run_method(label, method, upd, keep, tol, r, wall, jorder, fchange, whistory, double, refactor, stol, &
                         loopsingle, smb)
     character(len=*), intent(in) :: label, method, upd
@@ -1150,7 +1143,9 @@ contains
     scene%integrator%method = method
     scene%integrator%jacobian_steps = keep
     if (present(jorder)) scene%hydro%jacobian_order = jorder
-    if (present(stol)) scene%hydro%solver_tolerance = stol
+    if (present(stol)) then
+      if (stol > 0.0_wp) scene%hydro%solver_tolerance = stol
+    end if
     if (present(fchange) .or. present(whistory) .or. present(double) .or. present(refactor) .or. &
         present(loopsingle) .or. present(smb)) then
       call make_hydro_model(scene%hydro, scene%integrator%tolerance, hydro, error)
