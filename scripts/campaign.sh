@@ -212,7 +212,7 @@ digest_all() {
   done
   scenes=()
   [ -d "$results/scenes" ] && scenes=(--scenes "$results/scenes")
-  knotflow-campaign status --ledger "$ledger" "${scenes[@]}"
+  knotflow-campaign status --ledger "$ledger" "${scenes[@]}" --scene-reference "$results/scene-reference.md"
 }
 
 # --digest-every: a digest every $digest_every minutes until the file $1 appears (checked every

@@ -389,3 +389,61 @@ def test_continuation_with_a_new_default_is_digested(tmp_path):
     defaults = {("hydro", "solver_tolerance"): "0.1E-5"}
     e = campaign.digest(path, ledger, "cc", 10, defaults=defaults)
     assert len(e["segments"]) == 2 and e["t_reached"] == 7.0, e
+
+
+def test_status_rate_from_alike_sweeps(tmp_path, capsys):
+    """A sweep with time left and no run of its own takes the pooled rate of the sweeps with a
+    rate whose scenes are alike (the same chain shape and beads, hydrodynamics, integration,
+    flow and forces but for the bending stiffness); a variable written in one scene only counts
+    as the same only when it has the program's default (--scene-reference)."""
+    import json
+
+    from knotflow_tools import cli
+    base = SCENE.replace("candycane", "trefoil").replace("n_beads = 152", "n_beads = 99").replace(
+        "2000.0000000000000", "1000.0000000000000").replace(
+        "&integrator", "&hydro\n  model = 'multipole'\n  update = 'iterative'\n/\n&integrator")
+    ledger, scenes = tmp_path / "ledger", tmp_path / "scenes"
+    (ledger / "ma").mkdir(parents=True)
+    e = _ledger_entry("A0.80_s1", "finished", 1000.0, 1000.0, [(3000.0, 2.0), (1000.0, 4.0)])
+    e["sweep"], e["scene"] = "ma", base.replace("bending_a = 1.0", "bending_a = 0.8")
+    (ledger / "ma" / "A0.80_s1.json").write_text(json.dumps(e))
+    later = base.replace("  update = 'iterative'", "  update = 'iterative'\n  solver_tolerance = 0.1E-5")
+    cases = {"mb": later.replace("seed = 1", "seed = 3").replace("bending_a = 1.0", "bending_a = 2.2"),
+             "mc": later.replace("n_beads = 99", "n_beads = 152"),
+             "md": later.replace("'iterative'", "'adaptive'")}
+    for sweep, text in cases.items():
+        (scenes / sweep).mkdir(parents=True)
+        for k in (1, 2):
+            (scenes / sweep / f"A{k}.nml").write_text(text)
+    ma = ("ma: 1 of 1 finished, 0 running, 0 not started; 4.00 s of wall per time unit (load "
+          "2.5): about 0.0 h of one worker left")
+    # without the default of solver_tolerance the older scene may have run with another value
+    lines = campaign.status_lines(str(ledger), str(scenes))
+    assert lines[1:] == [ma] + [f"{s}: 0 of 2 finished, 0 running, 2 not started; no rate "
+                                "measured yet" for s in ("mb", "mc", "md")] + [
+        "campaign: 1 of 7 cases finished; about 0.0 h of one worker left at the measured rates "
+        "(sweeps without a measured rate not counted)"]
+    # with it (written as knotflow writes it, 1e-6 in another format): mb, 2000 time units at
+    # 4 s; mc (other beads) and md (other update) stay without a rate
+    lines = campaign.status_lines(str(ledger), str(scenes), {("hydro", "solver_tolerance"): "1.0e-6"})
+    assert lines[2] == ("mb: 0 of 2 finished, 0 running, 2 not started; no rate measured yet, at "
+                        "that of ma (alike scenes): 4.00 s of wall per time unit (load 2.5): about "
+                        "2.2 h of one worker left")
+    assert lines[3].endswith("no rate measured yet") and lines[4].endswith("no rate measured yet")
+    assert lines[5].startswith("campaign: 1 of 7 cases finished; about 2.2 h of one worker left")
+    st = campaign.status(str(ledger), str(scenes), {("hydro", "solver_tolerance"): "1.0e-6"})
+    assert [w["rate_from"] for w in st["sweeps"]] == [[], ["ma"], [], []]
+    # another default: the older scene ran with another solver tolerance, not alike
+    lines = campaign.status_lines(str(ledger), str(scenes), {("hydro", "solver_tolerance"): "1.0e-4"})
+    assert lines[2].endswith("no rate measured yet")
+    # the command line: --scene-reference FILE (knotflow --scene-reference's Markdown)
+    ref = tmp_path / "scene-reference.md"
+    ref.write_text("## `&hydro`\n\n| variable | default |\n|---|---|\n| `solver_tolerance` | `1.0e-6` |\n")
+    assert cli.main_campaign(["status", "--ledger", str(ledger), "--scenes", str(scenes),
+                              "--scene-reference", str(ref), "--markdown"]) == 0
+    out = capsys.readouterr().out
+    assert "| `mb` | 2 | 0 | - | 2 | 4.00 (2.5), that of `ma` | 2.2 |" in out
+    with pytest.raises(SystemExit) as stop:
+        cli.main_campaign(["status", "--ledger", str(ledger), "--scene-reference",
+                           str(tmp_path / "none.md")])
+    assert stop.value.code == 2 and "--scene-reference" in capsys.readouterr().err

@@ -495,7 +495,19 @@ def _newest_kernels_rate(runs: list) -> tuple[str, float, float, float, float] |
             sum(w * x for w, x in loaded), sum(w for w, _ in loaded))
 
 
-def status(ledger: str, scenes: str | None = None) -> dict:
+def _alike(scene_a: str, scene_b: str, defaults: dict) -> bool:
+    """Two scenes whose cases cost alike per time unit: the same chain shape and number of
+    beads and the same hydrodynamics, integration, flow and forces but for the bending
+    stiffness (`scene_differences` with `defaults`; the chain's orientation, seed and
+    perturbation, its stiffness and the output may differ)."""
+    for var in ("shape", "n_beads"):
+        if _scene_value(scene_a, "chain", var) != _scene_value(scene_b, "chain", var):
+            return False
+    return all(d.startswith("&forces bending_a:")
+               for d in scene_differences(scene_a, scene_b, defaults))
+
+
+def status(ledger: str, scenes: str | None = None, defaults: dict | None = None) -> dict:
     """Where a campaign stands, from its ledger: "cases", per case of the ledger (sweep, case,
     status, t_reached, t_end, segments, wall seconds and mean load of its runs, weighted by wall
     time, commits); "sweeps", per sweep (cases, finished, running and, with `scenes`, the
@@ -504,8 +516,13 @@ def status(ledger: str, scenes: str | None = None) -> dict:
     mean load, only the runs on the newest BLAS kernels when runs recorded them,
     _newest_kernels_rate; the wall seconds one worker still needs at that rate, NaN without a
     rate); "campaign" (with `scenes`): cases, finished, seconds left, whether every sweep with
-    time left had a rate."""
+    time left had a rate. A sweep with time left and no rate of its own takes the pooled rate
+    of the sweeps with one whose scenes are alike (`_alike`, with `defaults` from
+    `scene_defaults` completing variables an older scene did not write); "rate_from" names
+    them (empty: its own rate or none)."""
     out: dict = {"cases": [], "sweeps": [], "campaign": None}
+    defaults = defaults or {}
+    measured: dict = {}   # sweep: (scene, wall, time units, load x wall, loaded wall, kernels)
     sweeps = {d for d in os.listdir(ledger) if os.path.isdir(os.path.join(ledger, d))}
     if scenes is not None:
         sweeps |= {d for d in os.listdir(scenes) if os.path.isdir(os.path.join(scenes, d))}
@@ -519,16 +536,20 @@ def status(ledger: str, scenes: str | None = None) -> dict:
             names |= {f[:-4] for f in os.listdir(scene_dir) if f.endswith(".nml")}
         count = {"finished": 0, "running": 0, "not started": 0}
         wall_sum = loaded_sum = load_sum = t_sum = t_left = 0.0
+        scene = None
         sweep_runs: list = []
         running = []
         for name in sorted(names):
             e = load(ledger, sweep, name)
             if e is None:   # a scene without a ledger entry
                 with open(os.path.join(str(scene_dir), name + ".nml"), encoding="utf-8") as fh:
-                    t_end = _scene_value(fh.read(), "integrator", "t_end")
+                    text = fh.read()
+                t_end = _scene_value(text, "integrator", "t_end")
+                scene = scene or text
                 count["not started"] += 1
                 t_left += float(t_end) if t_end is not None else math.nan
                 continue
+            scene = scene or e.get("scene")
             wall, loaded, load_w, commits = _run_totals(e)
             sweep_runs += [r for seg in e["segments"] for r in seg["runs"]]
             count[e["status"]] = count.get(e["status"], 0) + 1
@@ -551,24 +572,36 @@ def status(ledger: str, scenes: str | None = None) -> dict:
         if wall_sum > 0.0 and t_sum > 0.0:
             rate, load_rate = wall_sum / t_sum, _ratio(load_sum, loaded_sum)
             left = rate * t_left
-            left_total += left
-        else:
-            counted = counted and t_left == 0.0
+            if scene is not None:
+                measured[sweep] = (scene, wall_sum, t_sum, load_sum, loaded_sum, kernels)
         out["sweeps"].append({"sweep": sweep, "cases": len(names), "finished": count["finished"],
                               "running": running, "not_started": count["not started"],
                               "rate": rate, "load": load_rate, "kernels": kernels,
-                              "left": left})
+                              "left": left, "rate_from": [], "_t_left": t_left, "_scene": scene})
+    for w in out["sweeps"]:
+        t_left, scene = w.pop("_t_left"), w.pop("_scene")
+        if math.isnan(w["rate"]) and t_left > 0.0 and scene is not None:
+            donors = [d for d in sorted(measured) if _alike(scene, measured[d][0], defaults)]
+            if donors:
+                wall, span, load_w, loaded = (sum(measured[d][k] for d in donors) for k in range(1, 5))
+                kernels = ", ".join(sorted({measured[d][5] for d in donors if measured[d][5]}))
+                w.update(rate=wall / span, load=_ratio(load_w, loaded), kernels=kernels,
+                         left=wall / span * t_left, rate_from=donors)
+        if not math.isnan(w["left"]):
+            left_total += w["left"]
+        else:
+            counted = counted and t_left == 0.0
     if scenes is not None:
         out["campaign"] = {"cases": cases_total, "finished": finished_total, "left": left_total,
                            "counted": counted}
     return out
 
 
-def status_lines(ledger: str, scenes: str | None = None) -> list:
+def status_lines(ledger: str, scenes: str | None = None, defaults: dict | None = None) -> list:
     """`status` as text: one line per case of the ledger, then one per sweep (cases finished,
     running and, with `scenes`, not started; rate and time left) and, with `scenes`, a last
     line for the whole campaign."""
-    st = status(ledger, scenes)
+    st = status(ledger, scenes, defaults)
     lines = [f"{c['sweep']}/{c['case']}: {c['status']}, t = {c['t_reached']:g} of "
              f"{c['t_end']:g}, {c['segments']} segment(s), wall {c['wall'] / 3600:.2f} h, load "
              f"{c['load']:.1f}, commits {c['commits']}" for c in st["cases"]]
@@ -578,7 +611,12 @@ def status_lines(ledger: str, scenes: str | None = None) -> list:
         if math.isnan(w["rate"]):
             text += "; no rate measured yet"
         else:
-            text += (f"; {w['rate']:.2f} s of wall per time unit (load {w['load']:.1f}"
+            if w["rate_from"]:
+                text += (f"; no rate measured yet, at that of {', '.join(w['rate_from'])} (alike "
+                         "scenes):")
+            else:
+                text += ";"
+            text += (f" {w['rate']:.2f} s of wall per time unit (load {w['load']:.1f}"
                      + (f", runs with {w['kernels']}" if w["kernels"] else "") + "): "
                      f"about {w['left'] / 3600:.1f} h of one worker left")
         lines.append(text)
@@ -588,16 +626,18 @@ def status_lines(ledger: str, scenes: str | None = None) -> list:
     return lines
 
 
-def status_markdown(ledger: str, scenes: str | None = None) -> list:
+def status_markdown(ledger: str, scenes: str | None = None, defaults: dict | None = None) -> list:
     """`status` as a markdown table, one row per sweep (the running cases with the time they
     reached), and, with `scenes`, a line for the whole campaign: what a document shows."""
-    st = status(ledger, scenes)
+    st = status(ledger, scenes, defaults)
     lines = ["| sweep | cases | finished | running (time reached) | not started | wall time per "
              "time unit, s (load) | left, hours of one worker |", "|---|---|---|---|---|---|---|"]
     for w in st["sweeps"]:
         running = ", ".join(f"{c} (t = {t:g})" for c, t in w["running"]) or "-"
         ns = str(w["not_started"]) if scenes is not None else "?"
         rate = "-" if math.isnan(w["rate"]) else f"{w['rate']:.2f} ({w['load']:.1f})"
+        if w["rate_from"]:
+            rate += f", that of {', '.join(f'`{d}`' for d in w['rate_from'])}"
         left = "-" if math.isnan(w["left"]) else f"{w['left'] / 3600:.1f}"
         lines.append(f"| `{w['sweep']}` | {w['cases']} | {w['finished']} | {running} | {ns} "
                      f"| {rate} | {left} |")

@@ -656,6 +656,10 @@ def _campaign(argv: Argv) -> int:
     st.add_argument("--scenes", metavar="DIR",
                     help="the campaign's scenes (DIR/<sweep>/<case>.nml, knotflow --write-scenes):"
                     " count the cases not started and the time they need")
+    st.add_argument("--scene-reference", metavar="FILE",
+                    help="what `knotflow --scene-reference` printed: completes the variables an "
+                    "older scene did not write when a sweep without a rate of its own takes that "
+                    "of sweeps with alike scenes")
     st.add_argument("--markdown", action="store_true",
                     help="one markdown table row per sweep instead (for a document)")
     md = sub.add_parser("mode", help="record a case's mode: knotflow-analyze <case>.csv --json")
@@ -717,8 +721,11 @@ def _campaign(argv: Argv) -> int:
     else:
         if args.scenes is not None and not os.path.isdir(args.scenes):
             p.error(f"--scenes {args.scenes}: not a directory")
+        defaults = None
+        if args.scene_reference is not None:
+            defaults = _scene_reference(p, args.scene_reference)
         render = campaign.status_markdown if args.markdown else campaign.status_lines
-        for line in render(args.ledger, args.scenes):
+        for line in render(args.ledger, args.scenes, defaults):
             print(line)
     return 0
 
