@@ -522,7 +522,10 @@ def status(ledger: str, scenes: str | None = None, defaults: dict | None = None)
     them (empty: its own rate or none)."""
     out: dict = {"cases": [], "sweeps": [], "campaign": None}
     defaults = defaults or {}
-    measured: dict = {}   # sweep: (scene, wall, time units, load x wall, loaded wall, kernels)
+    # sweeps with a rate of their own: {sweep: (scene, [wall, time units, load x wall, loaded
+    # wall], kernels)}; per sweep of out["sweeps"], its time left and scene
+    measured: dict = {}
+    left_and_scene: list = []
     sweeps = {d for d in os.listdir(ledger) if os.path.isdir(os.path.join(ledger, d))}
     if scenes is not None:
         sweeps |= {d for d in os.listdir(scenes) if os.path.isdir(os.path.join(scenes, d))}
@@ -573,18 +576,18 @@ def status(ledger: str, scenes: str | None = None, defaults: dict | None = None)
             rate, load_rate = wall_sum / t_sum, _ratio(load_sum, loaded_sum)
             left = rate * t_left
             if scene is not None:
-                measured[sweep] = (scene, wall_sum, t_sum, load_sum, loaded_sum, kernels)
+                measured[sweep] = (scene, [wall_sum, t_sum, load_sum, loaded_sum], kernels)
         out["sweeps"].append({"sweep": sweep, "cases": len(names), "finished": count["finished"],
                               "running": running, "not_started": count["not started"],
                               "rate": rate, "load": load_rate, "kernels": kernels,
-                              "left": left, "rate_from": [], "_t_left": t_left, "_scene": scene})
-    for w in out["sweeps"]:
-        t_left, scene = w.pop("_t_left"), w.pop("_scene")
+                              "left": left, "rate_from": []})
+        left_and_scene.append((t_left, scene))
+    for w, (t_left, scene) in zip(out["sweeps"], left_and_scene):
         if math.isnan(w["rate"]) and t_left > 0.0 and scene is not None:
             donors = [d for d in sorted(measured) if _alike(scene, measured[d][0], defaults)]
             if donors:
-                wall, span, load_w, loaded = (sum(measured[d][k] for d in donors) for k in range(1, 5))
-                kernels = ", ".join(sorted({measured[d][5] for d in donors if measured[d][5]}))
+                wall, span, load_w, loaded = (sum(x) for x in zip(*(measured[d][1] for d in donors)))
+                kernels = ", ".join(sorted({measured[d][2] for d in donors if measured[d][2]}))
                 w.update(rate=wall / span, load=_ratio(load_w, loaded), kernels=kernels,
                          left=wall / span * t_left, rate_from=donors)
         if not math.isnan(w["left"]):
