@@ -102,3 +102,34 @@ def test_errors(results, tmp_path, capsys):
     assert rc == 2
     assert "no meta.csv" in capsys.readouterr().err
     assert not os.path.exists(tmp_path / "b.md")
+
+
+def test_regenerating_keeps_what_follows_the_generated_part(results, tmp_path):
+    """The reuse and stiffness blocks and the sections written by hand after the generated part
+    survive a regeneration, in a report with the end marker and in one written before it."""
+    md = tmp_path / "accuracy.md"
+    args = [str(results), "--markdown", str(md), "--figures", str(tmp_path / "f")]
+    hand = ("%s\nreuse table\n%s\n\n## Written by hand\n\nmeasured with `x --y`: 1.23e-4\n"
+            % (accuracy.REUSE_BEGIN, accuracy.REUSE_END))
+    # a report of the layout before the marker: the generated part, then the blocks and sections
+    md.write_text("# old generated part\n\n| stale | table |\n\n" + hand)
+    assert cli.main_accuracy_report(args) == 0
+    text = md.read_text()
+    assert "stale" not in text and text.count("\n%s\n" % accuracy.GENERATED_END) == 1
+    assert text.endswith(accuracy.GENERATED_END + "\n\n" + hand)
+    assert "| rpy | 8.70e-01 | 5.00e-01 | 60 µs | 26.4 s (measured) |" in text
+    # regenerated again (the marker present now): the same file, nothing lost or repeated
+    assert cli.main_accuracy_report(args) == 0
+    assert md.read_text() == text
+    # a section added after the marker is kept too; the generated part is rewritten
+    md.write_text(text.replace("| rpy | 8.70e-01", "| rpy | edited") + "\n## Later\n\nmore\n")
+    assert cli.main_accuracy_report(args) == 0
+    again = md.read_text()
+    assert again == text + "\n## Later\n\nmore\n"
+    # the stiffness block, written after it, lands after the hand sections and is kept
+    accuracy.write_block(str(md), "stiffness table", accuracy.STIFFNESS_BEGIN,
+                         accuracy.STIFFNESS_END)
+    assert cli.main_accuracy_report(args) == 0
+    final = md.read_text()
+    assert final.index("## Later") < final.index("stiffness table")
+    assert final.count(accuracy.STIFFNESS_BEGIN) == 1 and "1.23e-4" in final
