@@ -61,6 +61,41 @@ def test_cell_probabilities_and_scores_of_table2_and_never():
     assert "| 1.4 | b | 10 | 3 | **0.30 (0.07-0.65)** | U->K |" in text
 
 
+def test_first_reknot_and_how_long_it_held():
+    from knotflow_tools.study_rows import first_reknot
+    # a short-lived knot: re-knotted at 680, untied again at 709
+    assert first_reknot([("unknot", 154.0), ("knot", 680.0), ("unknot", 709.0)], 1000.0) == \
+        (154.0, 680.0, 29.0, False)
+    # a knot that holds to the last frame
+    assert first_reknot([("unknot", 161.0), ("knot", 571.0)], 1000.0) == (161.0, 571.0, 429.0, True)
+    # the first re-knotting counts, not a knot before the first untying or a later one
+    events = [("knot", 10.0), ("unknot", 20.0), ("knot", 30.0), ("unknot", 40.0), ("knot", 50.0)]
+    assert first_reknot(events, 100.0) == (20.0, 30.0, 10.0, False)
+    assert first_reknot([("unknot", 152.0)], 1000.0) == (152.0, None, None, None)
+    assert first_reknot([], 1000.0) == (None, None, None, None)
+
+
+def test_cells_report_how_long_knots_held_and_the_final_state():
+    def row(t_reknot, held, lasted, final):
+        r = _tref(2.2, "c", held is not None)
+        r.update({"t_reknot": t_reknot, "reknot_held": held, "reknot_lasted": lasted,
+                  "final_state": final})
+        return r
+    rows = [row(571.0, 429.0, True, "knotted"), row(None, None, None, "unknotted"),
+            row(483.0, 29.0, False, "unknotted")]
+    cells = st.cell_probabilities(rows)
+    (c,) = cells
+    # in the order of the re-knot times, each with its own sample's time held
+    assert c["t_reknot"] == [483.0, 571.0]
+    assert c["held"] == [[29.0, False], [429.0, True]]
+    assert (c["transitions"], c["ends_knotted"]) == (2, 1)
+    text = "\n".join(st.probability_table(cells, st.table2_scores(cells)))
+    assert "| 483, 571 | 29, 429+ | 1 | 0 |" in text
+    # rows of an older results.json (no held time, no final state) give none
+    (old,) = st.cell_probabilities([_tref(2.2, "c", True)])
+    assert (old["held"], old["ends_knotted"]) == ([], 0)
+
+
 def _cane(a, mode, fr1, fr2, t, obs, status="finished"):
     case = SimpleNamespace(time=np.asarray(t, float), observables={k: np.asarray(v, float)
                                                                      for k, v in obs.items()})

@@ -43,6 +43,21 @@ def reknottings(events) -> int:
     return count
 
 
+def first_reknot(events, t_last):
+    """The first re-knotting of `events` (kind, time) and how long it held: (t_unknot, t_reknot,
+    t_held, lasted) with t_unknot the first untying, t_reknot the first knot event after it,
+    t_held the time from it to the next untying or, when there is none, to `t_last` (the last
+    frame), and lasted whether the knot still held then; None for what did not happen."""
+    t_unknot = next((t for k, t in events if k == "unknot"), None)
+    t_reknot = None if t_unknot is None else next(
+        (t for k, t in events if k == "knot" and t > t_unknot), None)
+    if t_reknot is None:
+        return t_unknot, None, None, None
+    t_next = next((t for k, t in events if k == "unknot" and t > t_reknot), None)
+    lasted = t_next is None
+    return t_unknot, t_reknot, (t_last if lasted else t_next) - t_reknot, lasted
+
+
 def status_of(case) -> dict:
     """Status, target t_end (the case's integrator.t_end; None when not recorded) and the time
     reached (the last frame read)."""
@@ -143,15 +158,14 @@ def trefoil_rows(files, closures=200, defaults=None):
     for case, ana in _analysed(files, closures):
         a, o = float(case.bending_a), str(case.orientation)
         events = history(ana.time, ana.kf, knotted_at_start=ana.kf[0] >= 0.5)
-        t_unknot = next((t for k, t in events if k == "unknot"), None)
-        t_reknot = None if t_unknot is None else next(
-            (t for k, t in events if k == "knot" and t > t_unknot), None)
+        t_unknot, t_reknot, t_held, lasted = first_reknot(events, float(ana.time[-1]))
         rows.append({
             "case": case.name, "A": a, "orientation": o, **status_of(case),
             "kf0": float(ana.kf[0]), "final_kf": ana.final_kf,
             "final_state": ana.final_state or "undecided",
             "events": [[k, t] for k, t in events], "reknottings": reknottings(events),
             "unknot_then_knot": t_reknot is not None, "t_unknot": t_unknot, "t_reknot": t_reknot,
+            "reknot_held": t_held, "reknot_lasted": lasted,
             "study_transition": in_study(a, o), "mode": mode_name(ana.case_mode),
             "overlap": overlap_stats(case), "runs": runs_summary(case.runs),
             "time": ana.time.tolist(), "kf": ana.kf.tolist(), "kf_source": ana.kf_source,

@@ -80,7 +80,10 @@ def bootstrap_mean_interval(values, level: float = LEVEL, samples: int = BOOTSTR
 def cell_probabilities(rows) -> list:
     """Per cell (A, orientation) of the trefoil samples: the samples, those with an
     unknot-then-knot transition, the probability with its exact interval, the untie and
-    re-knot times of the samples, and what Table 2 says. Only finished samples count."""
+    re-knot times of the samples, how long each first re-knotting held ("held": [time, lasted
+    to the end], in the order of the re-knot times; rows of an older results.json without it
+    give none), the samples whose final
+    state is knotted, and what Table 2 says. Only finished samples count."""
     cells: dict = {}
     for r in rows:
         if r.get("status", "finished") != "finished":
@@ -95,6 +98,10 @@ def cell_probabilities(rows) -> list:
                     "t_unknot": sorted(r["t_unknot"] for r in g if r["t_unknot"] is not None),
                     "t_reknot": sorted(r["t_reknot"] for r in g if r["t_reknot"] is not None),
                     "never_untied": sum(r["t_unknot"] is None for r in g),
+                    "held": [[h, lasted] for _t, h, lasted in sorted(
+                        (r["t_reknot"], r["reknot_held"], bool(r["reknot_lasted"])) for r in g
+                        if r.get("reknot_held") is not None)],
+                    "ends_knotted": sum(r.get("final_state") == "knotted" for r in g),
                     "study": in_study(a, o), "uncertain": 0 < k < len(g)})
     return out
 
@@ -140,9 +147,12 @@ def probability_table(cells, scores) -> list:
     """Markdown of Table 2 as probabilities and its scores."""
     def times(ts):
         return ", ".join(f"{t:g}" for t in ts) if ts else "-"
+
+    def held(hs):
+        return ", ".join(f"{t:g}{'+' if lasted else ''}" for t, lasted in hs) if hs else "-"
     out = ["| A | orientation | samples | transitions | probability (95 % interval) | Table 2 | "
-           "untie times | re-knot times | never untied |",
-           "|---|---|---|---|---|---|---|---|---|"]
+           "untie times | re-knot times | re-knot held for | ends knotted | never untied |",
+           "|---|---|---|---|---|---|---|---|---|---|---|"]
     for c in cells:
         lo, hi = c["interval"]
         p = f"{c['probability']:.2f} ({lo:.2f}-{hi:.2f})"
@@ -150,7 +160,8 @@ def probability_table(cells, scores) -> list:
             p = f"**{p}**"
         out.append(f"| {c['A']:g} | {c['orientation']} | {c['samples']} | {c['transitions']} | {p} | "
                    f"{'U->K' if c['study'] else '-'} | {times(c['t_unknot'])} | "
-                   f"{times(c['t_reknot'])} | {c['never_untied']} |")
+                   f"{times(c['t_reknot'])} | {held(c.get('held', []))} | "
+                   f"{c.get('ends_knotted', '-')} | {c['never_untied']} |")
     b, lg = scores["brier"], scores["log"]
     out += ["", f"Scores over {scores['samples']} samples in {scores['cells']} cells (Brier: lower "
             f"is better; log: mean log-likelihood per sample, probabilities kept in "
@@ -158,7 +169,10 @@ def probability_table(cells, scores) -> list:
             "| predictor | Brier | log score |", "|---|---|---|",
             f"| the study's Table 2 | {b['table2']:.4f} | {lg['table2']:.4f} |",
             f"| never a transition | {b['never']:.4f} | {lg['never']:.4f} |", "",
-            "Bold: a genuinely uncertain cell (some samples re-knot, some do not)."]
+            "Bold: a genuinely uncertain cell (some samples re-knot, some do not). Re-knot held "
+            "for: the time from a sample's first re-knotting (k_f above the upper threshold "
+            "after an untying) to its next untying (below the lower one), or with + to its last "
+            "frame, still knotted; ends knotted: the samples whose final state is knotted."]
     return out
 
 
