@@ -82,8 +82,8 @@ def cell_probabilities(rows) -> list:
     unknot-then-knot transition, the probability with its exact interval, the untie and
     re-knot times of the samples, how long each first re-knotting held ("held": [time, lasted
     to the end], in the order of the re-knot times; rows of an older results.json without it
-    give none), the samples whose final
-    state is knotted, and what Table 2 says. Only finished samples count."""
+    give none), the samples whose final state is knotted, and what Table 2 says. Only finished
+    samples count."""
     cells: dict = {}
     for r in rows:
         if r.get("status", "finished") != "finished":
@@ -172,7 +172,8 @@ def probability_table(cells, scores) -> list:
             "Bold: a genuinely uncertain cell (some samples re-knot, some do not). Re-knot held "
             "for: the time from a sample's first re-knotting (k_f above the upper threshold "
             "after an untying) to its next untying (below the lower one), or with + to its last "
-            "frame, still knotted; ends knotted: the samples whose final state is knotted."]
+            "frame, still knotted; ends knotted: the samples whose last frame is in the knotted "
+            "state of that rule."]
     return out
 
 
