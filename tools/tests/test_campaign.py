@@ -63,6 +63,22 @@ def test_continuation_scene_changes_only_what_it_must():
     assert campaign.scene_differences(SCENE, text, {}) == []
 
 
+def test_continuation_does_not_perturb_again():
+    # A sample perturbed at its start (&chain perturbation > 0): the ledger's frame holds the
+    # displaced trajectory; displacing the beads again at the continuation's start would make
+    # the continued case another sample. Only the perturbation's value changes, to 0.
+    perturbed = SCENE.replace("  seed = 1\n", "  seed = 1\n  perturbation = 0.99999999999999995E-6\n")
+    e = entry()
+    e["scene"] = perturbed
+    text = campaign.continuation_scene(e, "/x/A1.00_from1234.5.xyz", "results/cc/continued")
+    body = [ln for ln in text.splitlines() if not ln.startswith("!")]
+    changed = {a: b for a, b in zip(perturbed.splitlines(), body) if a != b}
+    assert len(body) == len(perturbed.splitlines())
+    assert changed["  perturbation = 0.99999999999999995E-6"] == "  perturbation = 0.0"
+    assert len(changed) == 6
+    assert campaign._scene_value(text, "chain", "perturbation") == 0.0
+
+
 def test_continuation_refused_when_nothing_is_left():
     with pytest.raises(ValueError, match="nothing left to run"):
         campaign.continuation_scene(entry(t_reached=2000.0), "a.xyz", "d")
@@ -389,6 +405,12 @@ def test_continuation_with_a_new_default_is_digested(tmp_path):
     defaults = {("hydro", "solver_tolerance"): "0.1E-5"}
     e = campaign.digest(path, ledger, "cc", 10, defaults=defaults)
     assert len(e["segments"]) == 2 and e["t_reached"] == 7.0, e
+    # the case is marked continued at the continuation's time (its stepper restarted there);
+    # so is the continuation's own case file, by its name
+    case = campaign.ledger_case(os.path.join(ledger, "cc", "A1.00.json"))
+    assert campaign.continued_at(case) == [5.0]
+    assert campaign.continued_at(read_case(path)) == [5.0]
+    assert campaign.continued_at(read_case(str(tmp_path / "A1.00.h5"))) == []
 
 
 def test_status_rate_from_alike_sweeps(tmp_path, capsys):

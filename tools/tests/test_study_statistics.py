@@ -297,6 +297,43 @@ def test_knotflow_study_samples_apart_by_integration_path(tmp_path):
     assert "by_path" not in res and res["cells"][0]["samples"] == 2
 
 
+def test_knotflow_study_samples_without_the_continued_ones(tmp_path):
+    """Three samples of (1.4, b), one of them the continuation of a case from the ledger
+    (`_from40`, its stepper restarted at t = 40): pooled 2 of 3; the uninterrupted table 1 of 2,
+    with the continued sample and its time named; none continued, no such part."""
+    import json
+
+    from analysis_fixture import write_knots
+
+    from knotflow_tools.cli import main_study
+
+    from conftest import unknotting_trefoil_frames, write_case
+    reknot = [0.98, 0.9, 0.05, 0.02, 0.95, 0.97, 0.96, 0.95]
+    stays = [0.98, 0.9, 0.05, 0.02, 0.03, 0.01, 0.02, 0.02]
+    t = np.arange(8) * 10.0
+    samples = tmp_path / "samples"
+    samples.mkdir()
+    for name, kf in (("A1.40_orb_s1", reknot), ("A1.40_orb_s2", stays), ("A1.40_orb_s3_from40", reknot)):
+        path = write_case(samples / f"{name}.h5", unknotting_trefoil_frames(8), time=t,
+                          attrs={"forces.bending_a": 1.4, "chain.orientation": "b",
+                                 "case_name": name, "scene": _path_scene("dopri45")})
+        write_knots(path, np.arange(8), t, kf, np.zeros((8, 10)), ["3_1"] * 8, closures=10, seed=1)
+    out = tmp_path / "out"
+    assert main_study(["--samples", str(samples), "--out", str(out)]) == 0
+    res = json.loads((out / "results.json").read_text())["samples"]
+    (pooled,) = res["cells"]
+    assert (pooled["samples"], pooled["transitions"]) == (3, 2)
+    whole = res["uninterrupted"]
+    assert whole["continued"] == [{"case": "A1.40_orb_s3_from40", "at": [40.0]}]
+    (cell,) = whole["cells"]
+    assert (cell["samples"], cell["transitions"], cell["uncertain"]) == (2, 1, True)
+    assert whole["scores"]["brier"]["table2"] == pytest.approx(0.5)
+    assert "### Without the samples continued from the case ledger" in (out / "results.md").read_text()
+    (samples / "A1.40_orb_s3_from40.h5").unlink()
+    assert main_study(["--samples", str(samples), "--out", str(out)]) == 0
+    assert "uninterrupted" not in json.loads((out / "results.json").read_text())["samples"]
+
+
 def test_knotflow_study_samples_scene_reference_completes_older_scenes(tmp_path):
     """Two samples on dopri45 'iterative', one scene without solver_tolerance (an older
     knotflow), one with it at 1e-6: two paths without --scene-reference, one with a reference

@@ -76,6 +76,20 @@ def split_name(name: str) -> tuple[str, float]:
     return (m["case"], float(m["t"])) if m else (name, 0.0)
 
 
+def continued_at(case) -> list:
+    """The times at which a case (io.Case of a case file or of a ledger entry) was continued
+    from the case ledger (its segments `<case>_from<T>`, or a case file of such a segment):
+    there its stepper started afresh from the ledger's frame, without the step-size history of
+    the uninterrupted run. Empty for a case run in one piece or resumed from its own checkpoint
+    (which keeps the stepper's state)."""
+    at = case.attrs.get("continued_at")
+    if at is not None:
+        return [float(t) for t in at]
+    name = case.attrs.get("case_name")
+    t = split_name(name)[1] if isinstance(name, str) else 0.0
+    return [t] if t > 0.0 else []
+
+
 def _paths(ledger: str, sweep: str, case: str) -> dict:
     base = os.path.join(ledger, sweep, case)
     return {k: base + ext for k, ext in (("json", ".json"), ("csv", ".csv"),
@@ -382,7 +396,9 @@ def _scene_setting(group: str, var: str):
 
 def continuation_scene(entry: dict, coordinate_file: str, directory: str) -> str:
     """The scene that continues a ledger case from its newest frame (`coordinate_file`, a copy
-    of the entry's last_frame) for the time still to run, into `directory`."""
+    of the entry's last_frame) for the time still to run, into `directory`. The &chain
+    perturbation is set to 0: a sample's displacement belongs to its start, and the frame
+    already holds it (knotflow displaces a file's beads too when perturbation > 0)."""
     text = entry["scene"]
     t_reached, t_end = float(entry["t_reached"]), float(entry["t_end"])
     if not t_end - t_reached > TIME_TOLERANCE:
@@ -397,6 +413,8 @@ def continuation_scene(entry: dict, coordinate_file: str, directory: str) -> str
 
     text = setting(text, "chain", "shape", "'file'")
     text = setting(text, "chain", "coordinate_file", f"'{coordinate_file}'")
+    if _scene_setting("chain", "perturbation").search(text):
+        text = setting(text, "chain", "perturbation", "0.0")
     text = setting(text, "integrator", "t_end", f"{t_end - t_reached:.17g}")
     text = setting(text, "output", "directory", f"'{directory}'")
     text = setting(text, "output", "case_name",
@@ -825,7 +843,9 @@ def ledger_case(path: str, matrices_dir: str | None = None):
     pos[-1] = np.asarray(entry["last_frame"], dtype=float)
     scene = entry["scene"]
     attrs = {"case_name": name, "status": entry["status"], "n_beads": n, "scene": scene,
-             "integrator.t_end": float(entry["t_end"]), "ledger": path}
+             "integrator.t_end": float(entry["t_end"]), "ledger": path,
+             "continued_at": [float(sg["t_offset"]) for sg in entry["segments"]
+                              if sg["case_name"] != name]}
     for key, group, var in (("forces.bending_a", "forces", "bending_a"),
                             ("chain.orientation", "chain", "orientation"),
                             ("chain.seed", "chain", "seed"), ("chain.shape", "chain", "shape"),

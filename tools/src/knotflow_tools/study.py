@@ -603,6 +603,25 @@ def samples_section(dirs, closures=200, defaults=None):
             lines += [f"#### {path or 'no scene text'}", "", finished_line(group), ""]
             lines += study_statistics.probability_table(c, sc) + [""]
             part["by_path"].append({"path": path, "cells": c, "scores": sc})
+    continued = [(r, r["continued_at"]) for r in rows if r["continued_at"]]
+    if continued:
+        whole = [r for r in rows if not r["continued_at"]]
+        c = study_statistics.cell_probabilities(whole)
+        sc = study_statistics.table2_scores(c)
+        names = ", ".join(f"{r['case']} (t = {', '.join(f'{t:g}' for t in at)})"
+                          for r, at in continued)
+        lines += ["### Without the samples continued from the case ledger", "",
+                  f"{len(continued)} of the samples were continued from the case ledger on "
+                  f"another machine: {names}. A continuation starts its stepper afresh from the "
+                  "ledger's frame (without the step-size history), a disturbance at the level of "
+                  "the integration tolerance at that time, larger than the samples' start "
+                  "perturbation; so the table above pools two kinds of sample, and this one "
+                  "holds only the samples run in one piece (or resumed from their own "
+                  "checkpoints, which keep the stepper's state).", "",
+                  finished_line(whole), ""]
+        lines += study_statistics.probability_table(c, sc) + [""]
+        part["uninterrupted"] = {"continued": [{"case": r["case"], "at": at} for r, at in continued],
+                                 "cells": c, "scores": sc}
     lines += sweep_records(rows)
     return lines, part
 

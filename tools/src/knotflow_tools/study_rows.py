@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from .analysis import analyze_case
-from .campaign import integration_path, load_case
+from .campaign import continued_at, integration_path, load_case
 from .plot import mode_name
 from .study_reference import in_study
 from .study_slipknots import slipknot_scan
@@ -169,7 +169,7 @@ def trefoil_rows(files, closures=200, defaults=None):
             "study_transition": in_study(a, o), "mode": mode_name(ana.case_mode),
             "overlap": overlap_stats(case), "runs": runs_summary(case.runs),
             "time": ana.time.tolist(), "kf": ana.kf.tolist(), "kf_source": ana.kf_source,
-            "path": _path(case, defaults),
+            "path": _path(case, defaults), "continued_at": continued_at(case),
         })
     rows.sort(key=lambda r: (r["A"], r["orientation"]))
     return rows
