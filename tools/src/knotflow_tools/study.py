@@ -617,7 +617,8 @@ def samples_section(dirs, closures=200, defaults=None):
                   "the integration tolerance at that time, larger than the samples' start "
                   "perturbation; so the table above pools two kinds of sample, and this one "
                   "holds only the samples run in one piece (or resumed from their own "
-                  "checkpoints, which keep the stepper's state).", "",
+                  "checkpoints, which keep the stepper's state; an iterative solver's warm start "
+                  "begins afresh there, a difference within its tolerance).", "",
                   finished_line(whole), ""]
         lines += study_statistics.probability_table(c, sc) + [""]
         part["uninterrupted"] = {"continued": [{"case": r["case"], "at": at} for r, at in continued],
