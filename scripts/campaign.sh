@@ -4,7 +4,7 @@
 # committed text files: knotflow-campaign, docs/analysis.md "The case ledger"), and the next
 # machine goes on from it.
 #   scripts/campaign.sh [--set study|ensembles] [--workers N] [--digest] [--digest-every MIN]
-#                       [--no-run] [--workdir DIR] [--ledger DIR]
+#                       [--start-before TIME] [--no-run] [--workdir DIR] [--ledger DIR]
 #
 #   --set       which sweeps: `study` (default) the multipole study of scripts/study_sweeps.sh,
 #               inputs/<sweep>.nml, ledger docs/reproduction_multipole/ledger, the sweeps
@@ -31,6 +31,11 @@
 #               time, in the background of the run), so that a machine that goes without
 #               warning loses at most MIN minutes of progress when the ledger lives on storage
 #               that outlasts it (the repository's checkout); commit the ledger as before.
+#   --start-before  a worker starts no case at or after TIME (anything `date -d` reads, e.g.
+#               '01:00' or '2026-12-08 01:00 UTC'; refused when it reads none), and stops: for a
+#               machine or a batch job that ends at a known time, so that no case is cut there and
+#               later continued from the ledger (a continuation restarts the stepper: another kind
+#               of sample, docs/running.md). The cases running at TIME go on to their end.
 #   --workdir   where knotflow runs (default: the repository): the case files go where the
 #               inputs say, DIR/results/<sweep>/ (and DIR/inputs, if missing, becomes a link to
 #               the repository's inputs, for their coordinate files); --ledger: default the
@@ -53,6 +58,7 @@ source "$KF_ROOT/scripts/ensemble_sweeps.sh"
 run=1
 digest=0
 digest_every=0   # minutes, as given (0: no periodic digest)
+start_before=    # seconds since the epoch (empty: no limit)
 digest_period=0  # the same in whole seconds
 workdir="$KF_ROOT"
 set_name=study
@@ -70,13 +76,18 @@ while [ $# -gt 0 ]; do
         kf_die "--digest-every needs a number of minutes, at least 1 s (0.0167): got '${2:-}'"
       fi
       digest_every="$2"; shift 2 ;;
+    --start-before)
+      [ $# -ge 2 ] || kf_die "--start-before needs a time (anything 'date -d' reads)"
+      start_before="$(date -d "$2" +%s 2>/dev/null)" \
+        || kf_die "--start-before '$2': not a time that 'date -d' reads (e.g. '01:00' or '2026-12-08 01:00 UTC')"
+      shift 2 ;;
     --no-run) run=0; shift ;;
     --workdir) [ $# -ge 2 ] || kf_die "--workdir needs a directory"; workdir="$2"; shift 2 ;;
     --ledger) [ $# -ge 2 ] || kf_die "--ledger needs a directory"; ledger="$2"; shift 2 ;;
     --set)
       case "${2:-}" in study|ensembles) set_name="$2" ;; *) kf_die "--set needs study or ensembles: got '${2:-}'" ;; esac
       shift 2 ;;
-    *) kf_die "unknown argument '$1' (allowed: --set study|ensembles, --workers N, --digest, --digest-every MIN, --no-run, --workdir DIR, --ledger DIR)" ;;
+    *) kf_die "unknown argument '$1' (allowed: --set study|ensembles, --workers N, --digest, --digest-every MIN, --start-before TIME, --no-run, --workdir DIR, --ledger DIR)" ;;
   esac
 done
 # The set: its sweeps (KF_STUDY_ROLES, KF_STUDY_SWEEPS), inputs, default ledger, the closures of
@@ -141,6 +152,10 @@ queue() {
 worker() {
   local id="$1" sweep case action scene status
   while read -r sweep case action scene; do
+    if [ -n "$start_before" ] && [ "$(date +%s)" -ge "$start_before" ]; then
+      kf_log "worker $id: no case starts at or after $(date -u -d "@$start_before" '+%Y-%m-%d %H:%M:%S UTC') (--start-before); worker stops"
+      break
+    fi
     mkdir "$results/claims/$sweep.$case" 2>/dev/null || continue
     kf_log "worker $id: $sweep/$case ($action: $scene)"
     status=0

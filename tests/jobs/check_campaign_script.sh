@@ -1,6 +1,7 @@
 #!/bin/bash
 # scripts/campaign.sh end to end on small sweeps put where the multipole study's inputs are
 # (RPY + excluded volume, seconds; the script does not depend on the model):
+#   0. --start-before a time already past runs no case; a time `date -d` cannot read is refused;
 #   1. the campaign with 2 workers is killed (its process group) once the candy-cane A1.00 has
 #      passed t = 8; `--no-run --digest` puts every case file into the ledger (k_f of every
 #      frame with the study's 1000 closures);
@@ -42,6 +43,18 @@ awk 'BEGIN { for (i = 0; i < 30; i++) printf "%.4f 0.0 %.4f\n", 1.02 * i, 0.3 * 
 kf_small_sweep candycane_order3_multipole "shape = 'file', coordinate_file = 'inputs/configs/small_chain.xyz'" \
   "&sweep bending_a = 1.0 /" 2.0
 ledger="docs/reproduction_multipole/ledger"
+
+# 0. --start-before: a time already past starts no case (every worker stops at once); a time
+#    that `date -d` cannot read is refused before anything runs.
+bash scripts/campaign.sh --workers 2 --start-before '1 minute ago' >"${work}/run0.log" 2>&1 \
+  || fail "campaign.sh --start-before in the past: $(tail -n 5 "${work}/run0.log")"
+[ "$(grep -c 'no case starts at or after' "${work}/run0.log")" = 2 ] \
+  || fail "--start-before in the past: both workers should stop: $(tail -n 5 "${work}/run0.log")"
+if compgen -G "results/*/*.h5" >/dev/null; then fail "--start-before in the past: a case started"; fi
+if bash scripts/campaign.sh --start-before 'no such time' >"${work}/bad0.log" 2>&1; then
+  fail "--start-before 'no such time' accepted"
+fi
+grep -q "not a time that 'date -d' reads" "${work}/bad0.log" || fail "--start-before refusal: $(cat "${work}/bad0.log")"
 
 # 1. Killed part-way, digested.
 setsid bash scripts/campaign.sh --workers 2 >"${work}/run1.log" 2>&1 &
