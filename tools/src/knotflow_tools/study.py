@@ -576,14 +576,21 @@ def _sweep_files(dirs) -> list:
     return [f for d in dirs for f in (find_case_files(d) or find_ledger_cases(d))]
 
 
+def _probabilities(rows):
+    """Table 2 as probabilities over `rows`: per-cell probabilities, the scores and the table."""
+    cells = study_statistics.cell_probabilities(rows)
+    scores = study_statistics.table2_scores(cells)
+    return cells, scores, study_statistics.probability_table(cells, scores) + [""]
+
+
 def samples_section(dirs, closures=200, defaults=None):
     """Markdown and the results.json part of Table 2 as probabilities (study_statistics); when
     the samples ran on more than one integration path (campaign.integration_path, `defaults`
     for scenes written before a variable existed), the table is pooled over them and repeated
-    for each path ("by_path")."""
+    for each path ("by_path"); when some were continued from the case ledger
+    (campaign.continued_at), it is repeated without them ("uninterrupted")."""
     rows = trefoil_rows(_sweep_files(dirs), closures, defaults)
-    cells = study_statistics.cell_probabilities(rows)
-    scores = study_statistics.table2_scores(cells)
+    cells, scores, table = _probabilities(rows)
     paths: dict = {}
     for r in rows:
         paths.setdefault(r["path"], []).append(r)
@@ -592,24 +599,21 @@ def samples_section(dirs, closures=200, defaults=None):
     if len(paths) > 1:
         lines += [f"The samples ran on {len(paths)} integration paths (below, each apart); this "
                   "table pools them.", ""]
-    lines += study_statistics.probability_table(cells, scores) + [""]
+    lines += table
     part = {"cells": cells, "scores": scores, "level": study_statistics.LEVEL}
     if len(paths) > 1:
         part["by_path"] = []
         lines += ["### By integration path", ""]
         for path, group in sorted(paths.items(), key=lambda kv: str(kv[0])):
-            c = study_statistics.cell_probabilities(group)
-            sc = study_statistics.table2_scores(c)
-            lines += [f"#### {path or 'no scene text'}", "", finished_line(group), ""]
-            lines += study_statistics.probability_table(c, sc) + [""]
+            c, sc, table = _probabilities(group)
+            lines += [f"#### {path or 'no scene text'}", "", finished_line(group), ""] + table
             part["by_path"].append({"path": path, "cells": c, "scores": sc})
-    continued = [(r, r["continued_at"]) for r in rows if r["continued_at"]]
+    continued = [r for r in rows if r["continued_at"]]
     if continued:
         whole = [r for r in rows if not r["continued_at"]]
-        c = study_statistics.cell_probabilities(whole)
-        sc = study_statistics.table2_scores(c)
-        names = ", ".join(f"{r['case']} (t = {', '.join(f'{t:g}' for t in at)})"
-                          for r, at in continued)
+        c, sc, table = _probabilities(whole)
+        names = ", ".join(f"{r['case']} (t = {', '.join(f'{t:g}' for t in r['continued_at'])})"
+                          for r in continued)
         lines += ["### Without the samples continued from the case ledger", "",
                   f"{len(continued)} of the samples were continued from the case ledger on "
                   f"another machine: {names}. A continuation starts its stepper afresh from the "
@@ -619,9 +623,9 @@ def samples_section(dirs, closures=200, defaults=None):
                   "holds only the samples run in one piece (or resumed from their own "
                   "checkpoints, which keep the stepper's state; an iterative solver's warm start "
                   "begins afresh there, a difference within its tolerance).", "",
-                  finished_line(whole), ""]
-        lines += study_statistics.probability_table(c, sc) + [""]
-        part["uninterrupted"] = {"continued": [{"case": r["case"], "at": at} for r, at in continued],
+                  finished_line(whole), ""] + table
+        part["uninterrupted"] = {"continued": [{"case": r["case"], "at": r["continued_at"]}
+                                               for r in continued],
                                  "cells": c, "scores": sc}
     lines += sweep_records(rows)
     return lines, part
