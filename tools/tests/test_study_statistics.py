@@ -328,7 +328,21 @@ def test_knotflow_study_samples_without_the_continued_ones(tmp_path):
     (cell,) = whole["cells"]
     assert (cell["samples"], cell["transitions"], cell["uncertain"]) == (2, 1, True)
     assert whole["scores"]["brier"]["table2"] == pytest.approx(0.5)
-    assert "### Without the samples continued from the case ledger" in (out / "results.md").read_text()
+    md = (out / "results.md").read_text()
+    assert "### Without the samples continued from the case ledger" in md
+    # each sample's events from its k_f series by the rule (below 0.1 untied, above 0.9
+    # knotted, t = 10 k): the re-knotting ones untie at 20 and knot at 40, the other unties only
+    per = {s["case"]: s for s in res["per_sample"]}
+    assert sorted(per) == ["A1.40_orb_s1", "A1.40_orb_s2", "A1.40_orb_s3_from40"]
+    for name in ("A1.40_orb_s1", "A1.40_orb_s3_from40"):
+        assert per[name]["events"] == [["unknot", 20.0], ["knot", 40.0]]
+        assert per[name]["max_kf_after_untie"] == pytest.approx(0.97)
+        assert (per[name]["final_kf"], per[name]["final_state"]) == (pytest.approx(0.95), "knotted")
+    assert per["A1.40_orb_s2"]["events"] == [["unknot", 20.0]]
+    assert per["A1.40_orb_s2"]["max_kf_after_untie"] == pytest.approx(0.05)
+    assert per["A1.40_orb_s2"]["final_state"] == "unknotted"
+    assert per["A1.40_orb_s3_from40"]["continued_at"] == [40.0] and per["A1.40_orb_s1"]["continued_at"] == []
+    assert "| A1.40_orb_s3_from40 | 1.4 | b | untied 20, knotted 40 | 0.97 | 0.95 | knotted | t = 40 |" in md
     (samples / "A1.40_orb_s3_from40.h5").unlink()
     assert main_study(["--samples", str(samples), "--out", str(out)]) == 0
     assert "uninterrupted" not in json.loads((out / "results.json").read_text())["samples"]

@@ -588,7 +588,8 @@ def samples_section(dirs, closures=200, defaults=None):
     the samples ran on more than one integration path (campaign.integration_path, `defaults`
     for scenes written before a variable existed), the table is pooled over them and repeated
     for each path ("by_path"); when some were continued from the case ledger
-    (campaign.continued_at), it is repeated without them ("uninterrupted")."""
+    (campaign.continued_at), it is repeated without them ("uninterrupted"); then every
+    sample's events, one line each ("per_sample", study_statistics.sample_events)."""
     rows = trefoil_rows(_sweep_files(dirs), closures, defaults)
     cells, scores, table = _probabilities(rows)
     paths: dict = {}
@@ -627,6 +628,8 @@ def samples_section(dirs, closures=200, defaults=None):
         part["uninterrupted"] = {"continued": [{"case": r["case"], "at": r["continued_at"]}
                                                for r in continued],
                                  "cells": c, "scores": sc}
+    part["per_sample"] = study_statistics.sample_events(rows)
+    lines += ["### Each sample", ""] + study_statistics.sample_table(part["per_sample"]) + [""]
     lines += sweep_records(rows)
     return lines, part
 

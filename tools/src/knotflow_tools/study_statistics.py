@@ -177,6 +177,44 @@ def probability_table(cells, scores) -> list:
     return out
 
 
+def sample_events(rows) -> list:
+    """Per finished trefoil sample, in the order of cell and case name: its k_f events (the
+    hysteresis rule of `transitions`: [kind, time] in time order), the largest k_f after its
+    first untying (None when it never untied), its last k_f and state, and the times it was
+    continued from the case ledger at (campaign.continued_at)."""
+    out = []
+    for r in sorted((r for r in rows if r.get("status", "finished") == "finished"),
+                    key=lambda r: (float(r["A"]), str(r["orientation"]), str(r["case"]))):
+        after = None
+        if r["t_unknot"] is not None:
+            t, kf = np.asarray(r["time"], dtype=float), np.asarray(r["kf"], dtype=float)
+            after = float(np.max(kf[t >= r["t_unknot"]]))
+        out.append({"case": r["case"], "A": float(r["A"]), "orientation": str(r["orientation"]),
+                    "events": [[str(k), float(t)] for k, t in r["events"]],
+                    "max_kf_after_untie": after, "final_kf": float(r["final_kf"]),
+                    "final_state": r["final_state"],
+                    "continued_at": [float(t) for t in r.get("continued_at") or []]})
+    return out
+
+
+def sample_table(samples) -> list:
+    """Markdown of `sample_events`: one line per sample."""
+    def events(ev):
+        return ", ".join(f"{'untied' if k == 'unknot' else 'knotted'} {t:g}" for k, t in ev) or "-"
+    out = ["| case | A | orientation | events | largest k_f after the first untying | last k_f | "
+           "last state | continued from the ledger at |", "|---|---|---|---|---|---|---|---|"]
+    for s in samples:
+        after = "-" if s["max_kf_after_untie"] is None else f"{s['max_kf_after_untie']:.2f}"
+        cont = ", ".join(f"t = {t:g}" for t in s["continued_at"]) or "-"
+        out.append(f"| {s['case']} | {s['A']:g} | {s['orientation']} | {events(s['events'])} | "
+                   f"{after} | {s['final_kf']:.2f} | {s['final_state']} | {cont} |")
+    out += ["", "Events: the frames where k_f first falls below the lower threshold (untied) or "
+            "rises above the upper one (knotted) after being on the other side, the hysteresis "
+            "rule of the table above; a sample that unties and re-knots more than once lists "
+            "every event."]
+    return out
+
+
 # ------------------------------------------------------------------ candy-canes by stiffness
 
 def _late(case_row):
