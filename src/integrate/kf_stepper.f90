@@ -14,7 +14,8 @@
 !> step used) and the current step size are read with accessor functions. The whole state of a
 !> stepper (step size, statistics and whatever its method keeps between calls) is exported and
 !> imported as two plain arrays with `get_state` / `set_state`, so a run written to a checkpoint
-!> and resumed continues exactly as if it had not been interrupted. Layout:
+!> and resumed continues exactly as if it had not been interrupted (`shift_clock` moves the times
+!> a method keeps when the continuation's clock starts at another time). Layout:
 !>   reals = [dt, dt_min_used, dt_max_used, <method reals>]
 !>   ints  = [state_version, steps, rejected, evaluations, <method ints>]
 module kf_stepper
@@ -68,6 +69,9 @@ module kf_stepper
     procedure, non_overridable :: get_state
     procedure, non_overridable :: set_state
     procedure, non_overridable :: set_basic_state
+    !> shift_clock(delta): the times the method keeps move by delta (a state continued on a
+    !> clock that starts elsewhere); nothing for a method that keeps none.
+    procedure :: shift_clock
     ! for the methods
     procedure, non_overridable :: reset_stepper
     procedure, non_overridable :: set_dt
@@ -228,6 +232,14 @@ contains
     this%steps_ = steps
     this%rejected_ = rejected
   end subroutine set_basic_state
+
+  !> The default of `shift_clock`: a method whose state holds no time has nothing to move.
+  subroutine shift_clock(this, delta)
+    class(stepper_t), intent(inout) :: this
+    real(wp), intent(in) :: delta
+    associate (unused => this, unused_delta => delta)
+    end associate
+  end subroutine shift_clock
 
   ! ---------------------------------------------------------------- for the methods
 

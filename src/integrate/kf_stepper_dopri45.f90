@@ -52,6 +52,7 @@ module kf_stepper_dopri45
     procedure :: error_estimate
     procedure :: get_method_state => dopri45_get_method_state
     procedure :: set_method_state => dopri45_set_method_state
+    procedure :: shift_clock => dopri45_shift_clock
   end type dopri45_stepper_t
 
 contains
@@ -226,5 +227,12 @@ contains
       this%y_fsal = reshape(reals(3 + n:2 + 2*n), [int(ints(2)), int(ints(3))])
     end if
   end subroutine dopri45_set_method_state
+
+  !> The FSAL stage's time moves with the clock (a state at t = t0 continued from t = t0 + delta).
+  subroutine dopri45_shift_clock(this, delta)
+    class(dopri45_stepper_t), intent(inout) :: this
+    real(wp), intent(in) :: delta
+    this%t_fsal = this%t_fsal + delta
+  end subroutine dopri45_shift_clock
 
 end module kf_stepper_dopri45

@@ -11,6 +11,7 @@ module kf_case_runner
   use kf_scene_items, only: scene_items, scene_text
   use kf_scene_item, only: scene_item_t, item_string, item_integer, item_real, item_logical, item_real_array
   use kf_chain_shapes, only: build_initial_chain
+  use kf_stepper_start, only: start_from_state
   use kf_dynamics, only: dynamics_t
   use kf_hydro_model, only: hydro_stats_t
   use kf_stepper, only: stepper_t
@@ -246,7 +247,8 @@ contains
     end subroutine choose_start
 
     !> Phase 3, the parts: the initial chain (unless resumed), the dynamics, the stepper (its state
-    !> from the checkpoint when resumed), the run diagnostics and the stresslet when asked for.
+    !> from the checkpoint when resumed, else from &chain stepper_state when the scene names one),
+    !> the run diagnostics and the stresslet when asked for.
     subroutine build_parts()
       if (.not. resumed) then
         call build_initial_chain(sc%chain, r, rotation, error)
@@ -259,6 +261,7 @@ contains
       call dyn%init(sc, size(r, 2), error)
       if (.not. allocated(error)) call make_stepper(sc%integrator, integ, error)
       if (.not. allocated(error) .and. resumed) call restore_stepper(error)
+      if (.not. allocated(error) .and. .not. resumed) call start_from_state(sc, r, integ, error)
       if (allocated(error)) then
         if (resumed) call file%close()
         status = case_failed

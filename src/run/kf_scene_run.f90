@@ -4,6 +4,7 @@
 !> src/capi/kf_capi_run: Python's knotflow.run_scene). The program knotflow farms the cases out
 !> over MPI ranks itself; both run each case with kf_case_runner's run_case.
 module kf_scene_run
+  use kf_kinds, only: wp
   use kf_strings, only: to_str
   use kf_error, only: error_t, fatal_error
   use kf_scene, only: scene_t, path_len
@@ -13,6 +14,9 @@ module kf_scene_run
   use kf_stepper, only: stepper_t
   use kf_stepper_factory, only: make_stepper
   use kf_case_match, only: check_reusable
+  use kf_chain_shapes, only: build_initial_chain
+  use kf_scene_check, only: refuse, quoted
+  use kf_stepper_start, only: start_from_state
   use kf_case_runner, only: run_case, case_path, case_reporter_t
   use kf_run_segment, only: run_launch_t
   use kf_fs, only: make_directory, check_writable_directory, lock_directory, lock_case, release_locks
@@ -34,6 +38,8 @@ contains
     type(dynamics_t) :: dyn
     class(stepper_t), allocatable :: integ
     character(len=:), allocatable :: name
+    real(wp), allocatable :: r(:, :)
+    real(wp) :: rotation(3, 3)
     integer :: n_beads
     call sw%case_scene(1, sc, name)
     n_beads = sc%chain%n_beads   ! resolved when the scene was read
@@ -42,7 +48,20 @@ contains
     ! What the models themselves reject is refused here too, not by every case at run time.
     call dyn%init(sc, n_beads, error)
     if (.not. allocated(error)) call make_stepper(sc%integrator, integ, error)
-    if (allocated(error)) error%message = trim(scene_file)//': the models reject the scene: '//error%message
+    if (allocated(error)) then
+      error%message = trim(scene_file)//': the models reject the scene: '//error%message
+      return
+    end if
+    ! A stepper state belongs to one run's chain and method: one case, and checked whole here.
+    if (len_trim(sc%chain%stepper_state) > 0) then
+      if (sw%n_cases() /= 1) then
+        call refuse(error, trim(scene_file), 'chain', 'stepper_state', quoted(sc%chain%stepper_state), &
+          "'' in a sweep of "//to_str(sw%n_cases())//' cases (a stepper state continues one run)')
+        return
+      end if
+      call build_initial_chain(sc%chain, r, rotation, error)
+      if (.not. allocated(error)) call start_from_state(sc, r, integ, error)
+    end if
   end subroutine check_case_resources
 
   !> Every finished or interrupted case file of the sweep must hold the requested scene

@@ -39,6 +39,8 @@ module kf_scene_chain
   character(len=*), parameter :: bond_length_random_allowed = &
     "a number > 0.5 with shape = 'random' (non-bonded beads stay 1 d apart)"
   character(len=*), parameter :: coordinate_file_allowed = "a file name (required with shape = 'file')"
+  character(len=*), parameter :: stepper_state_allowed = &
+    "'' (none) or an existing file, only with shape = 'file' (a state at its positions)"
   character(len=*), parameter :: straight_direction_allowed = 'a non-zero vector'
   character(len=*), parameter :: n_beads_min_allowed = 'an integer >= 2'
 
@@ -53,6 +55,9 @@ module kf_scene_chain
     integer :: trefoil_removed_point = 100          !< which of the 100 trefoil points is removed
     real(wp) :: bond_length = 1.02_wp               !< l0, rest length of the springs
     character(len=path_len) :: coordinate_file = '' !< shape = 'file': one bead per line, x y z
+    !> shape = 'file': the time stepper's state at the file's positions (HDF5, kf_stepper_state_file),
+    !> so that the run continues another one exactly; '': the stepper starts afresh
+    character(len=path_len) :: stepper_state = ''
     integer(i8) :: seed = 20150509_i8               !< candy-cane rotation, random chain
     real(wp) :: straight_direction(3) = [0.0_wp, 0.0_wp, 1.0_wp] !< axis of the straight chain
     !> candy-cane: 'random' (Haar rotation from seed) or 'tilt_x' (about x by tilt_deg)
@@ -76,20 +81,22 @@ contains
     integer :: n_beads, trefoil_removed_point
     character(len=1) :: orientation
     real(wp) :: bond_length, straight_direction(3), tilt_deg, perturbation
-    character(len=path_len) :: coordinate_file
+    character(len=path_len) :: coordinate_file, stepper_state
     character(len=name_len) :: candycane_rotation
     integer(i8) :: seed
     namelist /chain/ shape, n_beads, orientation, trefoil_removed_point, bond_length, &
-      coordinate_file, seed, straight_direction, candycane_rotation, tilt_deg, perturbation
+      coordinate_file, seed, straight_direction, candycane_rotation, tilt_deg, perturbation, stepper_state
     shape = p%shape; n_beads = p%n_beads; orientation = p%orientation
     trefoil_removed_point = p%trefoil_removed_point; bond_length = p%bond_length
     coordinate_file = p%coordinate_file; seed = p%seed; straight_direction = p%straight_direction
     candycane_rotation = p%candycane_rotation; tilt_deg = p%tilt_deg; perturbation = p%perturbation
+    stepper_state = p%stepper_state
     read (text, nml=chain, iostat=ios, iomsg=msg)
     p%shape = shape; p%n_beads = n_beads; p%orientation = orientation
     p%trefoil_removed_point = trefoil_removed_point; p%bond_length = bond_length
     p%coordinate_file = coordinate_file; p%seed = seed; p%straight_direction = straight_direction
     p%candycane_rotation = candycane_rotation; p%tilt_deg = tilt_deg; p%perturbation = perturbation
+    p%stepper_state = stepper_state
   end subroutine read_chain_group
 
   !> The variables of &chain, in namelist order, appended to `items`.
@@ -122,6 +129,10 @@ contains
       "the tilt about x of candycane_rotation = 'tilt_x'")
     call add_r(items, 'chain.perturbation', p%perturbation, perturbation_allowed(), &
       'every bead moved by this length in a random isotropic direction drawn from seed (0: none)')
+    call add_s(items, 'chain.stepper_state', p%stepper_state, stepper_state_allowed, &
+      "the time stepper's state at the coordinate file's positions (HDF5: /time, /positions, /stepper; "// &
+      'written by knotflow-campaign plan from the case ledger), so that the run continues the one it '// &
+      'comes from as a resume would; checked against the scene at set-up')
   end subroutine chain_items
 
   !> Check &chain (`file`: the scene file named in the messages, '' from code).
@@ -130,7 +141,6 @@ contains
     character(len=*), intent(in) :: file
     type(error_t), allocatable, intent(out) :: error
     type(scene_item_t), allocatable :: items(:)
-    logical :: exists
     allocate (items(0))
     call chain_items(p, items)
     call check_finite(items, file, error)
@@ -166,11 +176,16 @@ contains
         call refuse(error, file, 'chain', 'coordinate_file', "''", &
           coordinate_file_allowed); return
       end if
-      inquire (file=trim(p%coordinate_file), exist=exists)
-      if (.not. exists) then
-        call refuse(error, file, 'chain', 'coordinate_file', quoted(p%coordinate_file), &
-          'an existing file (not found)'); return
+      call check_exists('coordinate_file', p%coordinate_file, error)
+      if (allocated(error)) return
+    end if
+    if (len_trim(p%stepper_state) > 0) then
+      if (p%shape /= shape_file) then
+        call refuse(error, file, 'chain', 'stepper_state', quoted(p%stepper_state), &
+          stepper_state_allowed); return
       end if
+      call check_exists('stepper_state', p%stepper_state, error)
+      if (allocated(error)) return
     end if
     if (p%shape == shape_straight .and. .not. norm2(p%straight_direction) > 0.0_wp) then
       call refuse(error, file, 'chain', 'straight_direction', vector_text(p%straight_direction), &
@@ -196,6 +211,18 @@ contains
       call refuse(error, file, 'chain', 'perturbation', to_str_exact(p%perturbation), &
         perturbation_allowed()); return
     end if
+
+  contains
+
+    !> The file that &chain `var` names must exist.
+    subroutine check_exists(var, path, err)
+      character(len=*), intent(in) :: var, path
+      type(error_t), allocatable, intent(out) :: err
+      logical :: found
+      inquire (file=trim(path), exist=found)
+      if (.not. found) call refuse(err, file, 'chain', var, quoted(path), 'an existing file (not found)')
+    end subroutine check_exists
+
   end subroutine check_chain
 
   !> Set n_beads to the real bead count of the shape (a coordinate file is read and checked).

@@ -21,6 +21,7 @@ Usage: check_campaign.py KNOTFLOW KNOTFLOW_ANALYZE WORKDIR   (Python with knotfl
 """
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -184,6 +185,10 @@ run(exe, "sw.nml", "--dry-run")
 e = digest("results/sw/A1.40.h5", "ledger")
 T = e["t_reached"]
 assert e["status"] == "running" and T >= 14.0, e
+# the stepper's state at the newest frame (dopri45: dt, statistics, err_prev, the FSAL stage)
+kept_state = e
+assert e["stepper_state"]["t"] == T and e["stepper_state"]["method"] == "dopri45", e["stepper_state"]
+assert len(e["stepper_state"]["reals"]) == 3 + 2 + 2 * 3 * e["n_beads"], len(e["stepper_state"]["reals"])
 # Status: A running at T, B not started (the campaign's scenes, <dir>/<sweep>/<case>.nml).
 shutil.copytree("scenes", f"status_scenes/{SWEEP}")
 check_status([e], (40.0 - T) + 40.0)
@@ -200,6 +205,46 @@ out = run(sys.executable, "-c", "import sys; from knotflow_tools.cli import main
 plan = [ln.split() for ln in out if ln.strip()]
 assert [p[:2] for p in plan] == [["A1.40", "continue"], ["A2.20", "run"]], plan
 assert plan[0][2].endswith(f"continued/A1.40_from{T:g}.nml"), plan
+# The continuation starts from the stepper's state at T (the killed file's newest checkpoint,
+# kept by the digest): the state file beside the scene, named by &chain stepper_state.
+state = os.path.abspath(f"results/sw/continued/A1.40_from{T:g}.state.h5")
+cscene = open(plan[0][2]).read()
+assert f"stepper_state = '{state}'" in cscene, cscene
+with h5py.File(state, "r") as h:
+    assert h["time"][()] == T and h["stepper"].attrs["name"] == "dopri45", dict(h.attrs)
+    assert np.array_equal(h["positions"][()], np.asarray(kept_state["last_frame"])), "state positions"
+# Refused at set-up, nothing written (exit 2, the variable, the file and why): a state of another
+# stepper, of other positions (one bead moved by 1e-9 d), a state in a sweep of several cases,
+# a file that is not HDF5, a FIFO (refused by its type, not opened).
+xyz = next(ln.split("'")[1] for ln in cscene.splitlines() if "coordinate_file" in ln)
+moved = np.asarray(kept_state["last_frame"])
+moved[0, 0] += 1e-9
+write("moved.xyz", "".join(f"{x:.17g} {y:.17g} {z:.17g}\n" for x, y, z in moved))
+os.makedirs("bad", exist_ok=True)
+open("bad/not_a_state.h5", "wb").write(b"not HDF5")
+os.mkfifo("bad/fifo.h5")
+def elsewhere(text, directory):
+    """The scene text with its &output directory replaced."""
+    return re.sub(r"directory = '[^']*'", f"directory = '{directory}'", text, count=1)
+
+
+for name, change, text in (
+        ("rk4", ("method = 'dopri45'", "method = 'rk4'"), "it holds the state of stepper 'dopri45'"),
+        ("moved", (xyz, os.path.abspath("moved.xyz")), "its positions differ from the chain"),
+        ("sweep", ("", ""), "in a sweep of 2 cases"),
+        ("nostate", (state, os.path.abspath("bad/not_a_state.h5")), "not_a_state.h5"),
+        ("fifo", (state, os.path.abspath("bad/fifo.h5")), "only a regular file is read")):
+    bad_text = elsewhere(cscene.replace(*change), os.path.abspath("bad/" + name))
+    if name == "sweep":
+        bad_text += "&sweep bending_a = 1.4, 2.2 /\n"
+    write(f"bad/{name}.nml", bad_text)
+    r = subprocess.run([exe, f"bad/{name}.nml"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and "stepper_state" in r.stderr and text in r.stderr, (name, r.returncode, r.stderr)
+    assert not os.path.exists(f"bad/{name}"), f"{name}: something was written"
+# A control: the same continuation without the state (the stepper afresh at dt_initial), elsewhere.
+write("control.nml", elsewhere(cscene.replace(f"stepper_state = '{state}'", "stepper_state = ''"),
+                               os.path.abspath("control")))
+run(exe, "control.nml")
 for name, _action, scene in plan:
     run(exe, scene)
 cont = f"results/sw/continued/A1.40_from{T:g}.h5"
@@ -219,10 +264,26 @@ assert np.array_equal(rows[before, col["kf"]], ref[before, col["kf"]])
 assert np.all(np.isfinite(rows[:, col["kf"]]))
 last = np.asarray(campaign.load("ledger", SWEEP, "A1.40")["last_frame"])
 dev = np.max(np.linalg.norm(last - ref_last, axis=1))
-assert dev < 0.05, f"continued chain at t = 40 is {dev:.3g} d from the uninterrupted one"
-assert abs(rows[-1, col["rg"]] / ref[-1, col["rg"]] - 1) < 0.01, (rows[-1], ref[-1])
+with h5py.File(f"control/A1.40_from{T:g}.h5", "r") as h:
+    dev_control = np.max(np.linalg.norm(h["frames/positions"][-1] - ref_last, axis=1))
+# With the stepper's state the continuation is the uninterrupted run to rounding (its clock
+# starts at 0, not at T: the clipped steps' sizes differ in the last bits); the control, its
+# stepper afresh, is another trajectory within the tolerance.
+assert dev < 1e-9, f"continued chain at t = 40 is {dev:.3g} d from the uninterrupted one"
+# ... with its steps and derivative evaluations (the counts go on from the state's; the FSAL
+# stage is reused, its time moved to the new clock, so no evaluation is added)
+counts = []
+for path in ("results_ref/sw/A1.40.h5", cont):
+    with h5py.File(path, "r") as h:
+        g = max((h["checkpoint"][k] for k in ("slot0", "slot1")), key=lambda g: int(g["nframes"][()]))
+        counts.append(tuple(int(x) for x in g["stepper/ints"][()][1:4]))
+assert counts[0] == counts[1], f"steps, rejected, evaluations: uninterrupted {counts[0]}, continued {counts[1]}"
+assert dev_control > 100 * max(dev, 1e-15), (dev, dev_control)
 assert e["status"] == "finished" and len(e["segments"]) == 2, e
 assert e["segments"][1]["t_offset"] == T and e["segments"][1]["case_name"] == f"A1.40_from{T:g}"
+assert e["segments"][1]["from_state"] and not e["segments"][0]["from_state"], e["segments"]
+assert "stepper_state" not in e, "a finished entry keeps no stepper state"
+assert campaign.ledger_case("ledger/sw/A1.40.json").attrs["continued_at"] == [], "continued exactly"
 # The study's row of the case in two segments: its runs at the case's time, totals summed.
 campaign.set_case_mode("ledger", SWEEP, "A1.40", run(analyze, "ledger/sw/A1.40.csv", "--json").stdout)
 row = study_rows.trefoil_rows(["ledger/sw/A1.40.json"], CLOSURES)[0]
@@ -256,5 +317,5 @@ with h5py.File(gap, "r+") as h:
 refused(lambda: campaign.digest(gap, "ledger", SWEEP, CLOSURES, 10.0, gap),
         "a segment must go on where it ends")
 assert snapshot("ledger") == kept
-print(f"campaign ledger: A killed at t = {T:g}, continued to 40, {dev:.2e} d from the "
-      "uninterrupted chain")
+print(f"campaign ledger: A killed at t = {T:g}, continued to 40 from the stepper's state, {dev:.2e} d "
+      f"from the uninterrupted chain (without the state: {dev_control:.2e} d)")

@@ -102,7 +102,7 @@ CORPUS = [
      'unknown group &chains (allowed: &chain, &forces, &flow, &hydro, &integrator, &output, &sweep)'),
     ('unknown_variable',
      "&chain shapes = 'trefoil' /",
-     "&chain: unknown variable 'shapes' (allowed: shape, n_beads, orientation, trefoil_removed_point, bond_length, coordinate_file, seed, straight_direction, candycane_rotation, tilt_deg, perturbation)"),
+     "&chain: unknown variable 'shapes' (allowed: shape, n_beads, orientation, trefoil_removed_point, bond_length, coordinate_file, seed, straight_direction, candycane_rotation, tilt_deg, perturbation, stepper_state)"),
     ('wrong_type_real',
      "&forces spring_k = 'stiff' /",
      "&forces: spring_k = 'stiff' is not valid (expected a real number)"),

@@ -79,6 +79,49 @@ def test_continuation_does_not_perturb_again():
     assert campaign._scene_value(text, "chain", "perturbation") == 0.0
 
 
+def test_continuation_from_the_stepper_state(tmp_path):
+    """With a state file the scene names it in &chain stepper_state: replaced where the scene has
+    the variable, added to &chain where it was written before the variable existed; nothing else
+    changes but what a plain continuation changes. The state file holds what knotflow reads
+    (kf_stepper_state_file): /time on the segment's clock, the frame's positions, the arrays."""
+    e = entry()
+    e["last_frame"] = [[0.5, 1.0, 2.0], [1.5, 1.0, 2.0]]
+    e["stepper_state"] = {"t": 1234.5, "t_local": 34.5, "method": "dopri45",
+                          "reals": [0.01, 0.001, 0.1, 0.3, 34.5], "ints": [1, 10, 0, 61, 0, 0, 0]}
+    assert campaign.usable_state(e)
+    plain = campaign.continuation_scene(e, "/x/c.xyz", "d")
+    for scene in (SCENE, SCENE.replace("  seed = 1\n", "  seed = 1\n  stepper_state = ''\n")):
+        e["scene"] = scene
+        text = campaign.continuation_scene(e, "/x/c.xyz", "d", "/x/c.state.h5")
+        assert campaign._scene_value(text, "chain", "stepper_state") == "/x/c.state.h5"
+        assert campaign.from_state(text) and not campaign.from_state(scene)
+        without = [ln for ln in text.splitlines() if "stepper_state" not in ln]
+        assert without == [ln for ln in campaign.continuation_scene(e, "/x/c.xyz", "d").splitlines()
+                           if "stepper_state" not in ln]
+    assert "stepper_state" not in plain
+    path = str(tmp_path / "c.state.h5")
+    campaign.write_state_file(path, e)
+    with h5py.File(path, "r") as h:
+        assert h["time"][()] == 34.5 and h["stepper"].attrs["name"] == "dopri45"
+        assert np.array_equal(h["positions"][()], e["last_frame"])
+        assert h["stepper/reals"].dtype == np.float64 and h["stepper/ints"].dtype == np.int64
+        assert list(h["stepper/ints"][()]) == e["stepper_state"]["ints"]
+    # Not usable: another frame than the newest, or a state of another stepper than the scene's.
+    assert not campaign.usable_state({**e, "t_reached": 1240.0})
+    assert not campaign.usable_state({**e, "stepper_state": {**e["stepper_state"], "method": "rk4"}})
+    assert not campaign.usable_state(entry())
+
+
+def test_continued_at_leaves_out_exact_continuations():
+    """A continuation from the stepper state is the case's own resume: not a continued sample."""
+    from knotflow_tools.io import Case
+    with_state = SCENE.replace("  seed = 1\n", "  seed = 1\n  stepper_state = '/x/s.h5'\n")
+    for scene, expected in ((SCENE, [1234.5]), (with_state, [])):
+        case = Case(path="x.h5", attrs={"case_name": "A1.00_from1234.5", "scene": scene},
+                    time=np.zeros(1), positions=np.zeros((1, 2, 3)))
+        assert campaign.continued_at(case) == expected
+
+
 def test_continuation_refused_when_nothing_is_left():
     with pytest.raises(ValueError, match="nothing left to run"):
         campaign.continuation_scene(entry(t_reached=2000.0), "a.xyz", "d")

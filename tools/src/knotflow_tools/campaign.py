@@ -6,9 +6,12 @@ the study needs of each case in small text files that are committed, and what is
 
     LEDGER/<sweep>/<case>.json            status, time reached and the frame there at full
                                           precision (where to go on: one record, written last,
-                                          so the two always agree), the case's scene, its
-                                          segments (file, time offset, run records, overlap
-                                          totals)
+                                          so the two always agree), the time stepper's state
+                                          at that frame while the case runs (`stepper_state`:
+                                          the case file's newest checkpoint's, when it is that
+                                          frame), the case's scene, its segments (file, time
+                                          offset, run records, overlap totals, whether it
+                                          started from a stepper state)
     LEDGER/<sweep>/<case>.csv             one row per frame: FRAME_COLUMNS (time of the whole
                                           case, k_f of knotflow-analyze, shape, mode, overlaps,
                                           stresslet and its elastic part of the viscosity; 7
@@ -26,11 +29,15 @@ says for each case of a sweep what to run next: nothing (finished), the case's o
 (`knotflow --write-scenes`; it starts the case or resumes its file on this machine), or, when
 the ledger is ahead of this machine, a continuation: the case's scene started from
 the ledger's newest frame for the time still to run, written as `<case>_from<T>` (T: the time
-reached).
-Simple shear v0 = (z, 0, 0) does not depend on time, so a continuation computes what a resume
-would, except that the step size and the adaptive multipole path start afresh, as after any
-resume, and an overlap episode open at T is counted as two. The rows of a continuation are the
-ledger's rows from T on, at time T + t.
+reached), with the stepper's state at that frame where the ledger has it (`<case>_from<T>.state.h5`,
+`&chain stepper_state`).
+Simple shear v0 = (z, 0, 0) does not depend on time, so a continuation with the stepper's state
+computes what the case's own resume would: the stepper goes on with its step size, error history
+and FSAL stage; what a resume also starts afresh (a multipole model's reuse or iterative
+reference) does here too, and an overlap episode open at T is counted as two. Without a state
+(an entry digested before states were kept, or whose newest checkpoint was not its newest frame)
+the stepper starts afresh at dt_initial: another trajectory within the integration tolerance
+(`continued_at`). The rows of a continuation are the ledger's rows from T on, at time T + t.
 """
 
 from __future__ import annotations
@@ -43,6 +50,7 @@ import math
 import os
 import re
 
+import h5py
 import numpy as np
 
 from .atomic import write_bytes
@@ -78,16 +86,25 @@ def split_name(name: str) -> tuple[str, float]:
 
 def continued_at(case) -> list:
     """The times at which a case (io.Case of a case file or of a ledger entry) was continued
-    from the case ledger (its segments `<case>_from<T>`, or a case file of such a segment):
-    there its stepper started afresh from the ledger's frame, without the step-size history of
-    the uninterrupted run. Empty for a case run in one piece or resumed from its own checkpoint
-    (which keeps the stepper's state)."""
+    from the case ledger (its segments `<case>_from<T>`, or a case file of such a segment)
+    without the stepper's state: there its stepper started afresh from the ledger's frame,
+    without the step-size history of the uninterrupted run. Empty for a case run in one piece,
+    resumed from its own checkpoint or continued from the ledger's stepper state (`&chain
+    stepper_state`: both keep the stepper's state)."""
     at = case.attrs.get("continued_at")
     if at is not None:
         return [float(t) for t in at]
     name = case.attrs.get("case_name")
     t = split_name(name)[1] if isinstance(name, str) else 0.0
-    return [t] if t > 0.0 else []
+    return [t] if t > 0.0 and not from_state(case.attrs.get("scene")) else []
+
+
+def from_state(scene) -> bool:
+    """Whether a scene text started its run from a stepper state (a non-empty `&chain
+    stepper_state`)."""
+    if not isinstance(scene, str) or not scene:
+        return False
+    return bool(_scene_value(scene, "chain", "stepper_state"))
 
 
 def _paths(ledger: str, sweep: str, case: str) -> dict:
@@ -269,6 +286,7 @@ def digest(path: str, ledger: str, sweep: str, closures: int, positions_every: f
     t_end_case = float(case.attrs.get("integrator.t_end", math.nan)) + offset
     segment = {**ident, "t_offset": offset, "t_first": float(new[0, 0]),
                "t_last": float(new[-1, 0]), "status": case.status,
+               "from_state": from_state(case.attrs.get("scene")),
                "git_hash": str(case.attrs.get("git_hash", "")),
                "runs": [{k: _json_value(r.get(k)) for k in RUN_FIELDS} for r in runs],
                "diagnostic_totals": {k: _json_value(v)
@@ -287,6 +305,10 @@ def digest(path: str, ledger: str, sweep: str, closures: int, positions_every: f
              "kf_closures": closures, "positions_every": positions_every,
              "last_frame": [[float(x) for x in r] for r in case.positions[-1]],
              "scene": scene, "segments": segments}
+    st = case.stepper_state
+    if not finished and st is not None and abs(offset + st["time"] - entry["t_reached"]) <= TIME_TOLERANCE:
+        entry["stepper_state"] = {"t": entry["t_reached"], "t_local": st["time"],
+                                  "method": st["method"], "reals": st["reals"], "ints": st["ints"]}
     # Positions: the kept frames before this segment, then this segment's.
     kept_t, kept = read_positions(ledger, sweep, name)
     chosen = _every(new[:, 0], positions_every) if positions_every > 0 else []
@@ -394,11 +416,14 @@ def _scene_setting(group: str, var: str):
     return re.compile(rf"(&{group}\n(?:(?!/\n).*\n)*?)\s*{var} = ([^\n]*)\n")
 
 
-def continuation_scene(entry: dict, coordinate_file: str, directory: str) -> str:
+def continuation_scene(entry: dict, coordinate_file: str, directory: str,
+                       state_file: str | None = None) -> str:
     """The scene that continues a ledger case from its newest frame (`coordinate_file`, a copy
-    of the entry's last_frame) for the time still to run, into `directory`. The &chain
-    perturbation is set to 0: a sample's displacement belongs to its start, and the frame
-    already holds it (knotflow displaces a file's beads too when perturbation > 0)."""
+    of the entry's last_frame) for the time still to run, into `directory`; with `state_file`
+    (`write_state_file`) from the stepper's state at that frame (`&chain stepper_state`), so
+    that it goes on as the case's own resume would. The &chain perturbation is set to 0: a
+    sample's displacement belongs to its start, and the frame already holds it (knotflow
+    displaces a file's beads too when perturbation > 0)."""
     text = entry["scene"]
     t_reached, t_end = float(entry["t_reached"]), float(entry["t_end"])
     if not t_end - t_reached > TIME_TOLERANCE:
@@ -413,6 +438,13 @@ def continuation_scene(entry: dict, coordinate_file: str, directory: str) -> str
 
     text = setting(text, "chain", "shape", "'file'")
     text = setting(text, "chain", "coordinate_file", f"'{coordinate_file}'")
+    if state_file is not None:
+        if _scene_setting("chain", "stepper_state").search(text):
+            text = setting(text, "chain", "stepper_state", f"'{state_file}'")
+        else:   # a scene written before the variable existed
+            text = re.sub(r"(&chain\n(?:(?!/\n).*\n)*?)(/\n)",
+                          lambda m: m.group(1) + f"  stepper_state = '{state_file}'\n" + m.group(2),
+                          text, count=1)
     if _scene_setting("chain", "perturbation").search(text):
         text = setting(text, "chain", "perturbation", "0.0")
     text = setting(text, "integrator", "t_end", f"{t_end - t_reached:.17g}")
@@ -453,10 +485,41 @@ def plan(scenes_dir: str, results: str, ledger: str, sweep: str) -> list:
         xyz = os.path.abspath(os.path.join(cdir, cname + ".xyz"))
         write_xyz(xyz, np.asarray(entry["last_frame"], dtype=float),
                   comment=f"{sweep}/{name} at t = {entry['t_reached']:.17g} (the case ledger)")
+        state = None
+        if usable_state(entry):
+            state = os.path.abspath(os.path.join(cdir, cname + ".state.h5"))
+            write_state_file(state, entry)
         path = os.path.join(cdir, cname + ".nml")
-        _write_text(path, continuation_scene(entry, xyz, cdir))
+        _write_text(path, continuation_scene(entry, xyz, cdir, state))
         out.append((name, "continue", path))
     return out
+
+
+def usable_state(entry: dict) -> bool:
+    """Whether a running ledger entry's stepper state (`digest`: the newest checkpoint's, kept
+    when it is the newest frame) continues it: of the entry's newest frame and of the stepper
+    its scene runs (an entry digested before states were kept has none: it is continued from
+    its frame alone, the stepper afresh)."""
+    st = entry.get("stepper_state")
+    return (st is not None and abs(float(st["t"]) - float(entry["t_reached"])) <= TIME_TOLERANCE
+            and st["method"] == _scene_value(entry["scene"], "integrator", "method"))
+
+
+def write_state_file(path: str, entry: dict) -> None:
+    """The stepper state file of a ledger entry's newest frame (the layout knotflow reads,
+    kf_stepper_state_file): /time on the clock of the segment it comes from, /positions (the
+    entry's last_frame), /stepper/reals, /stepper/ints and the method's name. Made in memory
+    and written whole (knotflow_tools.atomic)."""
+    st = entry["stepper_state"]
+    image = _io.BytesIO()
+    with h5py.File(image, "w") as h:
+        h["time"] = float(st["t_local"])
+        h["positions"] = np.asarray(entry["last_frame"], dtype=np.float64)
+        g = h.create_group("stepper")
+        g["reals"] = np.asarray(st["reals"], dtype=np.float64)
+        g["ints"] = np.asarray(st["ints"], dtype=np.int64)
+        g.attrs["name"] = st["method"]
+    write_bytes(path, image.getvalue())
 
 
 def _continuation_path(results: str, sweep: str, segment: dict) -> str:
@@ -845,7 +908,7 @@ def ledger_case(path: str, matrices_dir: str | None = None):
     attrs = {"case_name": name, "status": entry["status"], "n_beads": n, "scene": scene,
              "integrator.t_end": float(entry["t_end"]), "ledger": path,
              "continued_at": [float(sg["t_offset"]) for sg in entry["segments"]
-                              if sg["case_name"] != name]}
+                              if sg["case_name"] != name and not sg.get("from_state")]}
     for key, group, var in (("forces.bending_a", "forces", "bending_a"),
                             ("chain.orientation", "chain", "orientation"),
                             ("chain.seed", "chain", "seed"), ("chain.shape", "chain", "shape"),

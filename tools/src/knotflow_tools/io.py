@@ -83,6 +83,7 @@ class Case:
     stresslet: dict | None = None              # /frames/stresslet: name -> (nframes[, 3, 3])
     diagnostic_totals_source: str = ""         # "attributes" or "checkpoint" (running case)
     runs: list = field(default_factory=list)   # /runs: one dict per run segment (RUN_FIELDS)
+    stepper_state: dict | None = None          # running case: checkpoint_stepper_state
 
     @property
     def name(self) -> str:
@@ -223,6 +224,28 @@ def checkpoint_frames(f):
     Frames beyond it were being written when the run stopped."""
     g = newest_checkpoint(f)
     return None if g is None else int(g["nframes"][()])
+
+
+def checkpoint_stepper_state(f, time_last: float, positions_last) -> dict | None:
+    """The time stepper's state in the newest checkpoint of the open case file `f` when that
+    checkpoint is the frame (time_last, positions_last) to the bit (the last frame read): the
+    checkpoint's time ("time", on the case file's clock), the method's name and the state's
+    arrays (kf_stepper get_state: "reals", "ints"), from which another run continues exactly
+    (&chain stepper_state, knotflow-campaign plan). None without a checkpoint, without a stepper
+    state in it (files written before it existed) or when it is another frame."""
+    g = newest_checkpoint(f)
+    if g is None or "stepper" not in g or "time" not in g or "positions" not in g:
+        return None
+    st = g["stepper"]
+    if "reals" not in st or "ints" not in st or "name" not in st.attrs:
+        return None
+    t = float(g["time"][()])
+    r = np.asarray(g["positions"][()], dtype=float)
+    if t != float(time_last) or r.shape != np.shape(positions_last) or not np.array_equal(r, positions_last):
+        return None
+    return {"time": t, "method": str(_attr(st.attrs["name"])),
+            "reals": [float(x) for x in np.asarray(st["reals"][()], dtype=float)],
+            "ints": [int(x) for x in np.asarray(st["ints"][()], dtype=np.int64)]}
 
 
 def checkpoint_diagnostic_totals(f):
@@ -426,6 +449,8 @@ def read_case(path) -> Case:
         elif totals:
             case.diagnostic_totals, case.diagnostic_totals_source = totals, "attributes"
         case.runs = read_runs(path, f)
+        if case.status != "finished":
+            case.stepper_state = checkpoint_stepper_state(f, time[-1], pos[-1])
         if "analysis" in f:
             try:
                 _read_analysis(f["analysis"], case)
