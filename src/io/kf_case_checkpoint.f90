@@ -20,7 +20,7 @@ module kf_case_checkpoint
   private
 
   public :: write_slots, upgrade_checkpoint, remove_legacy_checkpoint, latest_checkpoint, set_aside, &
-    checkpoint_frames, has_checkpoint, pad_columns
+    checkpoint_frames, has_checkpoint, pad_columns, read_stepper
 
   !> The checkpoint slots of schema 3 (`slot_groups(mod(k, 2))` for frame count k) and the
   !> single checkpoint of schema 1 and 2.
@@ -277,9 +277,7 @@ contains
       return
     end if
     if (h5_exists(file, group//'/stepper/ints')) then
-      call h5_read(file, group//'/stepper/reals', ck%stepper%reals, error)
-      if (.not. allocated(error)) call h5_read(file, group//'/stepper/ints', ck%stepper%ints, error)
-      if (.not. allocated(error)) call h5_read_attr(file, group//'/stepper', 'name', ck%stepper%name, error)
+      call read_stepper(file, group//'/stepper', ck%stepper, error)
       if (allocated(error)) return
     end if
     if (h5_exists(file, group//'/counters')) then
@@ -306,6 +304,18 @@ contains
     if (digest_value(checkpoint_digest(ck)) /= stored_digest) call fatal_error(error, 'the checkpoint (t = '// &
       to_str(ck%t, '(g0.6)')//') does not match its digest: it was not written completely')
   end subroutine read_checkpoint
+
+  !> The stepper's state in `group` (datasets reals and ints, attribute name): a checkpoint's
+  !> and a stepper state file's (kf_stepper_state_file).
+  subroutine read_stepper(file, group, stepper, error)
+    type(h5_file_t), intent(in) :: file
+    character(len=*), intent(in) :: group
+    type(stepper_checkpoint_t), intent(out) :: stepper
+    type(error_t), allocatable, intent(out) :: error
+    call h5_read(file, group//'/reals', stepper%reals, error)
+    if (.not. allocated(error)) call h5_read(file, group//'/ints', stepper%ints, error)
+    if (.not. allocated(error)) call h5_read_attr(file, group, 'name', stepper%name, error)
+  end subroutine read_stepper
 
   !> A checkpoint is trusted only when it is the frame it counts: /frames holds at least
   !> `nframes` frames and frame `nframes` has the checkpoint's time and positions.

@@ -12,8 +12,8 @@ module kf_stepper_state_file
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use kf_kinds, only: wp
   use kf_error, only: error_t, fatal_error
-  use kf_h5, only: h5_file_t, h5_open_file, h5_close_file, h5_exists, h5_attr_exists, h5_read, h5_read_attr
-  use kf_case_checkpoint, only: stepper_checkpoint_t
+  use kf_h5, only: h5_file_t, h5_open_file, h5_close_file, h5_exists, h5_attr_exists, h5_read
+  use kf_case_checkpoint, only: stepper_checkpoint_t, read_stepper
   use kf_file_type, only: check_regular_file
   implicit none
   private
@@ -56,9 +56,7 @@ contains
     end if
     if (.not. allocated(error)) call h5_read(file, '/time', st%t, error)
     if (.not. allocated(error)) call h5_read(file, '/positions', st%r, error)
-    if (.not. allocated(error)) call h5_read(file, '/stepper/reals', st%stepper%reals, error)
-    if (.not. allocated(error)) call h5_read(file, '/stepper/ints', st%stepper%ints, error)
-    if (.not. allocated(error)) call h5_read_attr(file, '/stepper', 'name', st%stepper%name, error)
+    if (.not. allocated(error)) call read_stepper(file, '/stepper', st%stepper, error)
     call h5_close_file(file, close_error)
     if (allocated(error)) return
     if (allocated(close_error)) then
